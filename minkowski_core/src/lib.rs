@@ -1,0 +1,3 @@
+//! minkowski_core
+#[cfg(feature = "python")]
+mod py;
