@@ -1,0 +1,53 @@
+//! Errors of the native core. Each variant says what went wrong and how to fix it.
+
+use thiserror::Error;
+
+/// Everything the core can refuse or fail at. Geometry problems are data, not panics.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CoreError {
+    /// Input coordinates or parameters contain NaN or infinity. Fix: clean the input.
+    #[error("{what}: non-finite value (NaN or inf) in the input")]
+    NonFinite {
+        /// Which input.
+        what: String,
+    },
+    /// A convex piece has fewer than 4 points or all its points lie in a plane, so it
+    /// bounds no volume. Fix: drop the piece or repair the mesh it came from.
+    #[error("{what}: degenerate convex piece ({detail}); a piece must span a volume")]
+    Degenerate {
+        /// Which input.
+        what: String,
+        /// Why.
+        detail: String,
+    },
+    /// A parameter is out of range (e.g. eps <= 0). Fix: pass a positive, finite value.
+    #[error("{name} = {value}: {detail}")]
+    InvalidParameter {
+        /// Parameter name.
+        name: String,
+        /// Offending value.
+        value: f64,
+        /// What is allowed.
+        detail: String,
+    },
+    /// The grid would need more cells than the budget allows. Fix: a larger eps, or raise
+    /// the cell budget if the memory is there.
+    #[error("the octree needs more than {budget} cells at cell size {cell_size:.3e} ({detail}); use a larger eps or raise the cell budget")]
+    ResourceLimit {
+        /// The cell budget that was exceeded.
+        budget: usize,
+        /// Finest cell size asked for.
+        cell_size: f64,
+        /// Context.
+        detail: String,
+    },
+    /// There are no primitives to work on. Fix: give at least one convex piece per operand.
+    #[error("{what}: no convex pieces given")]
+    Empty {
+        /// Which input.
+        what: String,
+    },
+}
+
+/// Result alias of the core.
+pub type CoreResult<T> = Result<T, CoreError>;

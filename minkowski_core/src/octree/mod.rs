@@ -1,0 +1,350 @@
+//! The adaptive octree over a set of convex primitives (seed paper §4.2).
+//!
+//! A cell keeps only the primitives that meet it, and of each only the facet planes that
+//! cut it (primitive and facet culling: every other plane is satisfied by the whole cell,
+//! so by Theorem 1 of the paper nothing else can change a query inside it). A cell inside a
+//! single primitive is FULL (cell culling), a cell no primitive meets is EMPTY (exactly
+//! free), otherwise MIXED and split down to the finest size `h`. Children filter their
+//! parent's lists, so work follows the boundary, not the volume. Parallel over subtrees.
+//!
+//! Entry points: [`Octree::build`], [`Leaf`], [`Label`], [`Octree::cell_box`],
+//! [`Octree::candidates`].
+
+#[cfg(test)]
+mod octree_tests;
+
+use crate::error::{CoreError, CoreResult};
+use crate::math::{Aabb, Vec3};
+use crate::polytope::ConvexPolytope;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// Deepest octree the lattice keys can address (coordinates below 2^21).
+pub const MAX_DEPTH: u32 = 20;
+
+/// The fraction of a finest cell by which the lattice is shifted off the region's corner,
+/// so that axis-aligned facets rarely fall exactly on lattice planes.
+const LATTICE_SHIFT: f64 = 0.381_966_011_250_105_1;
+
+/// Where convex primitives come from, and how cells that no primitive touches are labelled.
+///
+/// The decomposition source is a union of solid convex pieces: an untouched cell is EMPTY
+/// and a cell inside one piece is FULL. Other sources (an exact boundary convolution) can
+/// override both.
+pub trait PrimitiveSource: Sync {
+    /// The convex primitives.
+    fn primitives(&self) -> &[ConvexPolytope];
+    /// Label of a cell that no primitive meets, by its centre.
+    fn classify_untouched(&self, _center: Vec3) -> Label {
+        Label::Empty
+    }
+    /// Whether a cell inside a single primitive lies inside the solid.
+    fn primitives_are_solid(&self) -> bool {
+        true
+    }
+}
+
+impl PrimitiveSource for crate::minkowski::PolytopeSet {
+    fn primitives(&self) -> &[ConvexPolytope] {
+        &self.polys
+    }
+}
+
+/// Cell labels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Label {
+    /// Meets no primitive: exactly free.
+    Empty = 0,
+    /// Inside one primitive: exactly blocked.
+    Full = 1,
+    /// Meets a primitive boundary (conservatively); always at the finest level.
+    Mixed = 2,
+}
+
+/// A leaf of the octree.
+#[derive(Clone, Copy, Debug)]
+pub struct Leaf {
+    /// Lower corner in finest-lattice units.
+    pub ijk: [u32; 3],
+    /// Size is `2^level` finest cells (0 = finest).
+    pub level: u8,
+    /// Label.
+    pub label: Label,
+    /// Start of this leaf's candidate list in [`Octree::cands`] (MIXED leaves only).
+    pub cand_start: u32,
+    /// Length of that list (0 unless MIXED).
+    pub cand_len: u32,
+}
+
+/// The built octree: leaves in depth-first order and the candidate arena.
+#[derive(Clone, Debug)]
+pub struct Octree {
+    /// Position of lattice point (0, 0, 0).
+    pub origin: Vec3,
+    /// Finest cell size.
+    pub h: f64,
+    /// Root level (root cell is `2^depth` finest cells wide).
+    pub depth: u8,
+    /// All leaves.
+    pub leaves: Vec<Leaf>,
+    /// Candidate arena: for each MIXED leaf, records `[prim, k, plane_1 .. plane_k]`.
+    pub cands: Vec<u32>,
+}
+
+/// Counts of leaves by level (index = level) and label (index = `Label as usize`).
+pub type LevelCounts = Vec<[usize; 3]>;
+
+struct Ctx<'a> {
+    polys: &'a [ConvexPolytope],
+    solid: bool,
+    src: &'a (dyn Fn(Vec3) -> Label + Sync),
+    origin: Vec3,
+    h: f64,
+    budget: usize,
+    count: AtomicUsize,
+    abort: AtomicBool,
+}
+
+type Out = (Vec<Leaf>, Vec<u32>);
+
+impl Octree {
+    /// Build the octree over `source` covering `region` (grown by two cells and shifted off
+    /// the lattice), with finest cell size `h` and at most `max_cells` leaves.
+    ///
+    /// # Errors
+    /// [`CoreError::InvalidParameter`] for a non-positive or non-finite `h`,
+    /// [`CoreError::ResourceLimit`] when the lattice or the leaf count would exceed the limits.
+    pub fn build<S: PrimitiveSource + ?Sized>(source: &S, region: &Aabb, h: f64, max_cells: usize) -> CoreResult<Octree> {
+        if !(h > 0.0) || !h.is_finite() {
+            return Err(CoreError::InvalidParameter { name: "cell size".into(), value: h, detail: "must be positive and finite".into() });
+        }
+        let origin = region.min - Vec3::splat((2.0 + LATTICE_SHIFT) * h);
+        let span = region.extent().max_element() + (4.0 + 2.0 * LATTICE_SHIFT) * h;
+        let n = (span / h).ceil().max(1.0);
+        let depth = n.log2().ceil().max(0.0) as u32;
+        if depth > MAX_DEPTH {
+            return Err(CoreError::ResourceLimit {
+                budget: max_cells,
+                cell_size: h,
+                detail: format!("the region is {n:.0} cells wide; the lattice addresses at most 2^{MAX_DEPTH}"),
+            });
+        }
+        let polys = source.primitives();
+        let classify_untouched = |c: Vec3| source.classify_untouched(c);
+        let ctx = Ctx {
+            polys,
+            solid: source.primitives_are_solid(),
+            src: &classify_untouched,
+            origin,
+            h,
+            budget: max_cells,
+            count: AtomicUsize::new(0),
+            abort: AtomicBool::new(false),
+        };
+        let mut root = Vec::new();
+        for (i, p) in polys.iter().enumerate() {
+            root.push(i as u32);
+            root.push(p.normals.len() as u32);
+            root.extend(0..p.normals.len() as u32);
+        }
+        let (leaves, cands) = ctx.node([0, 0, 0], depth as u8, &root);
+        if ctx.abort.load(Ordering::Relaxed) {
+            return Err(CoreError::ResourceLimit {
+                budget: max_cells,
+                cell_size: h,
+                detail: "octree leaves".into(),
+            });
+        }
+        Ok(Octree { origin, h, depth: depth as u8, leaves, cands })
+    }
+
+    /// The closed box of a leaf.
+    pub fn cell_box(&self, leaf: &Leaf) -> Aabb {
+        let s = (1u64 << leaf.level) as f64 * self.h;
+        let min = self.origin + Vec3::new(leaf.ijk[0] as f64, leaf.ijk[1] as f64, leaf.ijk[2] as f64) * self.h;
+        Aabb::new(min, min + Vec3::splat(s))
+    }
+
+    /// The root cell's box.
+    pub fn root_box(&self) -> Aabb {
+        let s = (1u64 << self.depth) as f64 * self.h;
+        Aabb::new(self.origin, self.origin + Vec3::splat(s))
+    }
+
+    /// Position of lattice point `(i, j, k)`.
+    #[inline]
+    pub fn lattice_point(&self, i: u32, j: u32, k: u32) -> Vec3 {
+        self.origin + Vec3::new(i as f64, j as f64, k as f64) * self.h
+    }
+
+    /// The candidate records of a leaf: `(primitive, planes that cut the cell)`.
+    pub fn candidates<'a>(&'a self, leaf: &Leaf) -> CandIter<'a> {
+        let s = leaf.cand_start as usize;
+        CandIter { data: &self.cands[s..s + leaf.cand_len as usize] }
+    }
+
+    /// Leaves per level and label.
+    pub fn level_counts(&self) -> LevelCounts {
+        let mut c = vec![[0usize; 3]; self.depth as usize + 1];
+        for l in &self.leaves {
+            c[l.level as usize][l.label as usize] += 1;
+        }
+        c
+    }
+}
+
+/// Iterator over `(primitive, planes)` records of a candidate list.
+pub struct CandIter<'a> {
+    data: &'a [u32],
+}
+
+impl<'a> Iterator for CandIter<'a> {
+    type Item = (usize, &'a [u32]);
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.data.len() < 2 {
+            return None;
+        }
+        let (p, k) = (self.data[0] as usize, self.data[1] as usize);
+        let planes = &self.data[2..2 + k];
+        self.data = &self.data[2 + k..];
+        Some((p, planes))
+    }
+}
+
+/// Whether `p` (inside a cell) lies in the union, given that cell's candidate records.
+#[inline]
+pub fn cell_contains(polys: &[ConvexPolytope], cands: CandIter<'_>, p: Vec3) -> bool {
+    for (prim, planes) in cands {
+        let poly = &polys[prim];
+        if planes.iter().all(|&k| poly.normals[k as usize].dot(p) <= poly.offsets[k as usize]) {
+            return true;
+        }
+    }
+    false
+}
+
+impl Ctx<'_> {
+    fn cell(&self, ijk: [u32; 3], level: u8) -> Aabb {
+        let s = (1u64 << level) as f64 * self.h;
+        let min = self.origin + Vec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64) * self.h;
+        Aabb::new(min, min + Vec3::splat(s))
+    }
+
+    /// Filter `cand` against `cell` into `out`; the cell's label.
+    fn classify(&self, cell: &Aabb, cand: &[u32], out: &mut Vec<u32>) -> Label {
+        let (c, hh) = (cell.center(), cell.half());
+        let mut i = 0;
+        while i < cand.len() {
+            let prim = cand[i] as usize;
+            let k = cand[i + 1] as usize;
+            let planes = &cand[i + 2..i + 2 + k];
+            i += 2 + k;
+            let poly = &self.polys[prim];
+            if !poly.aabb.overlaps(cell) {
+                continue;
+            }
+            let mark = out.len();
+            out.push(prim as u32);
+            out.push(0);
+            let mut separated = false;
+            for &pl in planes {
+                let n = poly.normals[pl as usize];
+                let s = n.dot(c) - poly.offsets[pl as usize];
+                let r = n.abs().dot(hh);
+                if s - r > 0.0 {
+                    separated = true;
+                    break;
+                }
+                if s + r > 0.0 {
+                    out.push(pl);
+                }
+            }
+            if separated {
+                out.truncate(mark);
+                continue;
+            }
+            let kept = out.len() - mark - 2;
+            if kept == 0 && self.solid {
+                out.clear();
+                return Label::Full;
+            }
+            out[mark + 1] = kept as u32;
+        }
+        if out.is_empty() {
+            (self.src)(c)
+        } else {
+            Label::Mixed
+        }
+    }
+
+    fn leaf(&self, ijk: [u32; 3], level: u8, label: Label, cand_len: usize) -> Leaf {
+        if self.count.fetch_add(1, Ordering::Relaxed) >= self.budget {
+            self.abort.store(true, Ordering::Relaxed);
+        }
+        Leaf { ijk, level, label, cand_start: 0, cand_len: cand_len as u32 }
+    }
+
+    fn node(&self, ijk: [u32; 3], level: u8, cand: &[u32]) -> Out {
+        let mut out = (Vec::new(), Vec::new());
+        if level >= 4 {
+            let mut own = Vec::with_capacity(cand.len());
+            let label = self.classify(&self.cell(ijk, level), cand, &mut own);
+            if label != Label::Mixed || level == 0 {
+                self.push_leaf(&mut out, ijk, level, label, &own);
+                return out;
+            }
+            let parts: Vec<Out> = (0..8u32)
+                .into_par_iter()
+                .map(|c| {
+                    if self.abort.load(Ordering::Relaxed) {
+                        return (Vec::new(), Vec::new());
+                    }
+                    self.node(child(ijk, level, c), level - 1, &own)
+                })
+                .collect();
+            for (leaves, cands) in parts {
+                let off = out.1.len() as u32;
+                out.0.extend(leaves.into_iter().map(|mut l| {
+                    l.cand_start += off;
+                    l
+                }));
+                out.1.extend(cands);
+            }
+        } else {
+            self.node_seq(ijk, level, cand, &mut out);
+        }
+        out
+    }
+
+    fn node_seq(&self, ijk: [u32; 3], level: u8, cand: &[u32], out: &mut Out) {
+        if self.abort.load(Ordering::Relaxed) {
+            return;
+        }
+        let mut own = Vec::with_capacity(cand.len());
+        let label = self.classify(&self.cell(ijk, level), cand, &mut own);
+        if label != Label::Mixed || level == 0 {
+            self.push_leaf(out, ijk, level, label, &own);
+            return;
+        }
+        for c in 0..8u32 {
+            self.node_seq(child(ijk, level, c), level - 1, &own, out);
+        }
+    }
+
+    fn push_leaf(&self, out: &mut Out, ijk: [u32; 3], level: u8, label: Label, own: &[u32]) {
+        let keep = if label == Label::Mixed { own.len() } else { 0 };
+        let mut leaf = self.leaf(ijk, level, label, keep);
+        leaf.cand_start = out.1.len() as u32;
+        if keep > 0 {
+            out.1.extend_from_slice(own);
+        }
+        out.0.push(leaf);
+    }
+}
+
+#[inline]
+fn child(ijk: [u32; 3], level: u8, c: u32) -> [u32; 3] {
+    let half = 1u32 << (level - 1);
+    [ijk[0] + (c & 1) * half, ijk[1] + ((c >> 1) & 1) * half, ijk[2] + ((c >> 2) & 1) * half]
+}

@@ -1,0 +1,14 @@
+//! Convex polytopes: construction by a robust 3D hull and exact queries.
+//!
+//! Entry points: [`ConvexPolytope::try_from_points`] (hull of a point cloud),
+//! [`ConvexPolytope::contains_point`], [`ConvexPolytope::signed_distance`],
+//! [`ConvexPolytope::overlaps_box`] (separating axes, exact),
+//! [`ConvexPolytope::contains_box`], [`ConvexPolytope::clip_segment`].
+
+mod hull;
+mod queries;
+#[cfg(test)]
+mod polytope_tests;
+
+pub use hull::ConvexPolytope;
+pub use queries::{clip_planes, point_triangle_distance2};

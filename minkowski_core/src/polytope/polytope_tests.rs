@@ -1,0 +1,100 @@
+use super::*;
+use crate::error::CoreError;
+use crate::math::{Aabb, Vec3};
+
+fn cube(c: Vec3, r: f64) -> ConvexPolytope {
+    let mut pts = Vec::new();
+    for k in 0..8 {
+        let s = Vec3::new(
+            if k & 1 == 1 { r } else { -r },
+            if k & 2 == 2 { r } else { -r },
+            if k & 4 == 4 { r } else { -r },
+        );
+        pts.push(c + s);
+    }
+    ConvexPolytope::from_points(&pts)
+}
+
+#[test]
+fn cube_has_six_merged_facets_and_exact_volume() {
+    let p = cube(Vec3::ZERO, 1.0);
+    assert_eq!(p.normals.len(), 6);
+    assert_eq!(p.vertices.len(), 8);
+    assert!((p.volume() - 8.0).abs() < 1e-12);
+    for (n, d) in p.normals.iter().zip(&p.offsets) {
+        assert!((n.length() - 1.0).abs() < 1e-12);
+        assert!((d - 1.0).abs() < 1e-12, "offset {d}");
+    }
+}
+
+#[test]
+fn signed_distance_matches_closed_form() {
+    let p = cube(Vec3::ZERO, 1.0);
+    assert!((p.signed_distance(Vec3::ZERO) + 1.0).abs() < 1e-12);
+    assert!((p.signed_distance(Vec3::new(0.5, 0.2, 0.0)) + 0.5).abs() < 1e-12);
+    assert!((p.signed_distance(Vec3::new(3.0, 0.0, 0.0)) - 2.0).abs() < 1e-12);
+    // corner region: Euclidean distance to the corner, not the plane bound
+    let q = Vec3::new(2.0, 2.0, 2.0);
+    assert!((p.signed_distance(q) - 3f64.sqrt()).abs() < 1e-12);
+    assert!(p.plane_distance(q) < p.signed_distance(q));
+    // edge region
+    assert!((p.signed_distance(Vec3::new(2.0, 2.0, 0.0)) - 2f64.sqrt()).abs() < 1e-12);
+}
+
+#[test]
+fn box_queries() {
+    let p = cube(Vec3::ZERO, 1.0);
+    assert!(p.contains_box(&Aabb::new(Vec3::splat(-0.5), Vec3::splat(0.5))));
+    assert!(!p.contains_box(&Aabb::new(Vec3::splat(0.5), Vec3::splat(1.5))));
+    assert!(p.overlaps_box(&Aabb::new(Vec3::splat(0.5), Vec3::splat(1.5))));
+    assert!(!p.overlaps_box(&Aabb::new(Vec3::splat(1.1), Vec3::splat(1.5))));
+    // a tilted polytope: octahedron |x|+|y|+|z| <= 1 and a box near its face, outside it
+    let oct = ConvexPolytope::from_points(&[
+        Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z,
+    ]);
+    assert_eq!(oct.normals.len(), 8);
+    assert!(!oct.overlaps_box(&Aabb::new(Vec3::splat(0.4), Vec3::splat(0.6))));
+    assert!(oct.overlaps_box(&Aabb::new(Vec3::splat(0.2), Vec3::splat(0.4))));
+}
+
+#[test]
+fn segment_clipping_is_exact() {
+    let p = cube(Vec3::ZERO, 1.0);
+    let (t0, t1) = p.clip_segment(Vec3::new(-3.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 0.0)).unwrap();
+    assert!((t0 - 1.0 / 3.0).abs() < 1e-12 && (t1 - 2.0 / 3.0).abs() < 1e-12);
+    assert!(p.clip_segment(Vec3::new(-3.0, 1.5, 0.0), Vec3::new(3.0, 1.5, 0.0)).is_none());
+    // grazing along a face counts as touching (closed sets)
+    assert!(p.clip_segment(Vec3::new(-3.0, 1.0, 0.0), Vec3::new(3.0, 1.0, 0.0)).is_some());
+}
+
+#[test]
+fn degenerate_and_non_finite_input_are_errors() {
+    let flat = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.3, 0.6, 0.0)];
+    assert!(matches!(ConvexPolytope::try_from_points(&flat, "flat"), Err(CoreError::Degenerate { .. })));
+    let few = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    assert!(matches!(ConvexPolytope::try_from_points(&few, "few"), Err(CoreError::Degenerate { .. })));
+    let nan = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f64::NAN, 0.0, 1.0)];
+    assert!(matches!(ConvexPolytope::try_from_points(&nan, "nan"), Err(CoreError::NonFinite { .. })));
+    let same = [Vec3::ONE; 5];
+    assert!(ConvexPolytope::try_from_points(&same, "same").is_err());
+}
+
+#[test]
+fn hull_of_many_points_contains_them_all() {
+    // deterministic pseudo-random points in a ball
+    let mut x: u64 = 0x9E3779B97F4A7C15;
+    let mut rnd = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let pts: Vec<Vec3> = (0..2000).map(|_| Vec3::new(rnd(), rnd(), rnd())).filter(|p| p.length() < 1.0).collect();
+    let p = ConvexPolytope::from_points(&pts);
+    for q in &pts {
+        assert!(p.plane_distance(*q) <= 1e-9);
+    }
+    for v in &p.vertices {
+        assert!(p.plane_distance(*v).abs() <= 1e-9, "hull vertex on the boundary");
+    }
+}

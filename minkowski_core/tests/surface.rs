@@ -1,0 +1,153 @@
+//! Integration tests: closedness, orientation, the error bound and topology of extracted
+//! surfaces on shapes with closed-form answers.
+
+use minkowski_core::*;
+use std::collections::HashMap;
+
+fn boxp(min: [f64; 3], max: [f64; 3]) -> Vec<Vec3> {
+    (0..8)
+        .map(|k| {
+            Vec3::new(
+                if k & 1 == 1 { max[0] } else { min[0] },
+                if k & 2 == 2 { max[1] } else { min[1] },
+                if k & 4 == 4 { max[2] } else { min[2] },
+            )
+        })
+        .collect()
+}
+
+fn set_of(boxes: &[([f64; 3], [f64; 3])]) -> PolytopeSet {
+    PolytopeSet::new(boxes.iter().map(|(a, b)| ConvexPolytope::from_points(&boxp(*a, *b))).collect())
+}
+
+/// Each directed edge once, its reverse once: closed, manifold, consistently oriented.
+fn check_closed_oriented(s: &Surface) {
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    for f in &s.faces {
+        assert!(f[0] != f[1] && f[1] != f[2] && f[0] != f[2], "degenerate face {f:?}");
+        for k in 0..3 {
+            *directed.entry((f[k], f[(k + 1) % 3])).or_default() += 1;
+        }
+    }
+    for (&(a, b), &n) in &directed {
+        assert_eq!(n, 1, "directed edge {a}->{b} used {n} times");
+        assert_eq!(directed.get(&(b, a)), Some(&1), "edge {a}->{b} has no opposite");
+    }
+}
+
+fn volume(s: &Surface) -> f64 {
+    s.faces
+        .iter()
+        .map(|f| {
+            let (a, b, c) = (s.vertices[f[0] as usize], s.vertices[f[1] as usize], s.vertices[f[2] as usize]);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum()
+}
+
+fn euler(s: &Surface) -> i64 {
+    let mut edges = std::collections::HashSet::new();
+    for f in &s.faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            edges.insert((a.min(b), a.max(b)));
+        }
+    }
+    s.vertices.len() as i64 - edges.len() as i64 + s.faces.len() as i64
+}
+
+fn run(set: &PolytopeSet, eps: f64) -> UnionResult {
+    approximate_union(set, &UnionParams { eps, max_cells: 20_000_000, max_refinements: 2 }).unwrap()
+}
+
+#[test]
+fn cube_surface_is_closed_and_within_the_bound() {
+    let set = set_of(&[([0.0; 3], [1.0; 3])]);
+    let r = run(&set, 0.05);
+    let s = &r.surface;
+    assert!(!s.faces.is_empty());
+    assert_eq!(s.complex_cells, 0);
+    assert_eq!(s.inconsistent_edges, 0);
+    check_closed_oriented(s);
+    assert_eq!(euler(s), 2);
+    // vertices are exact boundary points (up to the clamp)
+    let cube = &set.polys[0];
+    for v in &s.vertices {
+        assert!(cube.signed_distance(*v).abs() <= r.error_bound);
+    }
+    // volume within area × bound
+    let v = volume(s);
+    assert!((v - 1.0).abs() <= 6.0 * r.error_bound, "volume {v}");
+    assert!(v > 0.0, "outward orientation gives positive volume");
+}
+
+#[test]
+fn square_ring_keeps_its_hole() {
+    // four bars around a 1×1 hole: genus 1
+    let set = set_of(&[
+        ([0.0, 0.0, 0.0], [3.0, 1.0, 1.0]),
+        ([0.0, 2.0, 0.0], [3.0, 3.0, 1.0]),
+        ([0.0, 0.0, 0.0], [1.0, 3.0, 1.0]),
+        ([2.0, 0.0, 0.0], [3.0, 3.0, 1.0]),
+    ]);
+    let r = run(&set, 0.1);
+    check_closed_oriented(&r.surface);
+    assert_eq!(euler(&r.surface), 0, "genus 1");
+    let v = volume(&r.surface);
+    assert!((v - 8.0).abs() <= 32.0 * r.error_bound, "volume {v}");
+}
+
+#[test]
+fn thin_slot_is_detected_as_complex_then_refined_open() {
+    // two blocks 0.06 apart: at eps 0.25 (h ≈ 0.144) no lattice point falls in the slot,
+    // the samples join the blocks, and the cells across the slot must be flagged
+    let set = set_of(&[([0.0, 0.0, 0.0], [1.0, 2.0, 2.0]), ([1.06, 0.0, 0.0], [2.06, 2.0, 2.0])]);
+    let coarse = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 0 }).unwrap();
+    assert!(coarse.surface.complex_cells > 0, "the slot must be flagged");
+    assert_eq!(euler(&coarse.surface), 2, "unrefined, the slot is closed (one sphere)");
+    let fine = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 4 }).unwrap();
+    assert_eq!(fine.surface.complex_cells, 0);
+    assert!(fine.refinements > 0);
+    check_closed_oriented(&fine.surface);
+    assert_eq!(euler(&fine.surface), 4, "two separate boxes: two spheres");
+}
+
+#[test]
+fn minkowski_of_boxes_is_the_box_of_summed_extents() {
+    let a = vec![boxp([-1.0, -1.0, -1.0], [1.0, 1.0, 1.0])];
+    let b = vec![boxp([9.5, -0.5, -0.5], [10.5, 0.5, 0.5])];
+    let sums = pairwise_sums(&a, &b, SumKind::Add).unwrap();
+    assert_eq!(sums.len(), 1);
+    let s = &sums[0];
+    assert!((s.volume() - 27.0).abs() < 1e-9);
+    assert!((s.aabb.min - Vec3::new(8.5, -1.5, -1.5)).length() < 1e-12);
+    let diff = pairwise_sums(&a, &b, SumKind::Subtract).unwrap();
+    assert!((diff[0].aabb.max - Vec3::new(-8.5, 1.5, 1.5)).length() < 1e-12);
+    assert!(matches!(pairwise_sums(&[], &b, SumKind::Add), Err(CoreError::Empty { .. })));
+}
+
+#[test]
+fn bad_eps_is_an_error() {
+    let set = set_of(&[([0.0; 3], [1.0; 3])]);
+    for eps in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let r = approximate_union(&set, &UnionParams { eps, max_cells: 1000, max_refinements: 0 });
+        assert!(matches!(r, Err(CoreError::InvalidParameter { .. })), "eps {eps}");
+    }
+    let r = approximate_union(&set, &UnionParams { eps: 1e-4, max_cells: 1000, max_refinements: 0 });
+    assert!(matches!(r, Err(CoreError::ResourceLimit { .. })));
+}
+
+#[test]
+fn set_queries() {
+    let set = set_of(&[([0.0; 3], [1.0; 3]), ([2.0, 0.0, 0.0], [3.0, 1.0, 1.0])]);
+    assert!(set.contains_point(Vec3::splat(0.5)));
+    assert!(!set.contains_point(Vec3::new(1.5, 0.5, 0.5)));
+    assert!((set.signed_distance(Vec3::new(1.5, 0.5, 0.5)) - 0.5).abs() < 1e-12);
+    assert!((set.signed_distance(Vec3::new(2.5, 0.5, 0.5)) + 0.5).abs() < 1e-12);
+    assert!((set.signed_distance(Vec3::new(10.0, 0.5, 0.5)) - 7.0).abs() < 1e-12);
+    assert!(!set.segment_is_free(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(4.0, 0.5, 0.5)));
+    assert!(set.segment_is_free(Vec3::new(1.5, -1.0, 0.5), Vec3::new(1.5, 2.0, 0.5)));
+    let iv = set.segment_intervals(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(4.0, 0.5, 0.5));
+    assert_eq!(iv.len(), 2);
+}
+
