@@ -1,2 +1,45 @@
-"""minkplan: translational motion planning on Minkowski-sum C-obstacles."""
-from . import _minkowski_core  # noqa: F401
+"""minkplan: translational motion planning on Minkowski-sum C-obstacles.
+
+Public API:
+
+- :func:`minkowski_sum`, :func:`c_obstacle` -> :class:`MinkowskiResult`
+- :func:`decompose` -> :class:`Decomposition` (convex pieces, cached)
+- :func:`load_mesh`, :func:`validate_solid`, :func:`repair_mesh`, :func:`mirror`
+- :mod:`planner.errors` (every error minkplan raises), :data:`tol` (all tolerances)
+"""
+
+from . import _minkowski_core  # noqa: F401  (native core; fails loudly if not built)
+from .decompose import Decomposition, decompose
+from .errors import (
+    GeometryError,
+    InvalidMeshError,
+    InvalidParameterError,
+    MinkplanError,
+    ResourceLimitError,
+    ScenarioError,
+)
+from .meshes import load_mesh, mirror, repair_mesh, validate_solid
+from .minkowski import MinkowskiResult, c_obstacle, minkowski_sum
+from .tolerances import Tolerances, tol
+
+__version__ = _minkowski_core.__version__
+
+__all__ = [
+    "Decomposition",
+    "GeometryError",
+    "InvalidMeshError",
+    "InvalidParameterError",
+    "MinkowskiResult",
+    "MinkplanError",
+    "ResourceLimitError",
+    "ScenarioError",
+    "Tolerances",
+    "c_obstacle",
+    "decompose",
+    "load_mesh",
+    "minkowski_sum",
+    "mirror",
+    "repair_mesh",
+    "tol",
+    "validate_solid",
+]

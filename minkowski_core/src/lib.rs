@@ -29,7 +29,7 @@ pub use minkowski::{pairwise_sums, PolytopeSet, SumKind};
 pub use octree::{Label, Leaf, Octree, PrimitiveSource};
 pub use polytope::ConvexPolytope;
 pub use surface::{extract, Surface};
-pub use union::{approximate_union, cell_size_for_eps, grid_error_bound, UnionParams, UnionResult};
+pub use union::{approximate_union, cell_size_for_eps, grid_error_bound, surface_error_bound, UnionParams, UnionResult};
 
 #[cfg(feature = "python")]
 mod py;

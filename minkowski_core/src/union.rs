@@ -25,8 +25,9 @@ pub struct UnionResult {
     pub surface: Surface,
     /// Finest cell size used.
     pub h: f64,
-    /// Two-sided Hausdorff bound of the surface to the union's boundary; it holds when
-    /// `surface.complex_cells == 0`.
+    /// Two-sided Hausdorff bound of the surface to the union's boundary that is proved for
+    /// this surface: `grid_error_bound(h)`, twice that with unresolved cells, infinite with
+    /// complex cells.
     pub error_bound: f64,
     /// Grid halvings done.
     pub refinements: u32,
@@ -43,18 +44,32 @@ pub fn cell_size_for_eps(eps: f64) -> f64 {
     eps / (3f64.sqrt() * (1.0 + 2.0 * EDGE_CLAMP))
 }
 
-/// Two-sided bound of a surface extracted at cell size `h`: every output point lies in a
-/// tetrahedron whose edge crossings are exact boundary points (≤ the longest tetrahedron
-/// edge, `sqrt(3) h`, away), and every boundary point lies in a band cell that the surface
-/// crosses (≤ the cell diagonal away) when no cell is complex; the clamp of vertices off
-/// lattice points adds `2 · EDGE_CLAMP` of that.
+/// Two-sided bound of a surface extracted at cell size `h` with no unresolved cell: every
+/// output point lies in a tetrahedron whose edge crossings are exact boundary points (≤ the
+/// longest tetrahedron edge, `sqrt(3) h`, away), and every boundary point lies in a band
+/// cell that the surface crosses (≤ the cell diagonal away); the clamp of vertices off
+/// lattice points adds `2 · EDGE_CLAMP` of that. With unresolved cells (all next to a cell
+/// the surface crosses) the bound is twice this.
 pub fn grid_error_bound(h: f64) -> f64 {
     3f64.sqrt() * h * (1.0 + 2.0 * EDGE_CLAMP)
 }
 
-/// Approximate the boundary of the union of `set` within `params.eps`, halving the grid
-/// while complex cells remain (at most `max_refinements` times, and only while the next
-/// grid fits the cell budget).
+/// The bound that holds for `surface` extracted at cell size `h` (infinite while complex
+/// cells remain).
+pub fn surface_error_bound(surface: &Surface, h: f64) -> f64 {
+    if surface.complex_cells > 0 {
+        f64::INFINITY
+    } else if surface.unresolved_cells > 0 {
+        2.0 * grid_error_bound(h)
+    } else {
+        grid_error_bound(h)
+    }
+}
+
+/// Approximate the boundary of the union of `set` within `params.eps`: the first grid has
+/// `grid_error_bound(h) = eps`; the grid is halved while the proved bound exceeds eps
+/// (unresolved or complex cells), at most `max_refinements` times and only while the next
+/// grid (about four times the band cells) is expected to fit the cell budget.
 ///
 /// # Errors
 /// [`CoreError::InvalidParameter`] for a bad eps, [`CoreError::ResourceLimit`] when even
@@ -82,17 +97,19 @@ pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<
         let t1 = Instant::now();
         let surface = extract(&oct, &set.polys);
         t_surf += t1.elapsed().as_secs_f64();
-        let done = surface.complex_cells == 0;
+        let bound = surface_error_bound(&surface, h);
+        let done = bound <= params.eps * (1.0 + 1e-9);
+        let next_fits = 4 * (oct.leaves.len() + surface.band_cells) <= params.max_cells;
         best = Some(UnionResult {
             surface,
             h,
-            error_bound: grid_error_bound(h),
+            error_bound: bound,
             refinements: round,
             level_counts: oct.level_counts(),
             seconds_octree: t_oct,
             seconds_surface: t_surf,
         });
-        if done {
+        if done || !next_fits {
             break;
         }
         h *= 0.5;

@@ -49,10 +49,13 @@ pub struct Surface {
     pub edges: usize,
     /// Edges the boundary crosses more than once or without a sign change.
     pub complex_edges: usize,
-    /// Cells the samples do not resolve: an edge crosses free space between two solid
-    /// stretches (a passage that may be lost), or solid crosses an edge of a cell whose
-    /// corners all have one sign (a feature the surface would miss). The two-sided bound and
-    /// the topology are guaranteed only when this is 0.
+    /// Cells whose corners all have one sign although solid (a sliver) or free space (a
+    /// gap) crosses one of their edges: the samples do not see that piece of boundary. Next
+    /// to a cell with a sign change this costs accuracy (the bound doubles to
+    /// `2 sqrt(3) h`), not closedness.
+    pub unresolved_cells: usize,
+    /// Unresolved cells with no 26-neighbour that has a sign change: there no bound holds
+    /// (a thin feature or passage may be lost), so the caller refines.
     pub complex_cells: usize,
     /// Edges whose clipped crossings disagreed with the lattice signs (rounding); should be 0.
     pub inconsistent_edges: usize,
@@ -264,23 +267,24 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
         edges.binary_search_by(|e| (e.0, e.1).cmp(&(x, y))).expect("edge of a band cell")
     };
 
-    // 3. triangles per cell
+    // 3. triangles per cell, and whether the cell resolves the boundary
     let table = case_table();
     let tet_list = tets();
-    let per_cell: Vec<(Vec<[u32; 3]>, bool)> = band
+    // (triangles, has a sign change, unresolved: silent but solid or free space on an edge)
+    let per_cell: Vec<(Vec<[u32; 3]>, bool, bool)> = band
         .par_iter()
         .map(|&li| {
             let keys: Vec<u64> = (0..8).map(|c| leaf_corner_key(li, c)).collect();
             let signs: Vec<bool> = keys.iter().map(|&q| sign_of(q)).collect();
             let mut tris = Vec::new();
-            // complex: a gap on some edge (a passage may be lost), or solid on some edge
-            // while no corner sees it (the surface would miss it)
             let sign_change = signs.iter().any(|&x| x != signs[0]);
-            let mut complex = false;
-            for &(a, b) in edges_local {
-                let r = &results[edge_index(keys[a], keys[b])];
-                if r.gap || (r.sliver && !sign_change) {
-                    complex = true;
+            let mut unresolved = false;
+            if !sign_change {
+                for &(a, b) in edges_local {
+                    let r = &results[edge_index(keys[a], keys[b])];
+                    if r.gap || r.sliver {
+                        unresolved = true;
+                    }
                 }
             }
             for (tn, t) in tet_list.iter().enumerate() {
@@ -293,12 +297,43 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
                     tris.push(f);
                 }
             }
-            (tris, complex)
+            (tris, sign_change, unresolved)
         })
         .collect();
-    for (tris, complex) in per_cell {
+    // an unresolved cell is complex unless a 26-neighbour has a sign change: then the
+    // surface passes within the two cells' joint diagonal (2 sqrt(3) h) of its points
+    let mut resolved: Vec<u64> = band
+        .iter()
+        .zip(&per_cell)
+        .filter(|(_, c)| c.1)
+        .map(|(&li, _)| leaf_corner_key(li, 0))
+        .collect();
+    resolved.sort_unstable();
+    for (&li, (tris, _, unresolved)) in band.iter().zip(per_cell) {
         s.faces.extend(tris);
-        s.complex_cells += complex as usize;
+        if !unresolved {
+            continue;
+        }
+        s.unresolved_cells += 1;
+        let l = &oct.leaves[li];
+        let mut near = false;
+        'n: for dz in -1i64..=1 {
+            for dy in -1i64..=1 {
+                for dx in -1i64..=1 {
+                    let (x, y, z) = (l.ijk[0] as i64 + dx, l.ijk[1] as i64 + dy, l.ijk[2] as i64 + dz);
+                    if x < 0 || y < 0 || z < 0 {
+                        continue;
+                    }
+                    if resolved.binary_search(&key(x as u32, y as u32, z as u32)).is_ok() {
+                        near = true;
+                        break 'n;
+                    }
+                }
+            }
+        }
+        if !near {
+            s.complex_cells += 1;
+        }
     }
     s
 }

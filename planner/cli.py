@@ -1,0 +1,149 @@
+"""The ``minkplan`` command line: thin, lazy imports, one-line errors.
+
+Exit codes: 0 success, 1 no result (planning: no path / not found), 2 bad input (one line
+on stderr naming the field or file), 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+_MESH_SUFFIXES = {".stl", ".obj", ".ply", ".off", ".glb"}
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="minkplan", description=__doc__.splitlines()[0])
+    p.add_argument("-v", "--verbose", action="count", default=0, help="more logging (-vv: debug)")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    m = sub.add_parser(
+        "minkowski",
+        help="Minkowski sum A ⊕ B (or C-obstacle A ⊕ −B) of two closed meshes",
+        description="Compute A ⊕ B of two closed meshes and write it as a mesh file. "
+        "With --mirror-b, compute A ⊕ (−B): the C-obstacle of obstacle A for robot B.",
+    )
+    m.add_argument("a", help="first mesh file (obstacle with --mirror-b)")
+    m.add_argument("b", help="second mesh file (robot with --mirror-b)")
+    m.add_argument("-o", "--output", required=True, help="output mesh (.stl .obj .ply .off .glb)")
+    m.add_argument(
+        "--eps",
+        type=float,
+        default=None,
+        help="grid error bound (default 0.5%% of the result's diagonal)",
+    )
+    m.add_argument(
+        "--mirror-b", action="store_true", help="use −B: the translational C-obstacle A ⊕ (−B)"
+    )
+    m.add_argument(
+        "--threshold",
+        type=float,
+        default=None,
+        help="CoACD concavity threshold for non-convex bodies",
+    )
+    m.add_argument("--seed", type=int, default=0, help="CoACD seed")
+    m.add_argument(
+        "--stats", default=None, help="also write error bound and statistics as JSON here"
+    )
+    m.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return p
+
+
+def _fail(message: str) -> int:
+    sys.stderr.write(f"minkplan: error: {message}\n")
+    return 2
+
+
+def _atomic_write(path: Path, write) -> None:
+    """Write via a temporary file in the same directory, then rename: never half a file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _cmd_minkowski(args) -> int:
+    out = Path(args.output)
+    if out.suffix.lower() not in _MESH_SUFFIXES:
+        return _fail(
+            f"--output {out}: unknown mesh format {out.suffix!r}; "
+            f"use one of {sorted(_MESH_SUFFIXES)}"
+        )
+    for label, f in (("a", args.a), ("b", args.b)):
+        if not Path(f).is_file():
+            return _fail(f"{label}: file {f!r} not found")
+
+    import planner
+
+    kwargs = {}
+    if args.threshold is not None:
+        kwargs["threshold"] = args.threshold
+    fn = planner.c_obstacle if args.mirror_b else planner.minkowski_sum
+    result = fn(
+        planner.load_mesh(args.a, name=args.a),
+        planner.load_mesh(args.b, name=args.b),
+        eps=args.eps,
+        seed=args.seed,
+        progress=False if args.no_progress else None,
+        **kwargs,
+    )
+    _atomic_write(
+        out, lambda tmp: result.mesh.export(tmp, file_type=out.suffix.lower().lstrip("."))
+    )
+    summary = {
+        "output": str(out),
+        "error_bound": result.error_bound,
+        "eps": result.eps,
+        "bound_guaranteed": result.bound_guaranteed,
+        "exact_decomposition": result.exact,
+        "stats": result.stats,
+    }
+    if args.stats:
+        stats_path = Path(args.stats)
+        _atomic_write(stats_path, lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))
+    sys.stdout.write(
+        f"wrote {out}: {result.stats['triangles']} triangles, error bound {result.error_bound:.4g} "
+        f"(grid {result.stats['grid_error_bound']:.4g} + decomposition "
+        f"{result.stats['decomposition_excess']:.4g}), {result.stats['seconds']['total']:.2f} s\n"
+    )
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    level = (
+        logging.WARNING
+        if args.verbose == 0
+        else logging.INFO
+        if args.verbose == 1
+        else logging.DEBUG
+    )
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    try:
+        from planner.errors import MinkplanError
+    except ImportError as exc:  # the native module is missing: a broken install
+        return _fail(f"minkplan is not installed correctly: {exc}")
+    try:
+        if args.command == "minkowski":
+            return _cmd_minkowski(args)
+        return _fail(f"unknown command {args.command!r}")
+    except MinkplanError as exc:
+        return _fail(str(exc))
+    except KeyboardInterrupt:
+        sys.stderr.write("minkplan: interrupted\n")
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
