@@ -39,15 +39,19 @@ fn leaves_tile_the_root_and_labels_are_right() {
 fn candidate_planes_are_only_those_cutting_the_cell() {
     let set = unit_cube_set();
     let oct = Octree::build(&set, &set.aabb, 0.1, 1_000_000).unwrap();
-    let cube = &set.polys[0];
     let mut seen = 0;
     for l in oct.leaves.iter().filter(|l| l.label == Label::Mixed) {
         let b = oct.cell_box(l);
         for (prim, planes) in oct.candidates(l) {
             assert_eq!(prim, 0);
             assert!(!planes.is_empty() && planes.len() <= 3, "a cube cell is cut by at most 3 facets");
+            // every kept plane really cuts the cell: corners on both sides
+            for &k in planes {
+                let (n, d) = (set.polys[0].normals[k as usize], set.polys[0].offsets[k as usize]);
+                let (c, h) = (b.center(), b.half());
+                assert!(n.dot(c) - n.abs().dot(h) <= d && n.dot(c) + n.abs().dot(h) > d);
+            }
             seen += 1;
-            let _ = b;
         }
     }
     assert!(seen > 0);

@@ -199,19 +199,37 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
         inside[i]
     };
 
-    // 2. distinct edges with an owning leaf; clip each against its leaf's primitives
+    // 2. edges: every Kuhn edge runs from a lower corner `lo` to `lo | m` for an axis mask
+    // m in 1..=7, so edge (point index of lo) * 7 + (m - 1) names it without a search
+    let corner_index = |li: usize| -> [u32; 8] {
+        let mut idx = [0u32; 8];
+        for (c, slot) in idx.iter_mut().enumerate() {
+            let q = leaf_corner_key(li, c);
+            *slot = pts.binary_search_by_key(&q, |p| p.0).expect("lattice point of a band cell") as u32;
+        }
+        idx
+    };
+    let cell_points: Vec<[u32; 8]> = band.par_iter().map(|&li| corner_index(li)).collect();
     let edges_local = cell_edges();
-    let mut edges: Vec<(u64, u64, u32)> = band
-        .par_iter()
-        .flat_map_iter(|&li| {
-            edges_local.iter().map(move |&(a, b)| {
-                let (ka, kb) = (leaf_corner_key(li, a), leaf_corner_key(li, b));
-                (ka.min(kb), ka.max(kb), li as u32)
-            })
+    let edge_slot = |idx: &[u32; 8], a: usize, b: usize| -> usize { idx[a] as usize * 7 + (b ^ a) - 1 };
+    let mut owner = vec![u32::MAX; pts.len() * 7];
+    for (n, idx) in cell_points.iter().enumerate() {
+        for &(a, b) in edges_local {
+            owner[edge_slot(idx, a, b)] = band[n] as u32;
+        }
+    }
+    let edges: Vec<(u64, u64, u32, usize)> = owner
+        .iter()
+        .enumerate()
+        .filter(|(_, &o)| o != u32::MAX)
+        .map(|(slot, &o)| {
+            let (pi, m) = (slot / 7, slot % 7 + 1);
+            let ka = pts[pi].0;
+            let (i, j, k) = unkey(ka);
+            let kb = key(i + (m & 1) as u32, j + ((m >> 1) & 1) as u32, k + ((m >> 2) & 1) as u32);
+            (ka, kb, o, slot)
         })
         .collect();
-    edges.par_sort_unstable();
-    edges.dedup_by_key(|e| (e.0, e.1));
     s.edges = edges.len();
 
     // per edge: the crossing (parameter from the lower key's end) when the signs differ, and
@@ -220,9 +238,9 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
     // ends: a thin feature or a clipped convex edge)
     let results: Vec<EdgeInfo> = edges
         .par_iter()
-        .map(|&(ka, kb, li)| {
+        .map(|&(ka, kb, li, slot)| {
             let (pa, pb) = (point_of(ka), point_of(kb));
-            let (sa, sb) = (sign_of(ka), sign_of(kb));
+            let (sa, sb) = (inside[slot / 7], sign_of(kb));
             let leaf = &oct.leaves[li as usize];
             let mut iv = Vec::new();
             for (prim, planes) in oct.candidates(leaf) {
@@ -251,37 +269,34 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
         })
         .collect();
 
-    // vertex ids for sign-changing edges
-    let mut vid = vec![u32::MAX; edges.len()];
+    // vertex ids for sign-changing edges, and edge info by slot
+    let mut vid = vec![u32::MAX; owner.len()];
+    let mut info_of = vec![u32::MAX; owner.len()];
     for (n, (e, r)) in edges.iter().zip(&results).enumerate() {
+        info_of[e.3] = n as u32;
         if let Some(t) = r.t {
-            vid[n] = s.vertices.len() as u32;
+            vid[e.3] = s.vertices.len() as u32;
             let (pa, pb) = (point_of(e.0), point_of(e.1));
             s.vertices.push(pa + (pb - pa) * t);
         }
         s.complex_edges += (r.gap || r.sliver) as usize;
         s.inconsistent_edges += r.inconsistent as usize;
     }
-    let edge_index = |ka: u64, kb: u64| -> usize {
-        let (x, y) = (ka.min(kb), ka.max(kb));
-        edges.binary_search_by(|e| (e.0, e.1).cmp(&(x, y))).expect("edge of a band cell")
-    };
 
     // 3. triangles per cell, and whether the cell resolves the boundary
     let table = case_table();
     let tet_list = tets();
     // (triangles, has a sign change, unresolved: silent but solid or free space on an edge)
-    let per_cell: Vec<(Vec<[u32; 3]>, bool, bool)> = band
+    let per_cell: Vec<(Vec<[u32; 3]>, bool, bool)> = cell_points
         .par_iter()
-        .map(|&li| {
-            let keys: Vec<u64> = (0..8).map(|c| leaf_corner_key(li, c)).collect();
-            let signs: Vec<bool> = keys.iter().map(|&q| sign_of(q)).collect();
+        .map(|idx| {
+            let signs: Vec<bool> = idx.iter().map(|&p| inside[p as usize]).collect();
             let mut tris = Vec::new();
             let sign_change = signs.iter().any(|&x| x != signs[0]);
             let mut unresolved = false;
             if !sign_change {
                 for &(a, b) in edges_local {
-                    let r = &results[edge_index(keys[a], keys[b])];
+                    let r = &results[info_of[edge_slot(idx, a, b)] as usize];
                     if r.gap || r.sliver {
                         unresolved = true;
                     }
@@ -292,7 +307,7 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
                 for tri in &table[tn][mask as usize] {
                     let mut f = [0u32; 3];
                     for (m, &(a, b)) in tri.iter().enumerate() {
-                        f[m] = vid[edge_index(keys[a], keys[b])];
+                        f[m] = vid[edge_slot(idx, a, b)];
                     }
                     tris.push(f);
                 }
