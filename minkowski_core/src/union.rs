@@ -66,10 +66,11 @@ pub fn surface_error_bound(surface: &Surface, h: f64) -> f64 {
     }
 }
 
-/// Approximate the boundary of the union of `set` within `params.eps`: the first grid has
-/// `grid_error_bound(h) = eps`; the grid is halved while the proved bound exceeds eps
-/// (unresolved or complex cells), at most `max_refinements` times and only while the next
-/// grid (about four times the band cells) is expected to fit the cell budget.
+/// Approximate the boundary of the union of `set` at resolution `params.eps`: the grid has
+/// `grid_error_bound(h) = eps`, which is the proved bound when every band cell resolves the
+/// boundary and twice it with unresolved cells (each next to a resolved one). While complex
+/// cells remain (no bound at all) the grid is halved, at most `max_refinements` times and
+/// only while the next grid (about four times the band cells) is expected to fit the budget.
 ///
 /// # Errors
 /// [`CoreError::InvalidParameter`] for a bad eps, [`CoreError::ResourceLimit`] when even
@@ -98,7 +99,7 @@ pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<
         let surface = extract(&oct, &set.polys);
         t_surf += t1.elapsed().as_secs_f64();
         let bound = surface_error_bound(&surface, h);
-        let done = bound <= params.eps * (1.0 + 1e-9);
+        let done = bound.is_finite();
         let next_fits = 4 * (oct.leaves.len() + surface.band_cells) <= params.max_cells;
         best = Some(UnionResult {
             surface,

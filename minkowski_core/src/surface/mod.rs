@@ -286,46 +286,50 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
     // 3. triangles per cell, and whether the cell resolves the boundary
     let table = case_table();
     let tet_list = tets();
-    // (triangles, has a sign change, unresolved: silent but solid or free space on an edge)
-    let per_cell: Vec<(Vec<[u32; 3]>, bool, bool)> = cell_points
+    // per cell: (has a sign change, unresolved: silent but solid or free space on an edge)
+    let flags: Vec<(bool, bool)> = cell_points
         .par_iter()
         .map(|idx| {
-            let signs: Vec<bool> = idx.iter().map(|&p| inside[p as usize]).collect();
-            let mut tris = Vec::new();
+            let signs: [bool; 8] = std::array::from_fn(|c| inside[idx[c] as usize]);
             let sign_change = signs.iter().any(|&x| x != signs[0]);
-            let mut unresolved = false;
-            if !sign_change {
-                for &(a, b) in edges_local {
+            let unresolved = !sign_change
+                && edges_local.iter().any(|&(a, b)| {
                     let r = &results[info_of[edge_slot(idx, a, b)] as usize];
-                    if r.gap || r.sliver {
-                        unresolved = true;
-                    }
-                }
-            }
-            for (tn, t) in tet_list.iter().enumerate() {
+                    r.gap || r.sliver
+                });
+            (sign_change, unresolved)
+        })
+        .collect();
+    let faces: Vec<[u32; 3]> = cell_points
+        .par_iter()
+        .zip(&flags)
+        .filter(|(_, f)| f.0)
+        .flat_map_iter(|(idx, _)| {
+            let signs: [bool; 8] = std::array::from_fn(|c| inside[idx[c] as usize]);
+            let vid = &vid;
+            tet_list.iter().enumerate().flat_map(move |(tn, t)| {
                 let mask = (0..4).fold(0u8, |m, n| m | ((signs[t[n]] as u8) << n));
-                for tri in &table[tn][mask as usize] {
+                table[tn][mask as usize].iter().map(move |tri| {
                     let mut f = [0u32; 3];
                     for (m, &(a, b)) in tri.iter().enumerate() {
                         f[m] = vid[edge_slot(idx, a, b)];
                     }
-                    tris.push(f);
-                }
-            }
-            (tris, sign_change, unresolved)
+                    f
+                })
+            })
         })
         .collect();
+    s.faces = faces;
     // an unresolved cell is complex unless a 26-neighbour has a sign change: then the
     // surface passes within the two cells' joint diagonal (2 sqrt(3) h) of its points
     let mut resolved: Vec<u64> = band
         .iter()
-        .zip(&per_cell)
-        .filter(|(_, c)| c.1)
+        .zip(&flags)
+        .filter(|(_, c)| c.0)
         .map(|(&li, _)| leaf_corner_key(li, 0))
         .collect();
     resolved.sort_unstable();
-    for (&li, (tris, _, unresolved)) in band.iter().zip(per_cell) {
-        s.faces.extend(tris);
+    for (&li, &(_, unresolved)) in band.iter().zip(&flags) {
         if !unresolved {
             continue;
         }
