@@ -34,7 +34,11 @@ class Primitives:
     ) -> list[tuple[float, float]]: ...
 
 def union_surface(
-    prims: Primitives, eps: float, max_cells: int = 8000000, max_refinements: int = 2
+    prims: Primitives,
+    eps: float,
+    max_cells: int = 8000000,
+    max_refinements: int = 2,
+    simplify: bool = True,
 ) -> dict[str, Any]: ...
 def build_octree(
     prims: Primitives,

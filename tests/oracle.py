@@ -37,6 +37,7 @@ __all__ = [
     "MinkowskiOracle",
     "approx_to_true_distances",
     "boundary_points_by_bisection",
+    "clear_caches",
     "exact_convex_sum",
     "hausdorff_estimate",
     "in_c_obstacle",
@@ -65,35 +66,33 @@ def _cross2(ax, ay, bx, by):
 class _ColumnGrid:
     """Triangles of a mesh binned by their xy bounding box in a rotated frame."""
 
-    def __init__(self, triangles: np.ndarray, rotation: np.ndarray):
-        tri = triangles @ rotation.T                      # (F, 3, 3) in the rotated frame
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, rotation: np.ndarray):
         self.rotation = rotation
-        self.tri = tri
-        f = len(tri)
-        lo = tri[:, :, :2].min(axis=1)
-        hi = tri[:, :, :2].max(axis=1)
+        self.rv = vertices @ rotation.T                   # vertices in the rotated frame
+        self.faces = faces
+        f = len(faces)
+        xy = self.rv[:, :2][faces]                        # (F, 3, 2)
+        lo = xy.min(axis=1)
+        hi = xy.max(axis=1)
+        del xy
         self.origin = lo.min(axis=0)
         span = np.maximum(hi.max(axis=0) - self.origin, 1e-300)
-        g = int(np.clip(np.sqrt(f), 1, 512))
+        g = int(np.clip(np.sqrt(f), 1, 1024))
         self.g = g
         self.cell = span / g * (1 + 1e-9)
         i0 = np.clip(((lo - self.origin) / self.cell).astype(np.int64), 0, g - 1)
         i1 = np.clip(((hi - self.origin) / self.cell).astype(np.int64), 0, g - 1)
+        del lo, hi
         nx = i1[:, 0] - i0[:, 0] + 1
         ny = i1[:, 1] - i0[:, 1] + 1
         count = nx * ny
-        tri_id = np.repeat(np.arange(f), count)
+        tri_id = np.repeat(np.arange(f, dtype=np.int32 if f < 2**31 else np.int64), count)
         k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
-        cx = i0[tri_id, 0] + k % nx[tri_id]
-        cy = i0[tri_id, 1] + k // nx[tri_id]
-        cell_id = cx * g + cy
+        cell_id = (i0[tri_id, 0] + k % nx[tri_id]) * g + (i0[tri_id, 1] + k // nx[tri_id])
+        del k
         order = np.argsort(cell_id, kind="stable")
         self.cell_tri = tri_id[order]
         self.cell_start = np.searchsorted(cell_id[order], np.arange(g * g + 1))
-        # orientation of each projected triangle: +1 if its normal points up (+z)
-        a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-        self.area2 = _cross2(b[:, 0] - a[:, 0], b[:, 1] - a[:, 1],
-                             c[:, 0] - a[:, 0], c[:, 1] - a[:, 1])
         self.scale = float(np.max(span))
 
     def winding(self, points: np.ndarray):
@@ -124,7 +123,7 @@ class _ColumnGrid:
             k = np.arange(c.sum()) - np.repeat(np.cumsum(c) - c, c)
             t = self.cell_tri[np.repeat(start[sl], c) + k]
             p = q[idx[sl]][pt_local]
-            tri = self.tri[t]
+            tri = self.rv[self.faces[t]]
             px, py = p[:, 0], p[:, 1]
             ax, ay = tri[:, 0, 0] - px, tri[:, 0, 1] - py
             bx, by = tri[:, 1, 0] - px, tri[:, 1, 1] - py
@@ -155,13 +154,15 @@ class _PointInMesh:
     """Reusable point-in-closed-mesh classifier (see :func:`winding_numbers`)."""
 
     def __init__(self, mesh: trimesh.Trimesh, seed: int = 12345):
-        self.triangles = np.asarray(mesh.triangles, dtype=np.float64)
+        self.vertices = np.array(mesh.vertices, dtype=np.float64)
+        faces = np.asarray(mesh.faces)
+        self.faces = faces.astype(np.int32 if len(self.vertices) < 2**31 else np.int64)
         self._rng = np.random.default_rng(seed)
         self._grids = [self._new_grid()]
 
     def _new_grid(self):
         rot = Rotation.random(random_state=self._rng).as_matrix()
-        return _ColumnGrid(self.triangles, rot)
+        return _ColumnGrid(self.vertices, self.faces, rot)
 
     def winding(self, points: np.ndarray) -> np.ndarray:
         points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
@@ -200,6 +201,14 @@ def _cached(cache: OrderedDict, key, build, size: int = 16):
     while len(cache) > size:
         cache.popitem(last=False)
     return value
+
+
+def clear_caches() -> None:
+    """Drop the cached FCL models and point-in-mesh grids (they can be large for big
+    meshes: an FCL BVH takes ~0.5 kB per triangle)."""
+    _PIM_CACHE.clear()
+    _ORACLE_CACHE.clear()
+    _SURFACE_CACHE.clear()
 
 
 def _pim(mesh: trimesh.Trimesh) -> _PointInMesh:

@@ -16,6 +16,7 @@ import numpy as np
 import trimesh
 
 __all__ = [
+    "bored_block",
     "box",
     "checked",
     "cross_of_bars",
@@ -198,6 +199,16 @@ def plate_with_hole(size=(10.0, 10.0, 1.0), hole_radius: float = 2.0,
     plate = manifold3d.Manifold.cube(list(map(float, size)), True)
     hole = manifold3d.Manifold.cylinder(2.0 * size[2] + 1.0, hole_radius, -1.0, sections, True)
     return from_manifold(plate - hole, "plate_with_hole")
+
+
+def bored_block(size=(2.0, 2.0, 4.0), bore_radius: float = 0.56,
+                sections: int = 32) -> trimesh.Trimesh:
+    """Block ``size`` centred on the origin with a round through-bore along z (a polygon
+    of ``sections`` sides with circumradius ``bore_radius``; its inradius is
+    ``bore_radius * cos(pi / sections)``)."""
+    block = manifold3d.Manifold.cube(list(map(float, size)), True)
+    bore = manifold3d.Manifold.cylinder(2.0 * size[2], bore_radius, -1.0, sections, True)
+    return from_manifold(block - bore, "bored_block")
 
 
 def nonconvex_part_2k() -> trimesh.Trimesh:

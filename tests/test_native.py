@@ -15,8 +15,10 @@ from planner.errors import InvalidMeshError, InvalidParameterError, ResourceLimi
 
 def cube(lo, hi):
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    return np.array([[hi[0] if k & 1 else lo[0], hi[1] if k & 2 else lo[1], hi[2] if k & 4 else lo[2]]
-                     for k in range(8)])
+    return np.array([
+        [hi[0] if k & 1 else lo[0], hi[1] if k & 2 else lo[1], hi[2] if k & 4 else lo[2]]
+        for k in range(8)
+    ])
 
 
 def test_stub_matches_the_binary():
@@ -114,7 +116,7 @@ def test_native_work_releases_the_gil():
     t = threading.Thread(target=ticker)
     t.start()
     t0 = time.perf_counter()
-    core.union_surface(s, 0.01)
+    core.union_surface(s, 0.01, simplify=False)
     t1 = time.perf_counter()
     stop.set()
     t.join()

@@ -32,6 +32,7 @@ def _uniform(bounds, n, rng, pad=0.0):
 
 SHAPES = {
     "box": lambda: shapes.box((1.0, 2.0, 3.0), (1.0, -2.0, 0.5)),
+    "bored_block": shapes.bored_block,
     "l_bracket": shapes.l_bracket,
     "slotted_bar": shapes.slotted_bar,
     "torus": lambda: shapes.torus(10.0, 3.0, 32, 16),
@@ -58,6 +59,7 @@ def test_shapes_closed_forms():
     assert shapes.l_bracket().volume == pytest.approx((4 * 1 + 1 * 2) * 2)
     assert shapes.torus(10, 3, 32, 16).euler_number == 0
     assert shapes.plate_with_hole().euler_number == 0
+    assert shapes.bored_block().euler_number == 0
     part = shapes.nonconvex_part_2k()
     assert 1500 <= len(part.faces) <= 2500
     assert part.convex_hull.volume > 1.2 * part.volume           # really non-convex

@@ -145,14 +145,16 @@ impl Primitives {
 
 /// Approximate the boundary of the union of `prims` with a closed, manifold,
 /// outward-oriented triangle mesh whose two-sided Hausdorff distance to the true boundary
-/// is at most `eps` (guaranteed when the returned `complex_cells` is 0; the grid is halved
-/// up to `max_refinements` times while complex cells remain). Returns a dict with
-/// `vertices` (n, 3), `faces` (m, 3), `h`, `error_bound` and statistics.
+/// is `error_bound`: `eps` when every band cell resolves the boundary, `2 eps` with
+/// unresolved cells, `inf` while complex cells remain (the grid is halved up to
+/// `max_refinements` times for those). `simplify` collapses the interiors of planar
+/// patches (same surface, fewer triangles). Returns a dict with `vertices` (n, 3), `faces`
+/// (m, 3), `h`, `error_bound` and statistics.
 #[pyfunction]
-#[pyo3(signature = (prims, eps, max_cells=8_000_000, max_refinements=2))]
-fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: usize, max_refinements: u32) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (prims, eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
+fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
     let set = prims.inner.clone();
-    let params = UnionParams { eps, max_cells, max_refinements };
+    let params = UnionParams { eps, max_cells, max_refinements, simplify };
     let r = py.detach(move || approximate_union(&set, &params))?;
     let d = PyDict::new(py);
     let s = &r.surface;
@@ -172,6 +174,8 @@ fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: 
     d.set_item("cells_per_level", r.level_counts.iter().map(|c| c.to_vec()).collect::<Vec<_>>())?;
     d.set_item("seconds_octree", r.seconds_octree)?;
     d.set_item("seconds_surface", r.seconds_surface)?;
+    d.set_item("seconds_simplify", r.seconds_simplify)?;
+    d.set_item("triangles_extracted", r.triangles_extracted)?;
     Ok(d)
 }
 

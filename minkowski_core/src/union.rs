@@ -4,7 +4,7 @@
 use crate::error::{CoreError, CoreResult};
 use crate::minkowski::PolytopeSet;
 use crate::octree::{LevelCounts, Octree};
-use crate::surface::{extract, Surface, EDGE_CLAMP};
+use crate::surface::{extract, merge_coplanar, Surface, EDGE_CLAMP};
 use std::time::Instant;
 
 /// Parameters of [`approximate_union`].
@@ -16,6 +16,9 @@ pub struct UnionParams {
     pub max_cells: usize,
     /// How many times the grid may be halved while complex cells remain.
     pub max_refinements: u32,
+    /// Collapse interior vertices of planar patches ([`merge_coplanar`]): same surface,
+    /// far fewer triangles on flat facets.
+    pub simplify: bool,
 }
 
 /// What [`approximate_union`] produced.
@@ -37,6 +40,10 @@ pub struct UnionResult {
     pub seconds_octree: f64,
     /// Seconds extracting surfaces (all rounds).
     pub seconds_surface: f64,
+    /// Seconds simplifying the final surface.
+    pub seconds_simplify: f64,
+    /// Triangles before simplification.
+    pub triangles_extracted: usize,
 }
 
 /// Finest cell size whose grid bound is `eps`.
@@ -109,11 +116,21 @@ pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<
             level_counts: oct.level_counts(),
             seconds_octree: t_oct,
             seconds_surface: t_surf,
+            seconds_simplify: 0.0,
+            triangles_extracted: 0,
         });
         if done || !next_fits {
             break;
         }
         h *= 0.5;
     }
-    Ok(best.expect("at least one round"))
+    let mut r = best.expect("at least one round");
+    r.triangles_extracted = r.surface.faces.len();
+    if params.simplify {
+        let t = Instant::now();
+        let scale = set.aabb.diagonal();
+        merge_coplanar(&mut r.surface, 1e-10 * scale, 1e-12 * r.h * r.h);
+        r.seconds_simplify = t.elapsed().as_secs_f64();
+    }
+    Ok(r)
 }

@@ -57,7 +57,7 @@ fn euler(s: &Surface) -> i64 {
 }
 
 fn run(set: &PolytopeSet, eps: f64) -> UnionResult {
-    approximate_union(set, &UnionParams { eps, max_cells: 20_000_000, max_refinements: 2 }).unwrap()
+    approximate_union(set, &UnionParams { eps, max_cells: 20_000_000, max_refinements: 2, simplify: false }).unwrap()
 }
 
 #[test]
@@ -102,10 +102,10 @@ fn thin_slot_is_detected_as_complex_then_refined_open() {
     // two blocks 0.06 apart: at eps 0.25 (h ≈ 0.144) no lattice point falls in the slot,
     // the samples join the blocks, and the cells across the slot must be flagged
     let set = set_of(&[([0.0, 0.0, 0.0], [1.0, 2.0, 2.0]), ([1.06, 0.0, 0.0], [2.06, 2.0, 2.0])]);
-    let coarse = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 0 }).unwrap();
+    let coarse = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 0, simplify: false }).unwrap();
     assert!(coarse.surface.complex_cells > 0, "the slot must be flagged");
     assert_eq!(euler(&coarse.surface), 2, "unrefined, the slot is closed (one sphere)");
-    let fine = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 4 }).unwrap();
+    let fine = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 4, simplify: false }).unwrap();
     assert_eq!(fine.surface.complex_cells, 0);
     assert!(fine.refinements > 0);
     check_closed_oriented(&fine.surface);
@@ -130,10 +130,10 @@ fn minkowski_of_boxes_is_the_box_of_summed_extents() {
 fn bad_eps_is_an_error() {
     let set = set_of(&[([0.0; 3], [1.0; 3])]);
     for eps in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        let r = approximate_union(&set, &UnionParams { eps, max_cells: 1000, max_refinements: 0 });
+        let r = approximate_union(&set, &UnionParams { eps, max_cells: 1000, max_refinements: 0, simplify: false });
         assert!(matches!(r, Err(CoreError::InvalidParameter { .. })), "eps {eps}");
     }
-    let r = approximate_union(&set, &UnionParams { eps: 1e-4, max_cells: 1000, max_refinements: 0 });
+    let r = approximate_union(&set, &UnionParams { eps: 1e-4, max_cells: 1000, max_refinements: 0, simplify: false });
     assert!(matches!(r, Err(CoreError::ResourceLimit { .. })));
 }
 
@@ -151,3 +151,21 @@ fn set_queries() {
     assert_eq!(iv.len(), 2);
 }
 
+
+#[test]
+fn simplification_keeps_the_surface_and_drops_flat_interiors() {
+    let set = set_of(&[([0.0, 0.0, 0.0], [3.0, 1.0, 1.0]), ([0.0, 0.0, 0.0], [1.0, 3.0, 1.0])]);
+    let p = |simplify| UnionParams { eps: 0.05, max_cells: 20_000_000, max_refinements: 1, simplify };
+    let raw = approximate_union(&set, &p(false)).unwrap();
+    let simple = approximate_union(&set, &p(true)).unwrap();
+    check_closed_oriented(&simple.surface);
+    assert_eq!(euler(&simple.surface), euler(&raw.surface));
+    assert!((volume(&simple.surface) - volume(&raw.surface)).abs() < 1e-9, "same solid");
+    assert!(simple.surface.faces.len() * 5 < raw.surface.faces.len(), "{} vs {}", simple.surface.faces.len(), raw.surface.faces.len());
+    assert_eq!(simple.triangles_extracted, raw.surface.faces.len());
+    // every kept vertex is one of the exact crossings
+    let l = &set;
+    for v in &simple.surface.vertices {
+        assert!(l.signed_distance(*v).abs() <= simple.error_bound);
+    }
+}

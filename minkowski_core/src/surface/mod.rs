@@ -12,8 +12,11 @@
 //!
 //! Entry point: [`extract`].
 
+mod simplify;
 #[cfg(test)]
 mod surface_tests;
+
+pub use simplify::merge_coplanar;
 
 use crate::math::Vec3;
 use crate::minkowski::merge_intervals;

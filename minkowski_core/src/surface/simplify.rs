@@ -1,0 +1,180 @@
+//! Geometry-preserving simplification of an extracted surface: interior vertices of planar
+//! patches are collapsed away.
+//!
+//! A vertex whose star (all triangles around it) lies in one plane is collapsed onto a
+//! neighbour when the link condition holds (the mesh stays a closed 2-manifold) and no
+//! triangle of the new star flips or degenerates in that plane. Every new triangle lies in
+//! the plane and the star's polygon is unchanged, so the surface is the same point set: the
+//! error bound, closedness and orientation are kept. Marching tetrahedra samples a flat
+//! facet with O(area / h²) triangles; afterwards only its boundary (O(perimeter / h))
+//! remains.
+
+use super::Surface;
+use crate::math::Vec3;
+
+/// Collapses never target a vertex with more incident triangles than this.
+const MAX_TARGET_DEGREE: usize = 40;
+
+/// Collapse interior vertices of planar patches of `s` (see the module docs). `plane_tol`
+/// is the distance within which a point counts as on a plane, `min_area` the smallest
+/// triangle area kept. Returns the number of vertices removed.
+pub fn merge_coplanar(s: &mut Surface, plane_tol: f64, min_area: f64) -> usize {
+    let nv = s.vertices.len();
+    let mut faces: Vec<[u32; 3]> = std::mem::take(&mut s.faces);
+    let mut alive = vec![true; faces.len()];
+    // vertex -> incident faces
+    let mut inc: Vec<Vec<u32>> = vec![Vec::new(); nv];
+    for (fi, f) in faces.iter().enumerate() {
+        for &v in f {
+            inc[v as usize].push(fi as u32);
+        }
+    }
+    let mut removed_v = vec![false; nv];
+    let mut removed = 0usize;
+    // stamp arrays: "w is a neighbour of the current v", "w was counted for the current u"
+    let mut mark = vec![0u64; nv];
+    let mut counted = vec![0u64; nv];
+    let mut stamp = 0u64;
+    for _pass in 0..2 {
+        let mut changed = 0usize;
+        for v in 0..nv {
+            if removed_v[v] || inc[v].len() < 3 {
+                continue;
+            }
+            stamp += 1;
+            if let Some(u) = try_collapse(v, &s.vertices, &mut faces, &mut alive, &mut inc, plane_tol, min_area, (&mut mark, &mut counted, stamp)) {
+                removed_v[v] = true;
+                let _ = u;
+                changed += 1;
+            }
+        }
+        removed += changed;
+        if changed * 50 < nv {
+            break;
+        }
+    }
+    // compact
+    let mut remap = vec![u32::MAX; nv];
+    let mut verts = Vec::with_capacity(nv - removed);
+    for (i, v) in s.vertices.iter().enumerate() {
+        if !removed_v[i] {
+            remap[i] = verts.len() as u32;
+            verts.push(*v);
+        }
+    }
+    s.faces = faces
+        .iter()
+        .zip(&alive)
+        .filter(|(_, &a)| a)
+        .map(|(f, _)| [remap[f[0] as usize], remap[f[1] as usize], remap[f[2] as usize]])
+        .collect();
+    s.vertices = verts;
+    removed
+}
+
+fn try_collapse(
+    v: usize,
+    pos: &[Vec3],
+    faces: &mut [[u32; 3]],
+    alive: &mut [bool],
+    inc: &mut [Vec<u32>],
+    plane_tol: f64,
+    min_area: f64,
+    scratch: (&mut [u64], &mut [u64], u64),
+) -> Option<usize> {
+    let (mark, counted, stamp) = scratch;
+    let star: Vec<u32> = inc[v].clone();
+    // the star's plane: normal of its largest triangle
+    let mut best = (0.0, Vec3::ZERO);
+    for &fi in &star {
+        let f = faces[fi as usize];
+        let n = (pos[f[1] as usize] - pos[f[0] as usize]).cross(pos[f[2] as usize] - pos[f[0] as usize]);
+        let a = n.length();
+        if a > best.0 {
+            best = (a, n / a);
+        }
+    }
+    if best.0 <= 0.0 {
+        return None;
+    }
+    let n = best.1;
+    let d = n.dot(pos[v]);
+    // all star vertices on the plane
+    for &fi in &star {
+        for &w in &faces[fi as usize] {
+            if (n.dot(pos[w as usize]) - d).abs() > plane_tol {
+                return None;
+            }
+        }
+    }
+    // the link of v: neighbours
+    let mut nbrs: Vec<u32> = Vec::with_capacity(star.len());
+    for &fi in &star {
+        for &w in &faces[fi as usize] {
+            if w as usize != v && !nbrs.contains(&w) {
+                nbrs.push(w);
+            }
+        }
+    }
+    if nbrs.len() != star.len() {
+        return None; // not a simple disk around v
+    }
+    // never onto a vertex with a huge fan (keeps every step cheap and the triangles
+    // reasonably shaped)
+    for &w in &nbrs {
+        mark[w as usize] = stamp;
+    }
+    for (ui, &u) in nbrs.iter().enumerate() {
+        if inc[u as usize].len() > MAX_TARGET_DEGREE {
+            continue;
+        }
+        // new star: faces of v not containing u, with v -> u; none may flip or degenerate
+        let flips = star.iter().any(|&fi| {
+            let f = faces[fi as usize];
+            if f.contains(&u) {
+                return false;
+            }
+            let g = f.map(|w| if w as usize == v { u } else { w });
+            let m = (pos[g[1] as usize] - pos[g[0] as usize]).cross(pos[g[2] as usize] - pos[g[0] as usize]);
+            m.dot(n) <= 2.0 * min_area
+        });
+        if flips {
+            continue;
+        }
+        // link condition: u and v share exactly the two apexes of their common edge
+        // (a distinct stamp per candidate u: stamp * 64 + ui never repeats for one v)
+        let cstamp = stamp * 64 + ui as u64 + 1;
+        let mut common = 0;
+        for &fi in &inc[u as usize] {
+            for &w in &faces[fi as usize] {
+                if w != u && mark[w as usize] == stamp && counted[w as usize] != cstamp {
+                    counted[w as usize] = cstamp;
+                    common += 1;
+                }
+            }
+        }
+        if common != 2 {
+            continue;
+        }
+        // apply
+        let mut moved = Vec::new();
+        for &fi in &star {
+            let f = faces[fi as usize];
+            if f.contains(&u) {
+                alive[fi as usize] = false;
+                for &w in &f {
+                    if w as usize != v {
+                        inc[w as usize].retain(|&x| x != fi);
+                    }
+                }
+            } else {
+                faces[fi as usize] = f.map(|w| if w as usize == v { u } else { w });
+                moved.push(fi);
+            }
+        }
+        inc[u as usize].extend(moved);
+        inc[v].clear();
+        return Some(u as usize);
+    }
+    None
+}
