@@ -14,6 +14,8 @@ use crate::math::Vec3;
 
 /// Collapses never target a vertex with more incident triangles than this.
 const MAX_TARGET_DEGREE: usize = 40;
+/// Vertices with larger stars are left alone.
+const STAR_CAP: usize = 64;
 
 /// Collapse interior vertices of planar patches of `s` (see the module docs). `plane_tol`
 /// is the distance within which a point counts as on a plane, `min_area` the smallest
@@ -83,10 +85,15 @@ fn try_collapse(
     scratch: (&mut [u64], &mut [u64], u64),
 ) -> Option<usize> {
     let (mark, counted, stamp) = scratch;
-    let star: Vec<u32> = inc[v].clone();
+    if inc[v].len() > STAR_CAP {
+        return None;
+    }
+    let mut star_buf = [0u32; STAR_CAP];
+    star_buf[..inc[v].len()].copy_from_slice(&inc[v]);
+    let star = &star_buf[..inc[v].len()];
     // the star's plane: normal of its largest triangle
     let mut best = (0.0, Vec3::ZERO);
-    for &fi in &star {
+    for &fi in star {
         let f = faces[fi as usize];
         let n = (pos[f[1] as usize] - pos[f[0] as usize]).cross(pos[f[2] as usize] - pos[f[0] as usize]);
         let a = n.length();
@@ -100,7 +107,7 @@ fn try_collapse(
     let n = best.1;
     let d = n.dot(pos[v]);
     // all star vertices on the plane
-    for &fi in &star {
+    for &fi in star {
         for &w in &faces[fi as usize] {
             if (n.dot(pos[w as usize]) - d).abs() > plane_tol {
                 return None;
@@ -108,20 +115,23 @@ fn try_collapse(
         }
     }
     // the link of v: neighbours
-    let mut nbrs: Vec<u32> = Vec::with_capacity(star.len());
-    for &fi in &star {
+    let mut nbr_buf = [0u32; 3 * STAR_CAP];
+    let mut nn = 0usize;
+    for &fi in star {
         for &w in &faces[fi as usize] {
-            if w as usize != v && !nbrs.contains(&w) {
-                nbrs.push(w);
+            if w as usize != v && !nbr_buf[..nn].contains(&w) {
+                nbr_buf[nn] = w;
+                nn += 1;
             }
         }
     }
+    let nbrs = &nbr_buf[..nn];
     if nbrs.len() != star.len() {
         return None; // not a simple disk around v
     }
     // never onto a vertex with a huge fan (keeps every step cheap and the triangles
     // reasonably shaped)
-    for &w in &nbrs {
+    for &w in nbrs {
         mark[w as usize] = stamp;
     }
     for (ui, &u) in nbrs.iter().enumerate() {
@@ -158,7 +168,7 @@ fn try_collapse(
         }
         // apply
         let mut moved = Vec::new();
-        for &fi in &star {
+        for &fi in star {
             let f = faces[fi as usize];
             if f.contains(&u) {
                 alive[fi as usize] = false;
