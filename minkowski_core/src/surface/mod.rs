@@ -30,6 +30,21 @@ use std::sync::OnceLock;
 /// zero-area triangles).
 pub const EDGE_CLAMP: f64 = 1e-4;
 
+/// Sort and merge `iv` into `out` (which must be at least as long); the merged count.
+fn merge_in_place(iv: &mut [(f64, f64)], out: &mut [(f64, f64)]) -> usize {
+    iv.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    let mut m = 0usize;
+    for &(a, b) in iv.iter() {
+        if m > 0 && a <= out[m - 1].1 + 1e-12 {
+            out[m - 1].1 = out[m - 1].1.max(b);
+        } else {
+            out[m] = (a, b);
+            m += 1;
+        }
+    }
+    m
+}
+
 struct EdgeInfo {
     t: Option<f64>,
     gap: bool,
@@ -197,41 +212,48 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
         .map(|&(q, li)| cell_contains(polys, oct.candidates(&oct.leaves[li as usize]), point_of(q)))
         .collect();
     s.lattice_points = pts.len();
-    let sign_of = |q: u64| -> bool {
-        let i = pts.binary_search_by_key(&q, |p| p.0).expect("lattice point of a band cell");
-        inside[i]
-    };
 
     // 2. edges: every Kuhn edge runs from a lower corner `lo` to `lo | m` for an axis mask
     // m in 1..=7, so edge (point index of lo) * 7 + (m - 1) names it without a search
-    let corner_index = |li: usize| -> [u32; 8] {
-        let mut idx = [0u32; 8];
-        for (c, slot) in idx.iter_mut().enumerate() {
-            let q = leaf_corner_key(li, c);
-            *slot = pts.binary_search_by_key(&q, |p| p.0).expect("lattice point of a band cell") as u32;
-        }
-        idx
-    };
-    let cell_points: Vec<[u32; 8]> = band.par_iter().map(|&li| corner_index(li)).collect();
+    // corner point indices without searching: for a fixed corner offset, the corner keys of
+    // the cells taken in order of their first corner increase, so one merge walk over the
+    // sorted points finds them all
+    let mut by_key: Vec<(u64, u32)> = band.iter().enumerate().map(|(n, &li)| (leaf_corner_key(li, 0), n as u32)).collect();
+    by_key.par_sort_unstable();
+    let columns: Vec<Vec<u32>> = (0..8usize)
+        .into_par_iter()
+        .map(|c| {
+            let o = corner(c);
+            let off = key(o[0] as u32, o[1] as u32, o[2] as u32);
+            let mut col = vec![0u32; band.len()];
+            let mut j = 0usize;
+            for &(k0, n) in &by_key {
+                let target = k0 + off; // no carries: coordinates stay below 2^21
+                while pts[j].0 < target {
+                    j += 1;
+                }
+                debug_assert_eq!(pts[j].0, target);
+                col[n as usize] = j as u32;
+            }
+            col
+        })
+        .collect();
+    let cell_points: Vec<[u32; 8]> = (0..band.len()).map(|n| std::array::from_fn(|c| columns[c][n])).collect();
+    drop(columns);
     let edges_local = cell_edges();
     let edge_slot = |idx: &[u32; 8], a: usize, b: usize| -> usize { idx[a] as usize * 7 + (b ^ a) - 1 };
-    let mut owner = vec![u32::MAX; pts.len() * 7];
+    // owner[slot] = (owning leaf, point index of the upper end)
+    let mut owner = vec![(u32::MAX, 0u32); pts.len() * 7];
     for (n, idx) in cell_points.iter().enumerate() {
         for &(a, b) in edges_local {
-            owner[edge_slot(idx, a, b)] = band[n] as u32;
+            owner[edge_slot(idx, a, b)] = (band[n] as u32, idx[b]);
         }
     }
-    let edges: Vec<(u64, u64, u32, usize)> = owner
+    let edges: Vec<(u64, u64, u32, usize, u32)> = owner
         .iter()
         .enumerate()
-        .filter(|(_, &o)| o != u32::MAX)
-        .map(|(slot, &o)| {
-            let (pi, m) = (slot / 7, slot % 7 + 1);
-            let ka = pts[pi].0;
-            let (i, j, k) = unkey(ka);
-            let kb = key(i + (m & 1) as u32, j + ((m >> 1) & 1) as u32, k + ((m >> 2) & 1) as u32);
-            (ka, kb, o, slot)
-        })
+        .filter(|(_, o)| o.0 != u32::MAX)
+        .map(|(slot, &(o, pb))| (pts[slot / 7].0, pts[pb as usize].0, o, slot, pb))
         .collect();
     s.edges = edges.len();
 
@@ -241,19 +263,35 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
     // ends: a thin feature or a clipped convex edge)
     let results: Vec<EdgeInfo> = edges
         .par_iter()
-        .map(|&(ka, kb, li, slot)| {
+        .map(|&(ka, kb, li, slot, ib)| {
             let (pa, pb) = (point_of(ka), point_of(kb));
-            let (sa, sb) = (inside[slot / 7], sign_of(kb));
+            let (sa, sb) = (inside[slot / 7], inside[ib as usize]);
             let leaf = &oct.leaves[li as usize];
-            let mut iv = Vec::new();
+            // intervals on the stack; a crowded cell spills to the heap
+            let mut buf = [(0.0f64, 0.0f64); 32];
+            let mut n = 0usize;
+            let mut spill: Vec<(f64, f64)> = Vec::new();
             for (prim, planes) in oct.candidates(leaf) {
                 let poly = &polys[prim];
                 let it = planes.iter().map(|&k| (poly.normals[k as usize], poly.offsets[k as usize]));
                 if let Some(t) = clip_planes(it, pa, pb) {
-                    iv.push(t);
+                    if n < buf.len() {
+                        buf[n] = t;
+                        n += 1;
+                    } else {
+                        spill.push(t);
+                    }
                 }
             }
-            let merged = merge_intervals(&mut iv);
+            let mut merged_buf = [(0.0f64, 0.0f64); 32];
+            let merged: &[(f64, f64)] = if spill.is_empty() {
+                let m = merge_in_place(&mut buf[..n], &mut merged_buf);
+                &merged_buf[..m]
+            } else {
+                spill.extend_from_slice(&buf[..n]);
+                spill = merge_intervals(&mut spill);
+                &spill
+            };
             let tiny = 1e-12;
             let gap = merged.len() >= 2;
             let sliver = merged.iter().any(|&(a, b)| a > tiny && b < 1.0 - tiny);
