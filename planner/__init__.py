@@ -2,6 +2,7 @@
 
 Public API:
 
+- :func:`load_scenario` -> :class:`Scenario`; :func:`plan` -> :class:`PlanOutcome`
 - :func:`minkowski_sum`, :func:`c_obstacle` -> :class:`MinkowskiResult`
 - :func:`decompose` -> :class:`Decomposition` (convex pieces, cached)
 - :func:`load_mesh`, :func:`validate_solid`, :func:`repair_mesh`, :func:`mirror`
@@ -20,6 +21,8 @@ from .errors import (
 )
 from .meshes import load_mesh, mirror, repair_mesh, validate_solid
 from .minkowski import MinkowskiResult, c_obstacle, minkowski_sum
+from .planning import PlanOutcome, plan
+from .scenario import Scenario, load_scenario
 from .tolerances import Tolerances, tol
 
 __version__ = _minkowski_core.__version__
@@ -31,14 +34,18 @@ __all__ = [
     "InvalidParameterError",
     "MinkowskiResult",
     "MinkplanError",
+    "PlanOutcome",
     "ResourceLimitError",
+    "Scenario",
     "ScenarioError",
     "Tolerances",
     "c_obstacle",
     "decompose",
     "load_mesh",
+    "load_scenario",
     "minkowski_sum",
     "mirror",
+    "plan",
     "repair_mesh",
     "tol",
     "validate_solid",

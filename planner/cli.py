@@ -51,6 +51,30 @@ def _parser() -> argparse.ArgumentParser:
         "--stats", default=None, help="also write error bound and statistics as JSON here"
     )
     m.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+    pl = sub.add_parser(
+        "plan",
+        help="plan a translational path for a scenario (YAML or OMPL.app .cfg)",
+        description="Plan a collision-free translation of the robot from start to goal. "
+        "Writes DIR/path.json (status, waypoints, length, clearance, timings, validation) "
+        "and DIR/report.json (cells, graph, refinement, seconds, certificate summary), and "
+        "DIR/certificate.json for a proved no-path. Exit 0: path found; 1: no path or not "
+        "found; 2: bad input.",
+    )
+    pl.add_argument("scenario", help="scenario .yaml, or an OMPL.app problem .cfg")
+    pl.add_argument("--out", required=True, help="output directory (created if needed)")
+    pl.add_argument(
+        "--planner",
+        default="minkplan",
+        help="minkplan (default: octree roadmap with proofs of no path) or ompl:NAME "
+        "(ompl:RRTConnect, ompl:PRM, ompl:BITstar, ...)",
+    )
+    pl.add_argument("--time-limit", type=float, default=None,
+                    help="seconds (default: the scenario's planner.time_limit)")
+    pl.add_argument("--seed", type=int, default=None,
+                    help="seed (default: the scenario's planner.seed)")
+    pl.add_argument("--cache-dir", default=None, help="decomposition cache directory")
+    pl.add_argument("--no-progress", action="store_true", help="no progress line")
     return p
 
 
@@ -64,6 +88,9 @@ def _atomic_write(path: Path, write) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual permissions
     try:
         write(tmp)
         os.replace(tmp, path)
@@ -120,6 +147,67 @@ def _cmd_minkowski(args) -> int:
     return 0
 
 
+def _write_json(path: Path, document, indent: int | None = 2) -> None:
+    text = json.dumps(document, indent=indent, allow_nan=False) + "\n"
+    _atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+
+
+def _cmd_plan(args) -> int:
+    import dataclasses
+
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        return _fail(f"--out {out}: exists and is not a directory")
+    if not (args.planner == "minkplan" or args.planner.startswith("ompl:")):
+        return _fail(
+            f"--planner {args.planner!r}: use minkplan or ompl:NAME (e.g. ompl:RRTConnect)"
+        )
+    scenario_path = Path(args.scenario)
+    if not scenario_path.is_file():
+        return _fail(f"scenario: file {str(scenario_path)!r} not found")
+
+    from planner.planning import plan
+    from planner.scenario import load_scenario
+
+    scenario = load_scenario(scenario_path)
+    overrides = {}
+    if args.time_limit is not None:
+        overrides["time_limit"] = args.time_limit
+    if args.seed is not None:
+        overrides["seed"] = args.seed
+    if overrides:
+        from planner.errors import InvalidParameterError
+
+        try:
+            settings = dataclasses.replace(scenario.settings, **overrides)
+        except InvalidParameterError as exc:
+            flag = "--time-limit" if "time_limit" in str(exc) else "--seed"
+            return _fail(f"{flag}: {str(exc).split(': ', 1)[-1]}")
+        scenario = dataclasses.replace(scenario, settings=settings)
+    outcome = plan(
+        scenario,
+        planner=args.planner,
+        cache_dir=args.cache_dir,
+        progress=False if args.no_progress else None,
+    )
+    _write_json(out / "path.json", outcome.path_json())
+    _write_json(out / "report.json", outcome.report_json())
+    certificate = outcome.certificate_json()
+    if certificate is not None:
+        _write_json(out / "certificate.json", certificate, indent=None)
+    detail = ""
+    if outcome.found:
+        detail = (
+            f": {len(outcome.waypoints)} waypoints, length {outcome.length:.6g}, "
+            f"clearance {outcome.clearance:.4g}"
+        )
+    sys.stdout.write(
+        f"{scenario.name}: {outcome.status}{detail} ({outcome.message}); "
+        f"{outcome.timings.get('total', 0.0):.2f} s; wrote {out}/path.json\n"
+    )
+    return outcome.exit_code
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     level = (
@@ -137,6 +225,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "minkowski":
             return _cmd_minkowski(args)
+        if args.command == "plan":
+            return _cmd_plan(args)
         return _fail(f"unknown command {args.command!r}")
     except MinkplanError as exc:
         return _fail(str(exc))

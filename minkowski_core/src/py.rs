@@ -226,5 +226,320 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(union_surface, m)?)?;
     m.add_function(wrap_pyfunction!(build_octree, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
+    m.add_class::<PyCSpace>()?;
     Ok(())
+}
+
+// ---------------------------------------------------------------------------------------
+// The planner's C-space: octree roadmap, refinement, attachment, certificate.
+// ---------------------------------------------------------------------------------------
+
+fn vec3_any(p: &[f64], what: &str) -> PyResult<Vec3> {
+    if p.len() != 3 || p.iter().any(|x| !x.is_finite()) {
+        return Err(InvalidParameterError::new_err(format!("{what}: expected 3 finite coordinates, got {p:?}")));
+    }
+    Ok(Vec3::new(p[0], p[1], p[2]))
+}
+
+/// The translational C-space of a planning problem: the C-obstacle primitives `prims`
+/// (or none), grown by `margin` (cube), walls filling everything outside `bounds`
+/// ((2, 3)), and an octree built with cells of about `h_coarse` that refinement can split
+/// down to `h_floor` (raised if the lattice would be too deep: see `floor`). Primitive
+/// indices below `n_obstacle_prims` are those of `prims`; the six walls follow.
+#[pyclass(name = "CSpace", module = "planner._minkowski_core")]
+pub struct PyCSpace {
+    inner: crate::roadmap::CSpace,
+    max_leaves: usize,
+}
+
+impl PyCSpace {
+    fn leaf_id(&self, i: usize) -> PyResult<usize> {
+        if i < self.inner.oct.leaves.len() {
+            Ok(i)
+        } else {
+            Err(InvalidParameterError::new_err(format!("leaf index {i} out of range ({} leaves)", self.inner.oct.leaves.len())))
+        }
+    }
+}
+
+/// Facet normals (k, 3) and offsets (k,) of a primitive.
+type Planes<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>);
+
+fn search_dict<'py>(py: Python<'py>, cs: &crate::roadmap::CSpace, r: &crate::roadmap::SearchResult) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("leaves", r.leaves.clone())?;
+    d.set_item("cost", r.cost)?;
+    d.set_item("expanded", r.expanded)?;
+    d.set_item("min_leaf_size", r.leaves.iter().map(|&i| cs.leaf_size(i)).fold(f64::INFINITY, f64::min))?;
+    Ok(d)
+}
+
+#[pymethods]
+impl PyCSpace {
+    #[new]
+    #[pyo3(signature = (prims, bounds, h_floor, h_coarse, margin=0.0, max_leaves=20_000_000))]
+    fn new(py: Python<'_>, prims: Option<&Primitives>, bounds: PyReadonlyArray2<'_, f64>, h_floor: f64, h_coarse: f64, margin: f64, max_leaves: usize) -> PyResult<Self> {
+        let b = points_of(&bounds, "bounds")?;
+        if b.len() != 2 {
+            return Err(InvalidParameterError::new_err("bounds: expected [[min x, y, z], [max x, y, z]]"));
+        }
+        let region = Aabb::new(b[0], b[1]);
+        let set = prims.map(|p| p.inner.clone());
+        let inner = py.detach(move || {
+            let polys: &[ConvexPolytope] = set.as_ref().map_or(&[], |s| &s.polys);
+            crate::roadmap::CSpace::build(polys, region, h_floor, h_coarse, margin, max_leaves)
+        })?;
+        Ok(PyCSpace { inner, max_leaves })
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.oct.leaves.len()
+    }
+
+    /// Number of obstacle primitives (the six walls follow them).
+    #[getter]
+    fn n_obstacle_prims(&self) -> usize {
+        self.inner.n_obstacle
+    }
+
+    /// Number of primitives, walls included.
+    #[getter]
+    fn n_primitives(&self) -> usize {
+        self.inner.set.len()
+    }
+
+    /// Finest cell size refinement can reach.
+    #[getter]
+    fn floor(&self) -> f64 {
+        self.inner.floor()
+    }
+
+    /// Level of the coarse cells (size `floor * 2**coarse_level`).
+    #[getter]
+    fn coarse_level(&self) -> u8 {
+        self.inner.coarse_level
+    }
+
+    /// Root level (the root cell is `floor * 2**depth` wide).
+    #[getter]
+    fn depth(&self) -> u8 {
+        self.inner.oct.depth
+    }
+
+    /// Position of lattice point (0, 0, 0), (3,).
+    #[getter]
+    fn origin<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.oct.origin.to_array().to_vec().into_pyarray(py)
+    }
+
+    /// The growth of the obstacle primitives.
+    #[getter]
+    fn margin(&self) -> f64 {
+        self.inner.margin
+    }
+
+    /// All leaves: dict with `ijk` (n, 3) lattice corners, `level` (n,) (size
+    /// `floor * 2**level`) and `label` (n,) (0 EMPTY, 1 FULL, 2 MIXED).
+    fn leaves<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let oct = &self.inner.oct;
+        let d = PyDict::new(py);
+        let n = oct.leaves.len();
+        let ijk: Vec<u32> = oct.leaves.iter().flat_map(|l| l.ijk).collect();
+        d.set_item("ijk", numpy::ndarray::Array2::from_shape_vec((n, 3), ijk).expect("n x 3").into_pyarray(py))?;
+        d.set_item("level", oct.leaves.iter().map(|l| l.level).collect::<Vec<u8>>().into_pyarray(py))?;
+        d.set_item("label", oct.leaves.iter().map(|l| l.label as u8).collect::<Vec<u8>>().into_pyarray(py))?;
+        Ok(d)
+    }
+
+    /// `(label, level)` of leaf `i`.
+    fn leaf(&self, i: usize) -> PyResult<(u8, u8)> {
+        let l = self.inner.oct.leaves[self.leaf_id(i)?];
+        Ok((l.label as u8, l.level))
+    }
+
+    /// Closed box of leaf `i`, (2, 3).
+    fn cell_box<'py>(&self, py: Python<'py>, i: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let b = self.inner.oct.cell_box(&self.inner.oct.leaves[self.leaf_id(i)?]);
+        Ok(to_array2([b.min.to_array(), b.max.to_array()].into_iter()).into_pyarray(py))
+    }
+
+    /// The leaf containing `point`, or None outside the root cell.
+    fn locate(&self, point: Vec<f64>) -> PyResult<Option<usize>> {
+        Ok(self.inner.locate(vec3_any(&point, "point")?))
+    }
+
+    /// Leaves sharing a face of positive area with leaf `i`: list of (leaf, portal), the
+    /// portal being the centre of the shared face.
+    fn neighbors(&self, i: usize) -> PyResult<Vec<(usize, [f64; 3])>> {
+        Ok(self.inner.neighbors(self.leaf_id(i)?).into_iter().map(|m| (m.leaf, m.portal.to_array())).collect())
+    }
+
+    /// Face-adjacent pairs of leaves whose labels are both in `labels`: (pairs (m, 2)
+    /// int64, portals (m, 3)), each pair once.
+    fn adjacency<'py>(&self, py: Python<'py>, labels: Vec<u8>) -> (Bound<'py, PyArray2<i64>>, Bound<'py, PyArray2<f64>>) {
+        let cs = &self.inner;
+        let pairs = py.detach(|| crate::roadmap::face_adjacency(&cs.oct, &cs.index, |i| labels.contains(&(cs.oct.leaves[i].label as u8))));
+        let flat: Vec<i64> = pairs.iter().flat_map(|p| [p.a as i64, p.b as i64]).collect();
+        let a = Array2::from_shape_vec((pairs.len(), 2), flat).expect("m x 2").into_pyarray(py);
+        (a, to_array2(pairs.iter().map(|p| p.portal.to_array())).into_pyarray(py))
+    }
+
+    /// Component of every leaf among the leaves whose label is in `labels` (face
+    /// adjacency, union-find), (n,) int64, -1 for the others; numbered in leaf order.
+    fn components<'py>(&self, py: Python<'py>, labels: Vec<u8>) -> Bound<'py, PyArray1<i64>> {
+        let cs = &self.inner;
+        let out = py.detach(|| {
+            let member = |i: usize| labels.contains(&(cs.oct.leaves[i].label as u8));
+            let pairs = crate::roadmap::face_adjacency(&cs.oct, &cs.index, member);
+            crate::roadmap::components(cs.oct.leaves.len(), &pairs, member)
+        });
+        out.into_iter().map(|c| if c == u32::MAX { -1 } else { c as i64 }).collect::<Vec<_>>().into_pyarray(py)
+    }
+
+    /// Whether each of `points` (n, 3) lies in a primitive (walls included), (n,) bool.
+    fn contains<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let pts = points_of(&points, "points")?;
+        Ok(pts.iter().map(|p| self.inner.set.contains_point(*p)).collect::<Vec<_>>().into_pyarray(py))
+    }
+
+    /// Signed distance of each of `points` (n, 3) to the primitives (walls included):
+    /// exact outside, minus the largest depth in one primitive inside.
+    fn signed_distance<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let pts = points_of(&points, "points")?;
+        Ok(pts.iter().map(|p| self.inner.set.signed_distance(*p)).collect::<Vec<_>>().into_pyarray(py))
+    }
+
+    /// `(primitive, depth)` for every primitive containing `point`; depth is the distance
+    /// to that primitive's nearest facet plane.
+    fn containing(&self, point: Vec<f64>) -> PyResult<Vec<(usize, f64)>> {
+        Ok(self.inner.containing(vec3_any(&point, "point")?))
+    }
+
+    /// Whether the closed segment a → b stays farther than `margin` from every primitive
+    /// (exact clipping; for margin > 0 against facet planes pushed out by `margin`).
+    #[pyo3(signature = (a, b, margin=0.0))]
+    fn segment_is_free(&self, a: Vec<f64>, b: Vec<f64>, margin: f64) -> PyResult<bool> {
+        Ok(self.inner.segment_is_free(vec3_any(&a, "a")?, vec3_any(&b, "b")?, margin))
+    }
+
+    /// How `point` joins the roadmap: list of (EMPTY leaf, entry point, cost), see the
+    /// Rust `CSpace::attach`; empty when in a FULL leaf or nothing is reachable.
+    #[pyo3(signature = (point, rings=2))]
+    fn attach(&self, point: Vec<f64>, rings: usize) -> PyResult<Vec<(usize, [f64; 3], f64)>> {
+        let p = vec3_any(&point, "point")?;
+        Ok(self.inner.attach(p, rings).into_iter().map(|a| (a.leaf, a.via.to_array(), a.cost)).collect())
+    }
+
+    /// Shortest roadmap path through EMPTY leaves from `start` to `goal` (attached with
+    /// `rings`): dict with `waypoints` (n, 3) (every segment exactly free), `leaves`,
+    /// `cost`, `expanded`, `min_leaf_size`; None when not connected through EMPTY leaves.
+    #[pyo3(signature = (start, goal, rings=2))]
+    fn free_path<'py>(&self, py: Python<'py>, start: Vec<f64>, goal: Vec<f64>, rings: usize) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let (s, g) = (vec3_any(&start, "start")?, vec3_any(&goal, "goal")?);
+        let cs = &self.inner;
+        let found = py.detach(|| {
+            let (sa, ga) = (cs.attach(s, rings), cs.attach(g, rings));
+            if sa.is_empty() || ga.is_empty() {
+                return None;
+            }
+            cs.free_path(s, g, &sa, &ga)
+        });
+        let Some((pts, r)) = found else { return Ok(None) };
+        let d = search_dict(py, cs, &r)?;
+        d.set_item("waypoints", to_array2(pts.iter().map(|p| p.to_array())).into_pyarray(py))?;
+        Ok(Some(d))
+    }
+
+    /// Cheapest channel of non-FULL leaves from the leaf of `start` to that of `goal`
+    /// (MIXED leaves cost `1 + penalty` per length; with `refinable_only`, MIXED leaves
+    /// at the floor are avoided): dict with `leaves`, `cost`, `expanded`,
+    /// `min_leaf_size`, or None.
+    #[pyo3(signature = (start, goal, penalty=2.0, refinable_only=true))]
+    fn channel<'py>(&self, py: Python<'py>, start: Vec<f64>, goal: Vec<f64>, penalty: f64, refinable_only: bool) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let (s, g) = (vec3_any(&start, "start")?, vec3_any(&goal, "goal")?);
+        let cs = &self.inner;
+        match py.detach(|| cs.channel(s, g, penalty, refinable_only)) {
+            Some(r) => Ok(Some(search_dict(py, cs, &r)?)),
+            None => Ok(None),
+        }
+    }
+
+    /// Split the MIXED leaves above the floor among `leaves` (with `ring`, also their MIXED
+    /// neighbours) `levels` times. Returns dict `refined`, `created`, `by_label` (3 counts).
+    /// Raises ResourceLimitError beyond the leaf budget (nothing changed then).
+    #[pyo3(signature = (leaves, ring=true, levels=1))]
+    fn refine<'py>(&mut self, py: Python<'py>, leaves: Vec<usize>, ring: bool, levels: u8) -> PyResult<Bound<'py, PyDict>> {
+        let max = self.max_leaves;
+        let cs = &mut self.inner;
+        let st = py.detach(move || cs.refine(&leaves, ring, levels, max))?;
+        let d = PyDict::new(py);
+        d.set_item("refined", st.refined)?;
+        d.set_item("created", st.created)?;
+        d.set_item("by_label", st.by_label.to_vec())?;
+        Ok(d)
+    }
+
+    /// Leaves per level (list index) and label ([EMPTY, FULL, MIXED]).
+    fn level_counts(&self) -> Vec<[usize; 3]> {
+        self.inner.level_counts()
+    }
+
+    /// (EMPTY leaves, pairs of face-adjacent EMPTY leaves): the roadmap's size.
+    fn roadmap_size(&self, py: Python<'_>) -> (usize, usize) {
+        let cs = &self.inner;
+        py.detach(|| cs.roadmap_size())
+    }
+
+    /// Shorten `waypoints` (n, 3) greedily with segment tests at `margin` (see the Rust
+    /// `CSpace::shortcut`); (m, 3), same ends.
+    #[pyo3(signature = (waypoints, margin=0.0, passes=3))]
+    fn shortcut<'py>(&self, py: Python<'py>, waypoints: PyReadonlyArray2<'py, f64>, margin: f64, passes: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let pts = points_of(&waypoints, "waypoints")?;
+        let cs = &self.inner;
+        let out = py.detach(|| cs.shortcut(&pts, margin, passes));
+        Ok(to_array2(out.iter().map(|p| p.to_array())).into_pyarray(py))
+    }
+
+    /// When the leaves of `start` and `goal` lie in different components of the EMPTY ∪
+    /// MIXED leaves, the certificate as a dict: `walls_around_start` (which component is
+    /// walled off), `start_component_size`, `goal_component_size`, `n_components`,
+    /// `component_leaves` (the walled component's leaves), `wall_leaves` (n,) int64 (FULL
+    /// leaves face-adjacent to it), `wall_prims` (n,) int64 (a primitive containing each,
+    /// -1 if none was found), `wall_boxes` (n, 2, 3). None when they are connected.
+    fn certificate<'py>(&self, py: Python<'py>, start: Vec<f64>, goal: Vec<f64>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let (s, g) = (vec3_any(&start, "start")?, vec3_any(&goal, "goal")?);
+        let cs = &self.inner;
+        let Some(c) = py.detach(|| cs.certificate(s, g)) else { return Ok(None) };
+        let d = PyDict::new(py);
+        d.set_item("walls_around_start", c.walls_around_start)?;
+        d.set_item("start_component_size", c.start_component.len())?;
+        d.set_item("goal_component_size", c.goal_component_size)?;
+        d.set_item("n_components", c.n_components)?;
+        let comp: Vec<usize> = if c.walls_around_start {
+            c.start_component.clone()
+        } else {
+            let lg = cs.locate(g).map(|i| c.labels[i]).unwrap_or(u32::MAX);
+            (0..c.labels.len()).filter(|&i| lg != u32::MAX && c.labels[i] == lg).collect()
+        };
+        d.set_item("component_leaves", comp)?;
+        d.set_item("wall_leaves", c.walls.iter().map(|w| w.0 as i64).collect::<Vec<_>>().into_pyarray(py))?;
+        d.set_item("wall_prims", c.walls.iter().map(|w| if w.1 == usize::MAX { -1 } else { w.1 as i64 }).collect::<Vec<_>>().into_pyarray(py))?;
+        let flat: Vec<f64> = c
+            .walls
+            .iter()
+            .flat_map(|w| {
+                let b = cs.oct.cell_box(&cs.oct.leaves[w.0]);
+                [b.min.to_array(), b.max.to_array()].into_iter().flatten()
+            })
+            .collect();
+        d.set_item("wall_boxes", numpy::ndarray::Array3::from_shape_vec((c.walls.len(), 2, 3), flat).expect("n x 2 x 3").into_pyarray(py))?;
+        Ok(Some(d))
+    }
+
+    /// Facet planes of primitive `i` (walls included): (normals (k, 3), offsets (k,));
+    /// inside is `normals @ x <= offsets`.
+    fn primitive_planes<'py>(&self, py: Python<'py>, i: usize) -> PyResult<Planes<'py>> {
+        let p = self.inner.set.polys.get(i).ok_or_else(|| InvalidParameterError::new_err(format!("primitive index {i} out of range")))?;
+        Ok((to_array2(p.normals.iter().map(|n| n.to_array())).into_pyarray(py), p.offsets.clone().into_pyarray(py)))
+    }
 }

@@ -224,6 +224,64 @@ pub fn cell_contains(polys: &[ConvexPolytope], cands: CandIter<'_>, p: Vec3) -> 
     false
 }
 
+/// Filter the candidate records `cand` (`[prim, k, plane_1 .. plane_k]`, see
+/// [`Octree::cands`]) against `cell` into `out` and return the cell's label: a primitive
+/// goes when one of its planes separates the cell; a plane that no longer cuts the cell is
+/// dropped; a primitive with no plane left contains the cell, which is then FULL when the
+/// primitives are solid; a cell no primitive meets gets `untouched(centre)`.
+pub(crate) fn classify_cell(
+    polys: &[ConvexPolytope],
+    solid: bool,
+    untouched: &(dyn Fn(Vec3) -> Label + Sync),
+    cell: &Aabb,
+    cand: &[u32],
+    out: &mut Vec<u32>,
+) -> Label {
+    let (c, hh) = (cell.center(), cell.half());
+    let mut i = 0;
+    while i < cand.len() {
+        let prim = cand[i] as usize;
+        let k = cand[i + 1] as usize;
+        let planes = &cand[i + 2..i + 2 + k];
+        i += 2 + k;
+        let poly = &polys[prim];
+        if !poly.aabb.overlaps(cell) {
+            continue;
+        }
+        let mark = out.len();
+        out.push(prim as u32);
+        out.push(0);
+        let mut separated = false;
+        for &pl in planes {
+            let n = poly.normals[pl as usize];
+            let s = n.dot(c) - poly.offsets[pl as usize];
+            let r = n.abs().dot(hh);
+            if s - r > 0.0 {
+                separated = true;
+                break;
+            }
+            if s + r > 0.0 {
+                out.push(pl);
+            }
+        }
+        if separated {
+            out.truncate(mark);
+            continue;
+        }
+        let kept = out.len() - mark - 2;
+        if kept == 0 && solid {
+            out.clear();
+            return Label::Full;
+        }
+        out[mark + 1] = kept as u32;
+    }
+    if out.is_empty() {
+        untouched(c)
+    } else {
+        Label::Mixed
+    }
+}
+
 impl Ctx<'_> {
     fn cell(&self, ijk: [u32; 3], level: u8) -> Aabb {
         let s = (1u64 << level) as f64 * self.h;
@@ -233,49 +291,7 @@ impl Ctx<'_> {
 
     /// Filter `cand` against `cell` into `out`; the cell's label.
     fn classify(&self, cell: &Aabb, cand: &[u32], out: &mut Vec<u32>) -> Label {
-        let (c, hh) = (cell.center(), cell.half());
-        let mut i = 0;
-        while i < cand.len() {
-            let prim = cand[i] as usize;
-            let k = cand[i + 1] as usize;
-            let planes = &cand[i + 2..i + 2 + k];
-            i += 2 + k;
-            let poly = &self.polys[prim];
-            if !poly.aabb.overlaps(cell) {
-                continue;
-            }
-            let mark = out.len();
-            out.push(prim as u32);
-            out.push(0);
-            let mut separated = false;
-            for &pl in planes {
-                let n = poly.normals[pl as usize];
-                let s = n.dot(c) - poly.offsets[pl as usize];
-                let r = n.abs().dot(hh);
-                if s - r > 0.0 {
-                    separated = true;
-                    break;
-                }
-                if s + r > 0.0 {
-                    out.push(pl);
-                }
-            }
-            if separated {
-                out.truncate(mark);
-                continue;
-            }
-            let kept = out.len() - mark - 2;
-            if kept == 0 && self.solid {
-                out.clear();
-                return Label::Full;
-            }
-            out[mark + 1] = kept as u32;
-        }
-        if out.is_empty() {
-            (self.src)(c)
-        } else {
-            Label::Mixed
-        }
+        classify_cell(self.polys, self.solid, self.src, cell, cand, out)
     }
 
     fn leaf(&self, ijk: [u32; 3], level: u8, label: Label, cand_len: usize) -> Leaf {

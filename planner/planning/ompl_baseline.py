@@ -1,0 +1,77 @@
+"""``--planner ompl:NAME``: an OMPL planner driven by the FCL checker on the original
+meshes, with the same outputs as minkplan's own planner (statuses, validation, timings).
+
+OMPL cannot prove that no path exists: a start or goal in collision is ``no_path`` (FCL
+shows the collision), everything else that is not a solution is ``not_found``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from planner.scenario import Scenario
+from planner.validation import FclChecker, OmplPlanner, PlanStatus
+
+from .octree_planner import default_contact_tolerance
+from .outcome import FOUND, NO_PATH, NOT_FOUND, PlanOutcome
+from .validate import validate_path
+
+__all__ = ["plan_ompl"]
+
+
+def plan_ompl(scenario: Scenario, name: str, *, validate: bool = True) -> PlanOutcome:
+    """Plan with the OMPL planner ``name`` (``RRTConnect``, ``PRM``, ``BITstar``, ...;
+    case-insensitive) for ``planner.time_limit`` seconds, seeded with ``planner.seed``.
+
+    Raises:
+        InvalidParameterError: unknown planner name.
+    """
+    t0 = time.perf_counter()
+    delta = default_contact_tolerance(scenario)
+    checker = FclChecker(scenario.robot.mesh, [b.mesh for b in scenario.obstacles],
+                         contact_tolerance=delta, names=[b.name for b in scenario.obstacles])
+    bounds = np.stack(scenario.bounds)
+    planner = OmplPlanner(name, checker, bounds, seed=scenario.settings.seed)
+    label = f"ompl:{planner.name}"
+    result = planner.solve(scenario.start, scenario.goal, scenario.settings.time_limit)
+    timings = {"search": result.seconds}
+    report = {"scenario": scenario.describe(), "contact_tolerance": delta,
+              "ompl": {"planner": planner.name, "status": result.status.value,
+                       "valid_checks": result.n_valid_checks,
+                       "invalid_checks": result.n_invalid_checks,
+                       "message": result.message}}
+
+    def done(status, reason, message, **kw) -> PlanOutcome:
+        timings["total"] = time.perf_counter() - t0
+        return PlanOutcome(status=status, reason=reason, message=message, planner=label,
+                           timings=timings, report=report, **kw)
+
+    if result.status in (PlanStatus.INVALID_START, PlanStatus.INVALID_GOAL):
+        which = "start" if result.status is PlanStatus.INVALID_START else "goal"
+        p = np.asarray(scenario.start if which == "start" else scenario.goal)
+        hit = checker.colliding_obstacle(p)
+        collision = {"which": which, "position": p.tolist()}
+        if hit is not None:
+            collision.update(obstacle=hit[0], depth_upper_bound=hit[1])
+            message = f"the {which} is in collision with {hit[0]} (depth about {hit[1]:.4g})"
+            return done(NO_PATH, f"{which}_in_collision", message, collision=collision)
+        return done(NOT_FOUND, f"{which}_invalid", f"the {which} is out of bounds",
+                    collision=collision)
+    if not result.solved:
+        return done(NOT_FOUND, "ompl_status",
+                    f"{planner.name}: {result.status.value} {result.message}".strip())
+    waypoints = np.asarray(result.waypoints, dtype=np.float64)
+    validation = {"fcl": {}, "ompl": {}}
+    clearance = float("nan")
+    if validate:
+        t1 = time.perf_counter()
+        validation = validate_path(waypoints, checker, bounds)
+        timings["validate"] = time.perf_counter() - t1
+        clearance = validation["fcl"]["min_clearance"]
+        if not (validation["fcl"]["valid"] and validation["ompl"]["valid"]):
+            return done(NOT_FOUND, "validation_failed",
+                        f"{planner.name}'s path failed validation", validation=validation)
+    return done(FOUND, "path", f"{planner.name} found a path", waypoints=waypoints,
+                length=result.length, clearance=clearance, validation=validation)

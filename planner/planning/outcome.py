@@ -1,0 +1,134 @@
+"""What a planning run returns: :class:`PlanOutcome`, and its JSON forms.
+
+``PlanOutcome.path_json()`` is the ``path.json`` contract of ``minkplan plan``::
+
+    {"status": "found" | "no_path" | "not_found", "waypoints": [[x, y, z], ...],
+     "length", "clearance", "timings": {...}, "validation": {"fcl": ..., "ompl": ...}}
+
+plus ``message``, ``reason`` and ``planner``; ``report_json()`` is ``report.json``
+(cells per label and level, graph size, refinement rounds, seconds per stage, the
+certificate's summary) and ``certificate_json()`` the full no-path certificate.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["FOUND", "NOT_FOUND", "NO_PATH", "PlanOutcome", "jsonable"]
+
+FOUND = "found"
+"""A path was found and passed both independent validations."""
+NO_PATH = "no_path"
+"""No collision-free path exists: proved by a certificate, or the start or goal collides."""
+NOT_FOUND = "not_found"
+"""Nothing found and nothing proved (floor, budget or time limit reached)."""
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy scalars and arrays turned into Python ones, non-finite floats
+    into ``None`` (JSON has no inf/nan)."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer, int)):
+        return int(value)
+    if isinstance(value, (np.floating, float)):
+        number = float(value)
+        return number if math.isfinite(number) else None
+    return value
+
+
+@dataclass
+class PlanOutcome:
+    """The result of :func:`planner.planning.plan`.
+
+    Attributes:
+        status: :data:`FOUND`, :data:`NO_PATH` or :data:`NOT_FOUND`.
+        waypoints: ``(n, 3)`` translations from start to goal; ``(0, 3)`` unless found.
+        length: path length (``nan`` without a path).
+        clearance: minimum robot-obstacle distance along the path measured by FCL on the
+            original meshes (``nan`` without a path).
+        timings: seconds per stage (``total`` included).
+        validation: ``{"fcl": {...}, "ompl": {...}}`` (empty dicts when not validated).
+        message: one line saying what happened.
+        reason: machine-readable cause: ``"path"``, ``"certificate"``,
+            ``"start_in_collision"``, ``"goal_in_collision"``, ``"floor"``,
+            ``"budget"``, ``"time_limit"``, ``"validation_failed"``, ``"ompl_status"``.
+        planner: ``"minkplan"`` or ``"ompl:NAME"``.
+        certificate: for a proved no-path: summary plus the walled-off component and its
+            FULL wall cells (boxes, primitives, obstacles), else ``None``.
+        collision: for a start or goal in collision: obstacle name and depth estimates.
+        report: everything else worth keeping (cells per level and label, refinement
+            rounds, graph size, decomposition, resolution).
+    """
+
+    status: str
+    waypoints: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    length: float = float("nan")
+    clearance: float = float("nan")
+    timings: dict[str, float] = field(default_factory=dict)
+    validation: dict[str, Any] = field(default_factory=lambda: {"fcl": {}, "ompl": {}})
+    message: str = ""
+    reason: str = ""
+    planner: str = "minkplan"
+    certificate: dict[str, Any] | None = None
+    collision: dict[str, Any] | None = None
+    report: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def found(self) -> bool:
+        return self.status == FOUND
+
+    @property
+    def exit_code(self) -> int:
+        """The CLI's exit code: 0 found, 1 otherwise."""
+        return 0 if self.found else 1
+
+    def path_json(self) -> dict[str, Any]:
+        """The ``path.json`` document."""
+        return jsonable(
+            {
+                "status": self.status,
+                "waypoints": np.asarray(self.waypoints, dtype=float).reshape(-1, 3),
+                "length": self.length,
+                "clearance": self.clearance,
+                "timings": self.timings,
+                "validation": self.validation,
+                "message": self.message,
+                "reason": self.reason,
+                "planner": self.planner,
+            }
+        )
+
+    def certificate_summary(self) -> dict[str, Any] | None:
+        if self.certificate is None:
+            return None
+        return {k: v for k, v in self.certificate.items() if k not in ("walls", "component")}
+
+    def report_json(self) -> dict[str, Any]:
+        """The ``report.json`` document."""
+        return jsonable(
+            {
+                "status": self.status,
+                "reason": self.reason,
+                "message": self.message,
+                "planner": self.planner,
+                "seconds": self.timings,
+                "certificate": self.certificate_summary(),
+                "collision": self.collision,
+                **self.report,
+            }
+        )
+
+    def certificate_json(self) -> dict[str, Any] | None:
+        """The full certificate (wall cells and the walled-off component), or ``None``."""
+        return None if self.certificate is None else jsonable(self.certificate)

@@ -1,0 +1,176 @@
+"""``minkplan plan``: outputs per the contract, exit codes, one-line input errors, and the
+Python API giving the same answer."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from planner.cli import main
+from planner.planning import plan
+from planner.scenario import load_scenario
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+PATH_KEYS = {"status", "waypoints", "length", "clearance", "timings", "validation"}
+
+
+@pytest.fixture(scope="module")
+def cache_dir(tmp_path_factory):
+    return tmp_path_factory.mktemp("cli-decompositions")
+
+
+def run(args, capsys):
+    code = main(args)
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_found_path_exit_0_and_files(tmp_path, capsys, cache_dir):
+    out = tmp_path / "peg"
+    code, stdout, err = run(["plan", str(SCENARIOS / "peg_in_hole_0.1.yaml"), "--out", str(out),
+                             "--cache-dir", str(cache_dir), "--no-progress"], capsys)
+    assert code == 0, err
+    assert "found" in stdout
+    doc = json.loads((out / "path.json").read_text())
+    assert PATH_KEYS <= set(doc)
+    assert doc["status"] == "found"
+    assert doc["validation"]["fcl"]["valid"] and doc["validation"]["ompl"]["valid"]
+    wp = np.array(doc["waypoints"])
+    assert wp.shape[1] == 3 and len(wp) >= 2
+    assert doc["length"] == pytest.approx(np.linalg.norm(np.diff(wp, axis=0), axis=1).sum())
+    assert doc["clearance"] > 0
+    report = json.loads((out / "report.json").read_text())
+    for key in ("cells", "graph", "refinement", "seconds", "certificate", "decomposition"):
+        assert key in report
+    assert report["cells"]["per_level"] and report["graph"]["nodes"] > 0
+    assert {"empty", "full", "mixed", "level", "size"} <= set(report["cells"]["per_level"][0])
+    assert not (out / "certificate.json").exists()
+    assert not list(out.glob(".*")), "no temporary files left behind"
+    # the Python API gives the same result
+    outcome = plan(load_scenario(SCENARIOS / "peg_in_hole_0.1.yaml"), cache_dir=cache_dir,
+                   progress=False)
+    np.testing.assert_allclose(outcome.waypoints, wp, rtol=0, atol=1e-12)
+
+
+def test_no_path_exit_1_with_certificate(tmp_path, capsys, cache_dir):
+    out = tmp_path / "seal"
+    code, stdout, err = run(["plan", str(SCENARIOS / "sealed_chamber.yaml"), "--out", str(out),
+                             "--cache-dir", str(cache_dir)], capsys)
+    assert code == 1, err
+    assert "no_path" in stdout
+    doc = json.loads((out / "path.json").read_text())
+    assert doc["status"] == "no_path" and doc["waypoints"] == [] and doc["length"] is None
+    report = json.loads((out / "report.json").read_text())
+    assert report["certificate"]["exact"] is True
+    assert report["certificate"]["wall_cells"] > 0
+    cert = json.loads((out / "certificate.json").read_text())
+    assert len(cert["walls"]) == report["certificate"]["wall_cells"]
+
+
+def test_start_in_collision_exit_1(tmp_path, capsys, cache_dir):
+    out = tmp_path / "hit"
+    code, stdout, _ = run(["plan", str(SCENARIOS / "start_in_collision.yaml"), "--out",
+                           str(out), "--cache-dir", str(cache_dir)], capsys)
+    assert code == 1
+    doc = json.loads((out / "path.json").read_text())
+    assert doc["status"] == "no_path" and doc["reason"] == "start_in_collision"
+    assert "block" in doc["message"]
+    assert json.loads((out / "report.json").read_text())["collision"]["obstacle"] == "block"
+
+
+def test_ompl_planner_same_outputs(tmp_path, capsys, cache_dir):
+    out = tmp_path / "rrt"
+    code, _, err = run(["plan", str(SCENARIOS / "peg_in_hole.yaml"), "--out", str(out),
+                        "--planner", "ompl:RRTConnect", "--time-limit", "10", "--seed", "1"],
+                       capsys)
+    assert code == 0, err
+    doc = json.loads((out / "path.json").read_text())
+    assert PATH_KEYS <= set(doc)
+    assert doc["planner"] == "ompl:RRTConnect" and doc["status"] == "found"
+    assert doc["validation"]["fcl"]["valid"] and doc["validation"]["ompl"]["valid"]
+
+
+def write(tmp_path, text: str) -> Path:
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    return path
+
+
+PEG = str((SCENARIOS / "peg_in_hole" / "peg.stl").resolve())
+
+
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        (f"robot: {{mesh: {PEG}}}\nstrat: [0, 0, 0]\ngoal: [1, 0, 0]\n", "strat"),
+        (f"robot: {{mesh: {PEG}}}\nstart: [0, 0]\ngoal: [1, 0, 0]\n", "start"),
+        ("robot: {mesh: missing.stl}\nstart: [0, 0, 0]\ngoal: [1, 0, 0]\n", "missing.stl"),
+        (f"robot: {{mesh: {PEG}}}\nstart: [0, 0, 0]\ngoal: [1, 0, 0]\n"
+         "planner: {time_limit: -1}\n", "planner.time_limit"),
+    ],
+)
+def test_schema_errors_one_line_exit_2(tmp_path, capsys, text, expected):
+    path = write(tmp_path, text)
+    code, stdout, err = run(["plan", str(path), "--out", str(tmp_path / "o")], capsys)
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("minkplan: error: ")
+    assert expected in lines[0] and "bad.yaml" in lines[0]
+    assert not (tmp_path / "o" / "path.json").exists()
+
+
+@pytest.mark.parametrize(
+    "extra, expected",
+    [
+        (["--planner", "dijkstra"], "--planner"),
+        (["--planner", "ompl:Nope"], "unknown OMPL planner"),
+        (["--time-limit", "0"], "--time-limit"),
+    ],
+)
+def test_bad_options_exit_2(tmp_path, capsys, extra, expected):
+    code, _, err = run(["plan", str(SCENARIOS / "bug_trap.yaml"), "--out", str(tmp_path / "o"),
+                        *extra], capsys)
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and expected in err
+
+
+def test_missing_scenario_and_bad_out(tmp_path, capsys):
+    code, _, err = run(["plan", str(tmp_path / "none.yaml"), "--out", str(tmp_path)], capsys)
+    assert code == 2 and "none.yaml" in err and len(err.strip().splitlines()) == 1
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    code, _, err = run(["plan", str(SCENARIOS / "bug_trap.yaml"), "--out", str(blocker)], capsys)
+    assert code == 2 and "--out" in err
+
+
+def test_installed_entry_point(tmp_path, cache_dir):
+    out = tmp_path / "trap"
+    proc = subprocess.run(
+        [sys.executable, "-m", "planner", "plan", str(SCENARIOS / "bug_trap.yaml"), "--out",
+         str(out), "--cache-dir", str(cache_dir)],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads((out / "path.json").read_text())["status"] == "found"
+
+
+OMPLAPP = Path(__file__).resolve().parents[2] / "shared" / "assets" / "omplapp" / "Easy.cfg"
+
+
+@pytest.mark.skipif(not OMPLAPP.is_file(), reason="OMPL.app assets not available")
+def test_omplapp_problem_file(tmp_path, capsys, cache_dir):
+    out = tmp_path / "easy"
+    code, stdout, err = run(["plan", str(OMPLAPP), "--out", str(out), "--cache-dir",
+                             str(cache_dir)], capsys)
+    assert code == 0, err
+    doc = json.loads((out / "path.json").read_text())
+    assert doc["status"] == "found"
+    assert doc["validation"]["fcl"]["valid"] and doc["validation"]["ompl"]["valid"]
+    report = json.loads((out / "report.json").read_text())
+    assert report["decomposition"]["exact"] is False  # the Easy world goes through CoACD
