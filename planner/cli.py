@@ -75,6 +75,13 @@ def _parser() -> argparse.ArgumentParser:
                     help="seed (default: the scenario's planner.seed)")
     pl.add_argument("--cache-dir", default=None, help="decomposition cache directory")
     pl.add_argument("--no-progress", action="store_true", help="no progress line")
+    pl.add_argument(
+        "--html",
+        action="store_true",
+        help="also write DIR/scene.html: the scene, C-obstacles, cells, roadmap and path "
+        "(self-contained, opens offline)",
+    )
+    _add_viz_parsers(sub)
     return p
 
 
@@ -205,7 +212,52 @@ def _cmd_plan(args) -> int:
         f"{scenario.name}: {outcome.status}{detail} ({outcome.message}); "
         f"{outcome.timings.get('total', 0.0):.2f} s; wrote {out}/path.json\n"
     )
+    if args.html:
+        from planner import viz
+
+        scene = viz.scene_for_plan(scenario, outcome, c_obstacle=True)
+        page = viz.write_html(scene, out / "scene.html")
+        sys.stdout.write(f"wrote {page} (self-contained; open it in a browser)\n")
     return outcome.exit_code
+
+
+def _cmd_view(args) -> int:
+    scenario_path = Path(args.scenario)
+    if not scenario_path.is_file():
+        return _fail(f"scenario: file {str(scenario_path)!r} not found")
+    plan_json = None
+    if args.path is not None:
+        path_file = Path(args.path)
+        if not path_file.is_file():
+            return _fail(f"--path: file {str(path_file)!r} not found")
+        try:
+            plan_json = json.loads(path_file.read_text())
+        except (OSError, ValueError) as exc:
+            return _fail(f"--path {path_file}: not a path.json file ({exc})")
+        if not isinstance(plan_json, dict) or "status" not in plan_json:
+            return _fail(f"--path {path_file}: not a path.json file (no 'status')")
+        plan_json = path_file
+
+    from planner import viz
+    from planner.scenario import load_scenario
+
+    scenario = load_scenario(scenario_path)
+    scene = viz.scene_for_plan(scenario, plan_json, c_obstacle=not args.no_c_obstacle)
+    viz.serve(scene, out=sys.stdout)
+    return 0
+
+
+def _add_viz_parsers(sub) -> None:
+    v = sub.add_parser(
+        "view",
+        help="show a scenario (and a planned path) live in meshcat on localhost",
+        description="Serve the scenario's scene (obstacles, robot at start and goal, "
+        "C-obstacles, and the path of --path with the robot moving along it) with meshcat "
+        "on localhost; prints the URL and serves until interrupted (Ctrl+C).",
+    )
+    v.add_argument("scenario", help="scenario .yaml, or an OMPL.app problem .cfg")
+    v.add_argument("--path", default=None, help="a path.json written by minkplan plan")
+    v.add_argument("--no-c-obstacle", action="store_true", help="do not compute C-obstacles")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -227,6 +279,8 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_minkowski(args)
         if args.command == "plan":
             return _cmd_plan(args)
+        if args.command == "view":
+            return _cmd_view(args)
         return _fail(f"unknown command {args.command!r}")
     except MinkplanError as exc:
         return _fail(str(exc))

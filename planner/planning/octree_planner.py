@@ -392,7 +392,8 @@ def plan_octree(scenario: Scenario, *, params: OctreeParams | None = None, cache
         outcome = PlanOutcome(
             status=status, waypoints=wp, length=length, clearance=clearance, timings=timings,
             validation=validation or {"fcl": {}, "ompl": {}}, message=message, reason=reason,
-            planner="minkplan", certificate=certificate, collision=collision, report=report)
+            planner="minkplan", certificate=certificate, collision=collision, report=report,
+            cspace=cs)
         log.info("%s: %s (%s) in %.2f s", scenario.name, status, message, timings["total"])
         return outcome
 

@@ -69,6 +69,8 @@ class PlanOutcome:
         collision: for a start or goal in collision: obstacle name and depth estimates.
         report: everything else worth keeping (cells per level and label, refinement
             rounds, graph size, decomposition, resolution).
+        cspace: the native C-space (octree leaves, roadmap) the answer came from, for
+            visualisation (``planner.viz.scene_for_plan``); ``None`` for OMPL baselines.
     """
 
     status: str
@@ -83,6 +85,7 @@ class PlanOutcome:
     certificate: dict[str, Any] | None = None
     collision: dict[str, Any] | None = None
     report: dict[str, Any] = field(default_factory=dict)
+    cspace: Any = field(default=None, repr=False, compare=False)
 
     @property
     def found(self) -> bool:

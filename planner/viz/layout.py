@@ -1,0 +1,299 @@
+"""Scenes for minkplan's results: the one layout, filled from what each entry point has.
+
+- :func:`scene_for_minkowski` -- operands and their Minkowski sum (or a C-obstacle).
+- :func:`scene_for_plan` -- a scenario, optionally its plan (``PlanOutcome``, the
+  ``path.json`` dict or file), the C-space octree and the C-obstacle surfaces.
+- :func:`cells_from_cspace`, :func:`roadmap_from_cspace` -- plain arrays from the native
+  ``CSpace`` (or anything with the same methods).
+- :func:`compute_c_obstacles` -- one C-obstacle surface per obstacle, from the core.
+- :func:`as_scene` -- whatever :func:`planner.viz.show` is given, as a :class:`Scene`.
+
+Every function is tolerant of missing optional parts: no plan, a ``not_found`` plan
+without waypoints, a dict lacking ``waypoints``, no C-space: the scene simply has fewer
+layers.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import trimesh
+
+from planner.errors import InvalidParameterError
+
+from .scene import (
+    COLORS,
+    EMPTY,
+    MINKOWSKI_A,
+    MINKOWSKI_B,
+    MINKOWSKI_SUM,
+    Scene,
+)
+
+__all__ = [
+    "as_scene",
+    "cells_from_cspace",
+    "compute_c_obstacles",
+    "plan_parts",
+    "roadmap_from_cspace",
+    "scene_for_minkowski",
+    "scene_for_plan",
+]
+
+
+def scene_for_minkowski(result, a=None, b=None, *, c_obstacle: bool = False,
+                        title: str | None = None) -> Scene:
+    """The operands and their sum.
+
+    Args:
+        result: a ``MinkowskiResult`` (or a bare mesh of the sum).
+        a, b: the operand meshes (optional).
+        c_obstacle: ``result`` is ``planner.c_obstacle(a, b)``: then ``a`` is drawn as an
+            obstacle, ``b`` as the robot at translation 0 and the surface at
+            ``cspace/c_obstacle``; else at ``minkowski/a``, ``minkowski/b``,
+            ``minkowski/sum``.
+        title: page title.
+    """
+    scene = Scene(title or ("C-obstacle" if c_obstacle else "Minkowski sum"))
+    if c_obstacle:
+        if a is not None:
+            scene.add_obstacles({"obstacle": a})
+        if b is not None:
+            scene.add_robot(b, start=np.zeros(3))
+        scene.add_c_obstacle(result)
+        return scene
+    if a is not None:
+        scene.add_mesh(MINKOWSKI_A, a, color=COLORS["operand_a"])
+    if b is not None:
+        scene.add_mesh(MINKOWSKI_B, b, color=COLORS["operand_b"])
+    scene.add_mesh(MINKOWSKI_SUM, result, color=COLORS["sum"], opacity=0.4)
+    return scene
+
+
+# ---- the C-space -----------------------------------------------------------------------
+
+def cells_from_cspace(cspace) -> tuple[np.ndarray, np.ndarray]:
+    """``(boxes (n, 2, 3), labels (n,))`` of every leaf of a native ``CSpace`` (leaf
+    ``i`` has lattice corner ``ijk[i]`` in units of ``floor`` from ``origin`` and size
+    ``floor * 2**level[i]``)."""
+    leaves = cspace.leaves()
+    ijk = np.asarray(leaves["ijk"], dtype=np.float64).reshape(-1, 3)
+    level = np.asarray(leaves["level"], dtype=np.float64).reshape(-1)
+    labels = np.asarray(leaves["label"], dtype=np.int64).reshape(-1)
+    floor = float(cspace.floor)
+    lo = np.asarray(cspace.origin, dtype=np.float64) + ijk * floor
+    hi = lo + (floor * 2.0 ** level)[:, None]
+    return np.stack([lo, hi], axis=1), labels
+
+
+def roadmap_from_cspace(cspace, boxes: np.ndarray | None = None) -> np.ndarray:
+    """Roadmap edges ``(2 m, 2, 3)``: every face-adjacent pair of EMPTY leaves joined
+    centre -> shared-face centre -> centre (two segments per edge)."""
+    if boxes is None:
+        boxes, _ = cells_from_cspace(cspace)
+    pairs, portals = cspace.adjacency([EMPTY])
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    portals = np.asarray(portals, dtype=np.float64).reshape(-1, 3)
+    if len(pairs) == 0:
+        return np.zeros((0, 2, 3))
+    centres = boxes.mean(axis=1)
+    first = np.stack([centres[pairs[:, 0]], portals], axis=1)
+    second = np.stack([portals, centres[pairs[:, 1]]], axis=1)
+    return np.concatenate([first, second])
+
+
+def _cspace_arrays(cspace) -> dict[str, np.ndarray]:
+    """Cells and roadmap from a native ``CSpace``, a mapping ``{"boxes", "labels",
+    "roadmap"}`` (each optional) or a ``(boxes, labels)`` pair."""
+    if cspace is None:
+        return {}
+    if hasattr(cspace, "leaves") and hasattr(cspace, "adjacency"):
+        boxes, labels = cells_from_cspace(cspace)
+        return {"boxes": boxes, "labels": labels,
+                "roadmap": roadmap_from_cspace(cspace, boxes)}
+    if isinstance(cspace, Mapping):
+        return {k: np.asarray(cspace[k]) for k in ("boxes", "labels", "roadmap")
+                if cspace.get(k) is not None}
+    if isinstance(cspace, (tuple, list)) and len(cspace) == 2:
+        return {"boxes": np.asarray(cspace[0]), "labels": np.asarray(cspace[1])}
+    raise InvalidParameterError(
+        f"cspace: expected a CSpace, a mapping with boxes/labels/roadmap or (boxes, labels), "
+        f"got {type(cspace).__name__}")
+
+
+def compute_c_obstacles(scenario, *, eps: float | None = None, cache_dir=None,
+                        progress: bool | None = False) -> dict[str, trimesh.Trimesh]:
+    """``{obstacle name: C-obstacle surface}`` from ``planner.c_obstacle`` (``eps``:
+    default the core's relative default)."""
+    from planner.minkowski import c_obstacle
+
+    return {body.name: c_obstacle(body.mesh, scenario.robot.mesh, eps=eps,
+                                  cache_dir=cache_dir, progress=progress).mesh
+            for body in scenario.obstacles}
+
+
+# ---- the plan --------------------------------------------------------------------------
+
+def _read_json(path: Path) -> Any:
+    with open(path, encoding="utf-8") as f:
+        return json.load(f)
+
+
+def plan_parts(plan) -> dict[str, Any]:
+    """What a scene needs of a plan: ``status``, ``reason``, ``waypoints`` ``(k, 3)``,
+    ``certificate`` (dict or ``None``), ``cspace`` (or ``None``).
+
+    ``plan`` is ``None``, a ``PlanOutcome``, the ``path.json`` dict (optionally with a
+    ``"certificate"``) or the path of a ``path.json`` file (a ``certificate.json`` beside
+    it is read too). Missing parts come back empty.
+    """
+    parts: dict[str, Any] = {"status": None, "reason": None, "waypoints": np.zeros((0, 3)),
+                             "certificate": None, "cspace": None}
+    if plan is None:
+        return parts
+    if isinstance(plan, (str, os.PathLike)):
+        path = Path(plan)
+        document = _read_json(path)
+        if not isinstance(document, Mapping):
+            raise InvalidParameterError(f"{path}: expected a JSON object (path.json)")
+        document = dict(document)
+        beside = path.with_name("certificate.json")
+        if "certificate" not in document and beside.is_file():
+            document["certificate"] = _read_json(beside)
+        plan = document
+    if hasattr(plan, "path_json"):  # a PlanOutcome
+        document = dict(plan.path_json())
+        document["certificate"] = getattr(plan, "certificate", None)
+        parts["cspace"] = getattr(plan, "cspace", None)
+        plan = document
+    if not isinstance(plan, Mapping):
+        raise InvalidParameterError(
+            f"plan: expected a PlanOutcome, a path.json dict or file, got {type(plan).__name__}")
+    parts["status"] = plan.get("status")
+    parts["reason"] = plan.get("reason")
+    waypoints = plan.get("waypoints")
+    if waypoints is not None and len(waypoints):
+        array = np.asarray(waypoints, dtype=np.float64)
+        if array.ndim != 2 or array.shape[1] != 3:
+            raise InvalidParameterError(
+                f"plan waypoints: expected [[x, y, z], ...], got shape {array.shape}")
+        parts["waypoints"] = array
+    parts["certificate"] = plan.get("certificate")
+    if plan.get("cspace") is not None:
+        parts["cspace"] = plan["cspace"]
+    return parts
+
+
+def _certificate_boxes(certificate) -> tuple[np.ndarray, np.ndarray | None]:
+    """Wall boxes and component boxes from a certificate in either form: the reports'
+    (``walls: [{"box": ...}]``, ``component: {"boxes": ...}``) or the core's
+    (``wall_boxes``)."""
+    if certificate is None:
+        return np.zeros((0, 2, 3)), None
+    if "wall_boxes" in certificate:
+        walls = np.asarray(certificate["wall_boxes"], dtype=np.float64)
+    else:
+        walls = np.asarray([w["box"] for w in certificate.get("walls") or []], dtype=np.float64)
+    component = certificate.get("component")
+    comp = None
+    if isinstance(component, Mapping) and component.get("boxes") is not None:
+        comp = np.asarray(component["boxes"], dtype=np.float64).reshape(-1, 2, 3)
+    return walls.reshape(-1, 2, 3), comp
+
+
+def scene_for_plan(scenario, plan=None, cspace=None, *, c_obstacle=None, certificate=None,
+                   animate: bool = True, cell_style: str = "auto",
+                   title: str | None = None) -> Scene:
+    """The scene of a planning problem, and of its result when given.
+
+    Args:
+        scenario: a ``Scenario`` or the path of a scenario YAML.
+        plan: ``None``, a ``PlanOutcome``, a ``path.json`` dict or file (see
+            :func:`plan_parts`); its waypoints give the path and the animation, its
+            certificate the wall cells.
+        cspace: octree leaves and roadmap: a native ``CSpace``, a mapping with ``boxes``
+            ``(n, 2, 3)``, ``labels`` ``(n,)``, ``roadmap`` ``(m, 2, 3)`` (each optional)
+            or ``(boxes, labels)``; default: the plan's, if it carries one.
+        c_obstacle: C-obstacle surface(s): a mesh, a ``MinkowskiResult``, a mapping
+            ``{name: mesh}``, or ``True`` to compute them with the core
+            (:func:`compute_c_obstacles`).
+        certificate: a no-path certificate, overriding the plan's.
+        animate: add the robot moving along the path.
+        cell_style: how to draw cells (see :meth:`Scene.add_boxes`).
+        title: page title (default: the scenario's name and the plan's status).
+    """
+    if isinstance(scenario, (str, os.PathLike)):
+        from planner.scenario import load_scenario
+
+        scenario = load_scenario(scenario)
+    parts = plan_parts(plan)
+    status = parts["status"]
+    scene = Scene(title or (f"{scenario.name}: {status}" if status else scenario.name))
+    scene.add_obstacles(scenario.obstacles)
+    reason = parts["reason"] or ""
+    scene.add_robot(
+        scenario.robot.mesh, scenario.start, scenario.goal,
+        start_color=COLORS["robot_collision"] if reason == "start_in_collision" else None,
+        goal_color=COLORS["robot_collision"] if reason == "goal_in_collision" else None,
+    )
+
+    if c_obstacle is True:
+        c_obstacle = compute_c_obstacles(scenario)
+    if c_obstacle is not None and c_obstacle is not False:
+        scene.add_c_obstacle(c_obstacle)
+
+    arrays = _cspace_arrays(cspace if cspace is not None else parts["cspace"])
+    if arrays.get("boxes") is not None and arrays.get("labels") is not None:
+        scene.add_cells(arrays["boxes"], arrays["labels"], style=cell_style)
+    if arrays.get("roadmap") is not None:
+        scene.add_roadmap(arrays["roadmap"])
+
+    waypoints = parts["waypoints"]
+    if len(waypoints):
+        scene.add_path(waypoints)
+        if animate and len(waypoints) >= 2:
+            scene.add_motion(scenario.robot.mesh, waypoints)
+
+    walls, component = _certificate_boxes(certificate if certificate is not None
+                                          else parts["certificate"])
+    if len(walls) or component is not None:
+        scene.add_certificate(walls, component)
+    return scene
+
+
+# ---- anything to a scene ---------------------------------------------------------------
+
+def as_scene(obj, **kwargs) -> Scene:
+    """``obj`` as a :class:`Scene`:
+
+    - a ``Scene``: itself;
+    - a ``MinkowskiResult`` (has ``.mesh`` and ``.error_bound``): :func:`scene_for_minkowski`
+      (``a=``, ``b=``, ``c_obstacle=`` as keywords);
+    - a ``Scenario`` or a scenario path: :func:`scene_for_plan` (``plan=``, ``cspace=``...);
+    - a ``PlanOutcome`` or a ``path.json`` dict: :func:`scene_for_plan` with
+      ``scenario=`` given as a keyword;
+    - a ``trimesh.Trimesh``: that mesh alone (at ``workspace/obstacles/mesh``).
+    """
+    if isinstance(obj, Scene):
+        if kwargs:
+            raise TypeError(f"as_scene: unexpected keywords for a Scene: {sorted(kwargs)}")
+        return obj
+    if hasattr(obj, "error_bound") and hasattr(obj, "mesh"):
+        return scene_for_minkowski(obj, **kwargs)
+    if isinstance(obj, trimesh.Trimesh):
+        scene = Scene(kwargs.pop("title", "mesh"))
+        scene.add_obstacles({"mesh": obj})
+        return scene
+    if hasattr(obj, "robot") and hasattr(obj, "obstacles") or isinstance(obj, (str, os.PathLike)):
+        return scene_for_plan(obj, **kwargs)
+    if hasattr(obj, "path_json") or isinstance(obj, Mapping):
+        scenario = kwargs.pop("scenario", None)
+        if scenario is None:
+            raise TypeError("as_scene: a plan needs its scenario: as_scene(plan, scenario=...)")
+        return scene_for_plan(scenario, obj, **kwargs)
+    raise TypeError(f"as_scene: cannot make a scene of {type(obj).__name__}")
