@@ -3,6 +3,7 @@
 Public API:
 
 - :func:`load_scenario` -> :class:`Scenario`; :func:`plan` -> :class:`PlanOutcome`
+- :func:`load_assembly`, :func:`plan_assembly` -> :class:`AssemblyResult`
 - :func:`minkowski_sum`, :func:`c_obstacle` -> :class:`MinkowskiResult`
 - :func:`decompose` -> :class:`Decomposition` (convex pieces, cached)
 - :func:`load_mesh`, :func:`validate_solid`, :func:`repair_mesh`, :func:`mirror`
@@ -10,6 +11,7 @@ Public API:
 """
 
 from . import _minkowski_core  # noqa: F401  (native core; fails loudly if not built)
+from .assembly import AssemblyResult, load_assembly, plan_assembly
 from .decompose import Decomposition, decompose
 from .errors import (
     GeometryError,
@@ -28,6 +30,7 @@ from .tolerances import Tolerances, tol
 __version__ = _minkowski_core.__version__
 
 __all__ = [
+    "AssemblyResult",
     "Decomposition",
     "GeometryError",
     "InvalidMeshError",
@@ -41,11 +44,13 @@ __all__ = [
     "Tolerances",
     "c_obstacle",
     "decompose",
+    "load_assembly",
     "load_mesh",
     "load_scenario",
     "minkowski_sum",
     "mirror",
     "plan",
+    "plan_assembly",
     "repair_mesh",
     "tol",
     "validate_solid",

@@ -82,6 +82,21 @@ def _parser() -> argparse.ArgumentParser:
         "(self-contained, opens offline)",
     )
     _add_viz_parsers(sub)
+    asm = sub.add_parser(
+        "assemble",
+        help="find an assembly sequence (and insertion paths) for an assembly YAML",
+        description="Take the assembly apart one part at a time (straight removals "
+        "first, then the planner) and reverse it. Writes DIR/sequence.json (parts in "
+        "assembly order, each with its insertion path) and DIR/report.json. Exit 0: a "
+        "sequence exists; 1: none (names the interlocked parts); 2: bad input.",
+    )
+    asm.add_argument("assembly", help="assembly .yaml (see docs/assembly.md)")
+    asm.add_argument("--out", required=True, help="output directory (created if needed)")
+    asm.add_argument("--cache-dir", default=None, help="decomposition cache directory")
+    asm.add_argument("--no-progress", action="store_true", help="no progress line")
+    asm.add_argument("--html", action="store_true",
+                     help="also write DIR/assembly.html: the parts moving in one after "
+                     "another (self-contained, opens offline)")
     return p
 
 
@@ -221,6 +236,18 @@ def _cmd_plan(args) -> int:
     return outcome.exit_code
 
 
+def _cmd_assemble(args) -> int:
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        return _fail(f"--out {out}: exists and is not a directory")
+    if not Path(args.assembly).is_file():
+        return _fail(f"assembly: file {args.assembly!r} not found")
+    from planner.assembly import assemble_command
+
+    return assemble_command(args.assembly, out, html=args.html, cache_dir=args.cache_dir,
+                            progress=False if args.no_progress else None, write=_write_json)
+
+
 def _cmd_view(args) -> int:
     scenario_path = Path(args.scenario)
     if not scenario_path.is_file():
@@ -281,6 +308,8 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_plan(args)
         if args.command == "view":
             return _cmd_view(args)
+        if args.command == "assemble":
+            return _cmd_assemble(args)
         return _fail(f"unknown command {args.command!r}")
     except MinkplanError as exc:
         return _fail(str(exc))
