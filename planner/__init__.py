@@ -10,7 +10,16 @@ Public API:
 - :mod:`planner.errors` (every error minkplan raises), :data:`tol` (all tolerances)
 """
 
-from . import _minkowski_core  # noqa: F401  (native core; fails loudly if not built)
+try:
+    from . import _minkowski_core  # native core
+except ImportError as _exc:  # pragma: no cover - depends on how it was installed
+    import os as _os
+
+    raise ImportError(
+        f"planner's native module _minkowski_core is not built in {_os.path.dirname(__file__)}: "
+        "this is probably the source tree shadowing an installed minkplan (run from another "
+        "directory, or install with `pip install -e .` so the module is built here)"
+    ) from _exc
 from .assembly import AssemblyResult, load_assembly, plan_assembly
 from .decompose import Decomposition, decompose
 from .errors import (

@@ -17,9 +17,24 @@ from pathlib import Path
 _MESH_SUFFIXES = {".stl", ".obj", ".ply", ".off", ".glb"}
 
 
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("minkplan")
+    except PackageNotFoundError:
+        return "unknown"
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="minkplan", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(
+        prog="minkplan",
+        description="Translational motion planning for rigid parts on Minkowski-sum "
+        "C-obstacles: plan paths with proofs of no path, find assembly sequences, compute "
+        "Minkowski sums and C-obstacles, look at them in meshcat.",
+    )
     p.add_argument("-v", "--verbose", action="count", default=0, help="more logging (-vv: debug)")
+    p.add_argument("--version", action="version", version=f"minkplan {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
 
     m = sub.add_parser(
@@ -225,7 +240,8 @@ def _cmd_plan(args) -> int:
         )
     sys.stdout.write(
         f"{scenario.name}: {outcome.status}{detail} ({outcome.message}); "
-        f"{outcome.timings.get('total', 0.0):.2f} s; wrote {out}/path.json\n"
+        f"{outcome.timings.get('total', 0.0):.2f} s; wrote {out}/path.json, report.json"
+        f"{', certificate.json' if certificate is not None else ''}\n"
     )
     if args.html:
         from planner import viz
@@ -270,6 +286,13 @@ def _cmd_view(args) -> int:
 
     scenario = load_scenario(scenario_path)
     scene = viz.scene_for_plan(scenario, plan_json, c_obstacle=not args.no_c_obstacle)
+
+    def _terminate(signum, frame):  # SIGTERM stops the server like Ctrl+C (no orphans)
+        raise KeyboardInterrupt
+
+    import signal
+
+    signal.signal(signal.SIGTERM, _terminate)
     viz.serve(scene, out=sys.stdout)
     return 0
 
