@@ -161,9 +161,7 @@ impl Octree {
 
     /// The closed box of a leaf.
     pub fn cell_box(&self, leaf: &Leaf) -> Aabb {
-        let s = (1u64 << leaf.level) as f64 * self.h;
-        let min = self.origin + Vec3::new(leaf.ijk[0] as f64, leaf.ijk[1] as f64, leaf.ijk[2] as f64) * self.h;
-        Aabb::new(min, min + Vec3::splat(s))
+        lattice_cell(self.origin, self.h, leaf.ijk, leaf.level)
     }
 
     /// The root cell's box.
@@ -282,11 +280,18 @@ pub(crate) fn classify_cell(
     }
 }
 
+/// The closed box of the cell with lower lattice corner `ijk` and size `2^level` finest
+/// cells, on the lattice with point `(0, 0, 0)` at `origin` and spacing `h`.
+#[inline]
+pub(crate) fn lattice_cell(origin: Vec3, h: f64, ijk: [u32; 3], level: u8) -> Aabb {
+    let s = (1u64 << level) as f64 * h;
+    let min = origin + Vec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64) * h;
+    Aabb::new(min, min + Vec3::splat(s))
+}
+
 impl Ctx<'_> {
     fn cell(&self, ijk: [u32; 3], level: u8) -> Aabb {
-        let s = (1u64 << level) as f64 * self.h;
-        let min = self.origin + Vec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64) * self.h;
-        Aabb::new(min, min + Vec3::splat(s))
+        lattice_cell(self.origin, self.h, ijk, level)
     }
 
     /// Filter `cand` against `cell` into `out`; the cell's label.

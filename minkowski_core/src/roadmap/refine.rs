@@ -9,7 +9,7 @@
 use super::index::LeafIndex;
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
-use crate::octree::{classify_cell, Label, Leaf, Octree, PrimitiveSource, MAX_DEPTH};
+use crate::octree::{classify_cell, lattice_cell, Label, Leaf, Octree, PrimitiveSource, MAX_DEPTH};
 use crate::polytope::ConvexPolytope;
 use rayon::prelude::*;
 
@@ -58,9 +58,7 @@ struct Classifier<'a> {
 
 impl Classifier<'_> {
     fn cell(&self, ijk: [u32; 3], level: u8) -> Aabb {
-        let s = (1u64 << level) as f64 * self.h;
-        let min = self.origin + Vec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64) * self.h;
-        Aabb::new(min, min + Vec3::splat(s))
+        lattice_cell(self.origin, self.h, ijk, level)
     }
 
     /// Filter the candidate records `cand` against `cell` into `out`; the cell's label.
