@@ -1,5 +1,6 @@
 """Assembly sequencing (planner.assembly): the demos' outcomes, every path re-validated
-by FCL at the assembly's contact tolerance, and one-line schema errors."""
+by FCL at the assembly's contact tolerance, one-line schema errors, per-pair C-obstacle
+reuse, irreducible interlocked sets and planned removals towards any side."""
 
 from __future__ import annotations
 
@@ -9,13 +10,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import planner.assembly as assembly_module
 from planner.assembly import (
+    DIRECTIONS,
+    PairCache,
     assemble_command,
+    benchmark_removals,
     load_assembly,
     parse_assembly,
     plan_assembly,
+    removal_problems,
+    removal_scenario,
 )
-from planner.errors import ScenarioError
+from planner.errors import InvalidParameterError, ScenarioError
 from planner.validation import FclChecker
 
 DEMOS = Path(__file__).resolve().parents[1] / "scenarios" / "assemblies"
@@ -83,9 +90,11 @@ def test_linked_rings_are_interlocked(tmp_path, capsys):
     sequence = json.loads((tmp_path / "out" / "sequence.json").read_text())
     assert sequence["status"] == "interlocked"
     assert sequence["interlocked"] == ["ring_a", "ring_b"]
-    assert sequence["parts"] == []
+    assert sequence["stuck"] == ["ring_a", "ring_b"]
+    assert sequence["parts"] == [] and sequence["proved"]
     report = json.loads((tmp_path / "out" / "report.json").read_text())
     assert all(report["attempts"][n]["proved"] for n in ("ring_a", "ring_b"))
+    assert report["interlocked_attempts"]["ring_a"]["obstacles"] == ["ring_b"]
     assert "ring_a, ring_b" in capsys.readouterr().out
 
 
@@ -193,7 +202,7 @@ def test_contact_normal_direction(tmp_path):
 
 
 def test_html_animation_and_benchmark(tmp_path):
-    from planner.assembly import benchmark_removals, scene_for_assembly
+    from planner.assembly import scene_for_assembly
 
     result = plan_assembly(load_assembly(DEMOS / "peg_in_block.yaml"))
     scene = scene_for_assembly(result)
@@ -206,3 +215,189 @@ def test_html_animation_and_benchmark(tmp_path):
     rows = benchmark_removals(result, planners=("minkplan", "ompl:RRTConnect"))
     assert [(r["planner"], r["status"], r["valid"]) for r in rows] == [
         ("minkplan", "found", True), ("ompl:RRTConnect", "found", True)]
+
+
+# ---------------------------------------------------------------- per-pair reuse
+
+
+def test_pair_c_obstacles_are_built_once_and_reused(monkeypatch):
+    """The C-obstacle of part j for moving part i does not change when other parts leave:
+    over the 6 removal steps of the latched box, each ordered pair's sums are built once
+    (counted at the native call), and later steps reuse them."""
+    real = assembly_module.Primitives
+    built: list[bytes] = []
+
+    class Counting:
+        @staticmethod
+        def pairwise_sums(pieces_a, pieces_b, subtract=False):
+            assert subtract
+            built.append(b"".join(p.tobytes() for p in [*pieces_a, b"|", *pieces_b]
+                                  if not isinstance(p, bytes)) + bytes(len(pieces_a)))
+            return real.pairwise_sums(pieces_a, pieces_b, subtract=subtract)
+
+    monkeypatch.setattr(assembly_module, "Primitives", Counting)
+    result = plan_assembly(load_assembly(DEMOS / "latched_box.yaml"))
+    assert result.found
+    reuse = result.reuse
+    n = len(result.assembly.parts)
+    assert reuse["steps"] == len(result.removal) == n - 1
+    assert len(built) == reuse["sums_computed"] == reuse["pairs"] <= n * (n - 1)
+    assert len(set(built)) == len(built)  # no pair built twice
+    assert reuse["pairs_reused_across_steps"] >= 5
+    assert reuse["sums_reused"] > 2 * reuse["sums_computed"]
+    assert reuse["verdicts_reused"] > reuse["verdicts_computed"]
+    _revalidate(result)
+
+
+def test_pair_verdicts_agree_with_fcl():
+    """Where the pair's primitives decide a straight line (blocked: a sampled depth beyond
+    the tolerance; free: it misses them), FCL on the two parts alone agrees."""
+    assembly = load_assembly(DEMOS / "latched_box.yaml")
+    cache = PairCache(assembly)
+    decided = {True: 0, False: 0}
+    for moving in ("latch", "lid", "wall_e"):
+        for obstacle in (p.name for p in assembly.parts if p.name != moving):
+            for dname, vec in DIRECTIONS.items():
+                verdict = cache.verdict(moving, obstacle, dname, vec, fcl=False)
+                if verdict is None:
+                    continue  # grazing: FCL decides those
+                far = cache.far_point(moving, dname, vec)
+                seg = cache.checker(moving, obstacle).check_segment(np.zeros(3), far)
+                assert seg.valid != verdict.blocked, (moving, obstacle, dname)
+                decided[verdict.blocked] += 1
+    assert decided[True] >= 10 and decided[False] >= 30, decided
+    assert cache.stats["sums_computed"] == 3 * 6 and cache.stats["fcl_pair_checks"] == 0
+
+
+# ---------------------------------------------------------------- interlocked sets
+
+
+def _box(lo, hi):
+    import trimesh
+
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    return trimesh.creation.box(extents=hi - lo,
+                                transform=trimesh.transformations.translation_matrix(
+                                    (lo + hi) / 2))
+
+
+def _union(*boxes):
+    import trimesh
+
+    return trimesh.util.concatenate([_box(lo, hi) for lo, hi in boxes])
+
+
+def _trapped_post(tmp_path: Path, parts=("base", "post", "ring_a", "ring_b")) -> Path:
+    """The linked rings above a base (fixed) with a pocket in which a post stands, its
+    top 0.05 under ring_a's west bar: the post is stuck while ring_a is there, ring_a
+    while ring_b is; only the two rings are interlocked."""
+    _union(([-1.6, -1.6, -1.4], [1.6, 1.6, -1.0]),
+           ([-1.6, -1.6, -1.1], [-1.0, 1.6, -0.7]),
+           ([-0.8, -1.6, -1.1], [1.6, 1.6, -0.7]),
+           ([-1.05, -1.6, -1.1], [-0.75, -0.1, -0.7]),
+           ([-1.05, 0.1, -1.1], [-0.75, 1.6, -0.7])).export(tmp_path / "base.stl")
+    _union(([-0.95, -0.05, -1.0], [-0.85, 0.05, -0.15])).export(tmp_path / "post.stl")
+    meshes = {"base": tmp_path / "base.stl", "post": tmp_path / "post.stl",
+              "ring_a": DEMOS / "meshes" / "ring_a.stl",
+              "ring_b": DEMOS / "meshes" / "ring_b.stl"}
+    path = tmp_path / ("trapped_" + "_".join(parts) + ".yaml")
+    text = "planner: {time_limit: 20}\n"
+    if "base" in parts:
+        text += "base: base\n"
+    text += "parts:\n" + "".join(f"  - {{name: {n}, mesh: {meshes[n]}}}\n" for n in parts)
+    path.write_text(text)
+    return path
+
+
+def test_interlocked_set_is_irreducible(tmp_path):
+    result = plan_assembly(load_assembly(_trapped_post(tmp_path)))
+    assert not result.found and result.exit_code == 1
+    assert result.stuck == ["post", "ring_a", "ring_b"]
+    assert result.interlocked == ["ring_a", "ring_b"]
+    assert result.proved
+    assert result.message.endswith("(proved); also stuck: post"), result.message
+    assert set(result.core_attempts) == {"ring_a", "ring_b"}
+    assert result.core_attempts["ring_a"]["obstacles"] == ["ring_b"]
+    # the post could not leave with everything else present (proved), but is not needed
+    assert result.attempts["post"]["proved"]
+    assert sorted(result.attempts["post"]["obstacles"]) == ["base", "ring_a", "ring_b"]
+    # irreducible: leaving out either ring, everything else comes apart
+    for keep in (("base", "post", "ring_b"), ("base", "post", "ring_a")):
+        sub = plan_assembly(load_assembly(_trapped_post(tmp_path, keep)))
+        assert sub.found, (keep, sub.message)
+        _revalidate(sub)
+
+
+def test_interlocked_set_without_minimizing(tmp_path):
+    result = plan_assembly(load_assembly(_trapped_post(tmp_path)), minimize=False)
+    assert result.interlocked == result.stuck == ["post", "ring_a", "ring_b"]
+    assert result.proved  # each of them was proved stuck with the others present
+
+
+# ---------------------------------------------------------------- goal sides
+
+
+def _tunnel(tmp_path: Path) -> Path:
+    """A slider on the floor of a roofed channel (the base): +z is blocked by a thick
+    roof, +x by an end wall, -x by a low stop it must climb over (no straight exit)."""
+    _union(([-1.0, -0.5, 0.0], [1.0, 0.5, 0.2]),
+           ([-1.0, -0.5, 0.1], [1.0, -0.3, 0.8]),
+           ([-1.0, 0.3, 0.1], [1.0, 0.5, 0.8]),
+           ([-0.95, -0.45, 0.7], [0.95, 0.45, 1.2]),
+           ([0.8, -0.35, 0.1], [1.0, 0.35, 0.75]),
+           ([-1.0, -0.35, 0.1], [-0.8, 0.35, 0.4])).export(tmp_path / "tunnel.stl")
+    _union(([-0.6, -0.25, 0.2], [0.2, 0.25, 0.35])).export(tmp_path / "slider.stl")
+    path = tmp_path / "tunnel.yaml"
+    path.write_text("base: tunnel\nplanner: {time_limit: 20}\nparts:\n"
+                    "  - {name: tunnel, mesh: tunnel.stl}\n"
+                    "  - {name: slider, mesh: slider.stl}\n")
+    return path
+
+
+def test_planned_removal_leaves_by_the_open_side(tmp_path):
+    """+z is blocked (roof): the planner's goal is put on the open -x side, tried first,
+    and the removal ends there (not around the roof)."""
+    result = plan_assembly(load_assembly(_tunnel(tmp_path)))
+    assert result.found, result.message
+    (step,) = result.removal
+    assert (step.method, step.direction) == ("planned", "-x")
+    assert len(step.removal) > 2
+    assert result.reuse["planner_runs"] == 1  # stopped at the first side
+    parts = {p.name: p for p in result.assembly.parts}
+    lo, hi = parts["tunnel"].mesh.bounds
+    p_lo, p_hi = parts["slider"].mesh.bounds + step.removal[-1]
+    assert p_hi[0] < lo[0]                       # out on the -x side ...
+    assert np.all(p_lo[1:] < hi[1:]) and np.all(p_hi[1:] > lo[1:])  # ... only there
+    assert np.max(step.removal[:, 2]) < hi[2] - parts["slider"].mesh.bounds[0][2]
+    _revalidate(result)
+
+
+def test_removal_scenario_directions():
+    assembly = load_assembly(DEMOS / "peg_in_block.yaml")
+    for dname, vec in DIRECTIONS.items():
+        scenario = removal_scenario(assembly, "peg", ["block"], dname)
+        lo, hi = scenario.bounds
+        goal = np.asarray(scenario.goal)
+        assert np.all(goal > lo) and np.all(goal < hi)
+        np.testing.assert_allclose(goal / np.linalg.norm(goal), vec, atol=1e-12)
+    tilted = removal_scenario(assembly, "peg", ["block"], [1.0, 0.0, 1.0])
+    np.testing.assert_allclose(tilted.goal[0], tilted.goal[2])
+    for bad, message in [("up", r"^direction 'up': use one of \+z, -z"),
+                         ([0, 0, 0], r"^direction \[0, 0, 0\]: expected a non-zero"),
+                         ([1, 0], r"^direction \[1, 0\]: expected a non-zero")]:
+        with pytest.raises(InvalidParameterError, match=message):
+            removal_scenario(assembly, "peg", ["block"], bad)
+    with pytest.raises(InvalidParameterError, match=r"^'pin': not a part of peg_in_block"):
+        removal_scenario(assembly, "peg", ["pin"])
+
+
+def test_benchmark_problems_of_an_interlocked_result():
+    result = plan_assembly(load_assembly(DEMOS / "linked_rings.yaml"))
+    problems = removal_problems(result)
+    assert [(p["part"], p["obstacles"], p["expected"]) for p in problems] == [
+        ("ring_a", ["ring_b"], "no_path"), ("ring_b", ["ring_a"], "no_path")]
+    rows = benchmark_removals(result, planners=("minkplan",), runs=2)
+    assert [(r["part"], r["run"], r["status"]) for r in rows] == [
+        ("ring_a", 0, "no_path"), ("ring_a", 1, "no_path"),
+        ("ring_b", 0, "no_path"), ("ring_b", 1, "no_path")]
+    assert all(0 < r["planning_seconds"] <= r["seconds"] for r in rows)

@@ -23,10 +23,12 @@ SMALL: dict[str, dict[str, object]] = {
     "01_minkowski_sum.ipynb": {"EPS": 0.1, "HEIGHT": 560},
     "02_peg_in_hole.ipynb": {"SCENARIOS": ["peg_in_hole.yaml", "sealed_chamber.yaml"],
                              "HEIGHT": 560},
+    "03_assembly.ipynb": {"ASSEMBLIES": ["pegs_and_holes.yaml", "linked_rings.yaml"],
+                          "HEIGHT": 560},
 }
 """Parameter overrides per notebook (every notebook must be listed)."""
 
-EXPECTED = ["01_minkowski_sum.ipynb", "02_peg_in_hole.ipynb"]
+EXPECTED = ["01_minkowski_sum.ipynb", "02_peg_in_hole.ipynb", "03_assembly.ipynb"]
 
 
 def notebooks() -> list[Path]:
@@ -97,6 +99,19 @@ def test_notebook_runs_and_shows_its_scenes(path, monkeypatch, tmp_path):
         assert result.error_bound <= 2 * SMALL[path.name]["EPS"]
         assert np.all(namespace["inside"] == [True, False])
         assert len(pages) == 2
+    # the colour the first scene must show beside the orange obstacles / fixed parts
+    second, saturation = viz.COLORS["sum"], 0.2
+    if path.name == "03_assembly.ipynb":
+        from planner.assembly import PART_COLORS
+
+        results = namespace["results"]
+        pegs, rings = results["pegs_and_holes.yaml"], results["linked_rings.yaml"]
+        assert pegs.order == ["lower", "upper"] and pegs.removal[0].validation["valid"]
+        assert not rings.found and rings.interlocked == ["ring_a", "ring_b"] and rings.proved
+        assert rings.reuse["sums_computed"] == 2
+        assert len(pages) == 1
+        # the moving part ("upper", second in the file) in its colour, the base in orange
+        second, saturation = PART_COLORS[1], 0.3
 
     # the first scene, as Jupyter would show it (the iframe), in a real browser
     page = tmp_path / "cell.html"
@@ -110,6 +125,6 @@ def test_notebook_runs_and_shows_its_scenes(path, monkeypatch, tmp_path):
     # the operand (obstacle orange) seen through the translucent sum (blue): both hues,
     # paler than when drawn alone, but far from the grey background and grid
     orange = browser.pixels_like(shot.rgb, viz.COLORS["obstacle"], min_saturation=0.3)
-    blue = browser.pixels_like(shot.rgb, viz.COLORS["sum"], min_saturation=0.2)
+    blue = browser.pixels_like(shot.rgb, second, min_saturation=saturation)
     assert orange >= 5000 and blue >= 5000 and not shot.errors, (orange, blue, shot.errors,
                                                                   shot.png)

@@ -41,6 +41,15 @@ pub enum CoreError {
         /// Context.
         detail: String,
     },
+    /// A triangle mesh cannot be used as a solid (open, inconsistently oriented, bad
+    /// indices). Fix: repair the mesh (close holes, orient the triangles outward).
+    #[error("{what}: {detail}")]
+    InvalidGeometry {
+        /// Which input.
+        what: String,
+        /// Why.
+        detail: String,
+    },
     /// There are no primitives to work on. Fix: give at least one convex piece per operand.
     #[error("{what}: no convex pieces given")]
     Empty {

@@ -15,6 +15,7 @@
 
 pub mod bvh;
 pub mod error;
+pub mod exact;
 pub mod math;
 pub mod minkowski;
 pub mod octree;
@@ -25,12 +26,13 @@ mod union;
 
 pub use bvh::Bvh;
 pub use error::{CoreError, CoreResult};
+pub use exact::{ExactSource, TriMesh};
 pub use math::{Aabb, Vec3};
 pub use minkowski::{pairwise_sums, PolytopeSet, SumKind};
-pub use octree::{Label, Leaf, Octree, PrimitiveSource};
+pub use octree::{CellSource, Label, Leaf, Octree};
 pub use polytope::ConvexPolytope;
 pub use surface::{extract, Surface};
-pub use union::{approximate_union, cell_size_for_eps, grid_error_bound, surface_error_bound, UnionParams, UnionResult};
+pub use union::{approximate_solid, approximate_union, cell_size_for_eps, grid_error_bound, surface_error_bound, UnionParams, UnionResult};
 
 #[cfg(feature = "python")]
 mod py;

@@ -6,7 +6,8 @@ use crate::math::{Aabb, Vec3};
 use crate::minkowski::{pairwise_sums, PolytopeSet, SumKind};
 use crate::octree::Octree;
 use crate::polytope::ConvexPolytope;
-use crate::union::{approximate_union, UnionParams};
+use crate::exact::{ExactSource, TriMesh};
+use crate::union::{approximate_solid, approximate_union, UnionParams, UnionResult};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -24,7 +25,7 @@ impl From<CoreError> for PyErr {
     fn from(e: CoreError) -> PyErr {
         let msg = e.to_string();
         match e {
-            CoreError::NonFinite { .. } | CoreError::Degenerate { .. } | CoreError::Empty { .. } => InvalidMeshError::new_err(msg),
+            CoreError::NonFinite { .. } | CoreError::Degenerate { .. } | CoreError::Empty { .. } | CoreError::InvalidGeometry { .. } => InvalidMeshError::new_err(msg),
             CoreError::InvalidParameter { .. } => InvalidParameterError::new_err(msg),
             CoreError::ResourceLimit { .. } => ResourceLimitError::new_err(msg),
         }
@@ -156,6 +157,10 @@ fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: 
     let set = prims.inner.clone();
     let params = UnionParams { eps, max_cells, max_refinements, simplify };
     let r = py.detach(move || approximate_union(&set, &params))?;
+    surface_dict(py, &r)
+}
+
+fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let s = &r.surface;
     d.set_item("vertices", to_array2(s.vertices.iter().map(|v| v.to_array())).into_pyarray(py))?;
@@ -213,6 +218,78 @@ fn build_octree<'py>(py: Python<'py>, prims: &Primitives, h: f64, bounds: Option
     Ok(d)
 }
 
+/// A closed mesh from (vertices (n, 3) float64, faces (m, 3) int64).
+fn mesh_of(v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>, what: &str) -> PyResult<TriMesh> {
+    let verts = points_of(v, &format!("{what} vertices"))?;
+    let fa = f.as_array();
+    if fa.ncols() != 3 {
+        return Err(InvalidMeshError::new_err(format!("{what} faces: expected shape (m, 3), got {:?}", f.shape())));
+    }
+    let mut faces = Vec::with_capacity(fa.nrows());
+    for row in fa.rows() {
+        if row.iter().any(|&x| x < 0 || x >= verts.len() as i64) {
+            return Err(InvalidMeshError::new_err(format!("{what} faces: index out of range 0..{} in {row:?}", verts.len())));
+        }
+        faces.push([row[0] as u32, row[1] as u32, row[2] as u32]);
+    }
+    Ok(TriMesh::new(verts, &faces, what)?)
+}
+
+/// The exact Minkowski sum `A ⊕ B` of two closed triangle meshes (boundary convolution,
+/// no decomposition): exact membership and segment queries, and its surface.
+#[pyclass(frozen, module = "planner._minkowski_core")]
+pub struct ExactSum {
+    inner: Arc<ExactSource>,
+}
+
+#[pymethods]
+impl ExactSum {
+    /// `A ⊕ B` for `a` and `b` given as (vertices (n, 3), faces (m, 3)); both closed and
+    /// outward oriented.
+    #[new]
+    fn new(a: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>), b: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>)) -> PyResult<Self> {
+        let ma = mesh_of(&a.0, &a.1, "a")?;
+        let mb = mesh_of(&b.0, &b.1, "b")?;
+        Ok(ExactSum { inner: Arc::new(ExactSource::new(vec![ma], mb, 0.0, None)) })
+    }
+
+    /// Box around the sum, (2, 3).
+    #[getter]
+    fn bounds<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let b = self.inner.aabb;
+        to_array2([b.min.to_array(), b.max.to_array()].into_iter()).into_pyarray(py)
+    }
+
+    /// Triangle counts of `a` and `b`.
+    #[getter]
+    fn triangles(&self) -> (usize, usize) {
+        (self.inner.obstacles[0].tris.len(), self.inner.b.tris.len())
+    }
+
+    /// Whether each of `points` (n, 3) lies in the closed sum, (n,) bool. Parallel.
+    fn contains<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let pts = points_of(&points, "points")?;
+        let src = self.inner.clone();
+        let out: Vec<bool> = py.detach(move || pts.par_iter().map(|p| src.contains_point(*p)).collect());
+        Ok(out.into_pyarray(py))
+    }
+
+    /// Whether the closed segment a → b misses the sum grown by the cube `margin`.
+    #[pyo3(signature = (a, b, margin=0.0))]
+    fn segment_is_free(&self, a: Vec<f64>, b: Vec<f64>, margin: f64) -> PyResult<bool> {
+        Ok(self.inner.segment_is_free(vec3_any(&a, "a")?, vec3_any(&b, "b")?, margin.max(0.0)))
+    }
+
+    /// The closed surface of the sum at resolution `eps` (as `union_surface`).
+    #[pyo3(signature = (eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
+    fn surface<'py>(&self, py: Python<'py>, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
+        let src = self.inner.clone();
+        let params = UnionParams { eps, max_cells, max_refinements, simplify };
+        let r = py.detach(move || approximate_solid(src.as_ref(), &src.aabb, &params))?;
+        surface_dict(py, &r)
+    }
+}
+
 /// Number of worker threads the native core uses.
 #[pyfunction]
 fn num_threads() -> usize {
@@ -227,6 +304,7 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(build_octree, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
     m.add_class::<PyCSpace>()?;
+    m.add_class::<ExactSum>()?;
     Ok(())
 }
 
@@ -292,6 +370,42 @@ impl PyCSpace {
         Ok(PyCSpace { inner, max_leaves })
     }
 
+    /// The C-space of the exact source: C-obstacles `O_k ⊕ (−R)` of the closed meshes
+    /// `obstacles` (list of (vertices (n, 3), faces (m, 3))) for the closed mesh `robot`,
+    /// grown by `margin`, without decomposition. Obstacle `k` is primitive `k`; the six
+    /// walls follow.
+    #[staticmethod]
+    #[pyo3(signature = (obstacles, robot, bounds, h_floor, h_coarse, margin=0.0, max_leaves=20_000_000))]
+    fn exact(
+        py: Python<'_>,
+        obstacles: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>)>,
+        robot: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>),
+        bounds: PyReadonlyArray2<'_, f64>,
+        h_floor: f64,
+        h_coarse: f64,
+        margin: f64,
+        max_leaves: usize,
+    ) -> PyResult<Self> {
+        let b = points_of(&bounds, "bounds")?;
+        if b.len() != 2 {
+            return Err(InvalidParameterError::new_err("bounds: expected [[min x, y, z], [max x, y, z]]"));
+        }
+        let region = Aabb::new(b[0], b[1]);
+        let mut meshes = Vec::with_capacity(obstacles.len());
+        for (k, (v, f)) in obstacles.iter().enumerate() {
+            meshes.push(mesh_of(v, f, &format!("obstacle {k}"))?);
+        }
+        let r = mesh_of(&robot.0, &robot.1, "robot")?;
+        let inner = py.detach(move || crate::roadmap::CSpace::build_exact(meshes, &r, region, h_floor, h_coarse, margin, max_leaves))?;
+        Ok(PyCSpace { inner, max_leaves })
+    }
+
+    /// Whether the C-obstacles come from the exact source (no decomposition).
+    #[getter]
+    fn is_exact(&self) -> bool {
+        self.inner.obstacles.is_exact()
+    }
+
     fn __len__(&self) -> usize {
         self.inner.oct.leaves.len()
     }
@@ -305,7 +419,7 @@ impl PyCSpace {
     /// Number of primitives, walls included.
     #[getter]
     fn n_primitives(&self) -> usize {
-        self.inner.set.len()
+        self.inner.obstacles.len()
     }
 
     /// Finest cell size refinement can reach.
@@ -399,14 +513,14 @@ impl PyCSpace {
     /// Whether each of `points` (n, 3) lies in a primitive (walls included), (n,) bool.
     fn contains<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let pts = points_of(&points, "points")?;
-        Ok(pts.iter().map(|p| self.inner.set.contains_point(*p)).collect::<Vec<_>>().into_pyarray(py))
+        Ok(pts.iter().map(|p| self.inner.obstacles.contains_point(*p)).collect::<Vec<_>>().into_pyarray(py))
     }
 
     /// Signed distance of each of `points` (n, 3) to the primitives (walls included):
     /// exact outside, minus the largest depth in one primitive inside.
     fn signed_distance<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pts = points_of(&points, "points")?;
-        Ok(pts.iter().map(|p| self.inner.set.signed_distance(*p)).collect::<Vec<_>>().into_pyarray(py))
+        Ok(pts.iter().map(|p| self.inner.obstacles.signed_distance(*p)).collect::<Vec<_>>().into_pyarray(py))
     }
 
     /// `(primitive, depth)` for every primitive containing `point`; depth is the distance
@@ -539,7 +653,10 @@ impl PyCSpace {
     /// Facet planes of primitive `i` (walls included): (normals (k, 3), offsets (k,));
     /// inside is `normals @ x <= offsets`.
     fn primitive_planes<'py>(&self, py: Python<'py>, i: usize) -> PyResult<Planes<'py>> {
-        let p = self.inner.set.polys.get(i).ok_or_else(|| InvalidParameterError::new_err(format!("primitive index {i} out of range")))?;
+        let crate::roadmap::Obstacles::Union(set) = &self.inner.obstacles else {
+            return Err(InvalidParameterError::new_err("the exact source has no convex primitives"));
+        };
+        let p = set.polys.get(i).ok_or_else(|| InvalidParameterError::new_err(format!("primitive index {i} out of range")))?;
         Ok((to_array2(p.normals.iter().map(|n| n.to_array())).into_pyarray(py), p.offsets.clone().into_pyarray(py)))
     }
 }

@@ -2,8 +2,9 @@
 //! remain.
 
 use crate::error::{CoreError, CoreResult};
+use crate::math::Aabb;
 use crate::minkowski::PolytopeSet;
-use crate::octree::{LevelCounts, Octree};
+use crate::octree::{CellSource, LevelCounts, Octree};
 use crate::surface::{extract, merge_coplanar, Surface, EDGE_CLAMP};
 use std::time::Instant;
 
@@ -83,18 +84,26 @@ pub fn surface_error_bound(surface: &Surface, h: f64) -> f64 {
 /// [`CoreError::InvalidParameter`] for a bad eps, [`CoreError::ResourceLimit`] when even
 /// the first grid does not fit, [`CoreError::Empty`] for an empty set.
 pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<UnionResult> {
-    if !(params.eps > 0.0) || !params.eps.is_finite() {
-        return Err(CoreError::InvalidParameter { name: "eps".into(), value: params.eps, detail: "must be positive and finite".into() });
-    }
     if set.is_empty() {
         return Err(CoreError::Empty { what: "primitive set".into() });
+    }
+    approximate_solid(set, &set.aabb, params)
+}
+
+/// [`approximate_union`] for any [`CellSource`] whose solid lies in `region`.
+///
+/// # Errors
+/// As [`approximate_union`].
+pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionParams) -> CoreResult<UnionResult> {
+    if !(params.eps > 0.0) || !params.eps.is_finite() {
+        return Err(CoreError::InvalidParameter { name: "eps".into(), value: params.eps, detail: "must be positive and finite".into() });
     }
     let mut h = cell_size_for_eps(params.eps);
     let mut best: Option<UnionResult> = None;
     let (mut t_oct, mut t_surf) = (0.0, 0.0);
     for round in 0..=params.max_refinements {
         let t0 = Instant::now();
-        let oct = match Octree::build(set, &set.aabb, h, params.max_cells) {
+        let oct = match Octree::build(set, region, h, params.max_cells) {
             Ok(o) => o,
             Err(e) => match best {
                 Some(b) => return Ok(b), // the finer grid does not fit: keep what we have
@@ -103,7 +112,7 @@ pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<
         };
         t_oct += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let surface = extract(&oct, &set.polys);
+        let surface = extract(&oct, set);
         t_surf += t1.elapsed().as_secs_f64();
         let bound = surface_error_bound(&surface, h);
         let done = bound.is_finite();
@@ -128,7 +137,7 @@ pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<
     r.triangles_extracted = r.surface.faces.len();
     if params.simplify {
         let t = Instant::now();
-        let scale = set.aabb.diagonal();
+        let scale = region.diagonal();
         merge_coplanar(&mut r.surface, 1e-10 * scale, 1e-12 * r.h * r.h);
         r.seconds_simplify = t.elapsed().as_secs_f64();
     }

@@ -26,28 +26,75 @@ pub const MAX_DEPTH: u32 = 20;
 /// so that axis-aligned facets rarely fall exactly on lattice planes.
 const LATTICE_SHIFT: f64 = 0.381_966_011_250_105_1;
 
-/// Where convex primitives come from, and how cells that no primitive touches are labelled.
+/// What the octree is built over: a source of candidate records per cell.
 ///
-/// The decomposition source is a union of solid convex pieces: an untouched cell is EMPTY
-/// and a cell inside one piece is FULL. Other sources (an exact boundary convolution) can
-/// override both.
-pub trait PrimitiveSource: Sync {
-    /// The convex primitives.
-    fn primitives(&self) -> &[ConvexPolytope];
-    /// Label of a cell that no primitive meets, by its centre.
-    fn classify_untouched(&self, _center: Vec3) -> Label {
-        Label::Empty
+/// A cell's *records* (`u32` runs in [`Octree::cands`]) name what may meet it; children
+/// filter their parent's records. The decomposition source ([`PolytopeSet`], a union of
+/// solid convex pieces) keeps `[prim, k, plane_1 .. plane_k]`; the exact source
+/// ([`crate::exact::ExactSource`]) keeps pairs of BVH nodes of the two meshes.
+///
+/// [`PolytopeSet`]: crate::minkowski::PolytopeSet
+pub trait CellSource: Sync {
+    /// The records of the root cell.
+    fn root_records(&self) -> Vec<u32>;
+    /// Filter the records `cand` of a parent against `cell` into `out` (cleared by the
+    /// caller) and label the cell. `finest`: the cell will not be split, so its records
+    /// must be resolved to what the surface and point queries use.
+    fn classify(&self, cell: &Aabb, cand: &[u32], finest: bool, out: &mut Vec<u32>) -> Label;
+    /// Whether `p`, a point of a cell with records `cand`, lies in the (closed) solid.
+    fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool;
+    /// The parts of the segment `a → b` (inside a finest cell with records `cand`) that lie
+    /// in the solid, as sorted, merged parameter intervals of `[0, 1]`; `sa`, `sb` are the
+    /// known memberships of the ends.
+    fn solid_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, sa: bool, sb: bool, out: &mut Vec<(f64, f64)>);
+}
+
+impl CellSource for crate::minkowski::PolytopeSet {
+    fn root_records(&self) -> Vec<u32> {
+        let mut root = Vec::new();
+        for (i, p) in self.polys.iter().enumerate() {
+            root.push(i as u32);
+            root.push(p.normals.len() as u32);
+            root.extend(0..p.normals.len() as u32);
+        }
+        root
     }
-    /// Whether a cell inside a single primitive lies inside the solid.
-    fn primitives_are_solid(&self) -> bool {
-        true
+
+    fn classify(&self, cell: &Aabb, cand: &[u32], _finest: bool, out: &mut Vec<u32>) -> Label {
+        classify_cell(&self.polys, cell, cand, out)
+    }
+
+    fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {
+        cell_contains(&self.polys, CandIter { data: cand }, p)
+    }
+
+    fn solid_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, _sa: bool, _sb: bool, out: &mut Vec<(f64, f64)>) {
+        out.clear();
+        for (prim, planes) in (CandIter { data: cand }) {
+            let poly = &self.polys[prim];
+            let it = planes.iter().map(|&k| (poly.normals[k as usize], poly.offsets[k as usize]));
+            if let Some(t) = crate::polytope::clip_planes(it, a, b) {
+                out.push(t);
+            }
+        }
+        merge_sorted(out);
     }
 }
 
-impl PrimitiveSource for crate::minkowski::PolytopeSet {
-    fn primitives(&self) -> &[ConvexPolytope] {
-        &self.polys
+/// Sort `iv` and merge overlapping (or touching within 1e-12) intervals in place.
+pub fn merge_sorted(iv: &mut Vec<(f64, f64)>) {
+    iv.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    let mut m = 0usize;
+    for i in 0..iv.len() {
+        let (a, b) = iv[i];
+        if m > 0 && a <= iv[m - 1].1 + 1e-12 {
+            iv[m - 1].1 = iv[m - 1].1.max(b);
+        } else {
+            iv[m] = (a, b);
+            m += 1;
+        }
     }
+    iv.truncate(m);
 }
 
 /// Cell labels.
@@ -96,9 +143,7 @@ pub struct Octree {
 pub type LevelCounts = Vec<[usize; 3]>;
 
 struct Ctx<'a> {
-    polys: &'a [ConvexPolytope],
-    solid: bool,
-    src: &'a (dyn Fn(Vec3) -> Label + Sync),
+    src: &'a dyn CellSource,
     origin: Vec3,
     h: f64,
     budget: usize,
@@ -115,7 +160,7 @@ impl Octree {
     /// # Errors
     /// [`CoreError::InvalidParameter`] for a non-positive or non-finite `h`,
     /// [`CoreError::ResourceLimit`] when the lattice or the leaf count would exceed the limits.
-    pub fn build<S: PrimitiveSource + ?Sized>(source: &S, region: &Aabb, h: f64, max_cells: usize) -> CoreResult<Octree> {
+    pub fn build<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize) -> CoreResult<Octree> {
         if !(h > 0.0) || !h.is_finite() {
             return Err(CoreError::InvalidParameter { name: "cell size".into(), value: h, detail: "must be positive and finite".into() });
         }
@@ -130,24 +175,15 @@ impl Octree {
                 detail: format!("the region is {n:.0} cells wide; the lattice addresses at most 2^{MAX_DEPTH}"),
             });
         }
-        let polys = source.primitives();
-        let classify_untouched = |c: Vec3| source.classify_untouched(c);
         let ctx = Ctx {
-            polys,
-            solid: source.primitives_are_solid(),
-            src: &classify_untouched,
+            src: source,
             origin,
             h,
             budget: max_cells,
             count: AtomicUsize::new(0),
             abort: AtomicBool::new(false),
         };
-        let mut root = Vec::new();
-        for (i, p) in polys.iter().enumerate() {
-            root.push(i as u32);
-            root.push(p.normals.len() as u32);
-            root.extend(0..p.normals.len() as u32);
-        }
+        let root = source.root_records();
         let (leaves, cands) = ctx.node([0, 0, 0], depth as u8, &root);
         if ctx.abort.load(Ordering::Relaxed) {
             return Err(CoreError::ResourceLimit {
@@ -176,10 +212,18 @@ impl Octree {
         self.origin + Vec3::new(i as f64, j as f64, k as f64) * self.h
     }
 
-    /// The candidate records of a leaf: `(primitive, planes that cut the cell)`.
+    /// The candidate records of a leaf of an octree over a [`PolytopeSet`]:
+    /// `(primitive, planes that cut the cell)`.
+    ///
+    /// [`PolytopeSet`]: crate::minkowski::PolytopeSet
     pub fn candidates<'a>(&'a self, leaf: &Leaf) -> CandIter<'a> {
+        CandIter { data: self.records(leaf) }
+    }
+
+    /// The raw candidate records of a leaf (see [`CellSource`]).
+    pub fn records<'a>(&'a self, leaf: &Leaf) -> &'a [u32] {
         let s = leaf.cand_start as usize;
-        CandIter { data: &self.cands[s..s + leaf.cand_len as usize] }
+        &self.cands[s..s + leaf.cand_len as usize]
     }
 
     /// Leaves per level and label.
@@ -194,7 +238,7 @@ impl Octree {
 
 /// Iterator over `(primitive, planes)` records of a candidate list.
 pub struct CandIter<'a> {
-    data: &'a [u32],
+    pub(crate) data: &'a [u32],
 }
 
 impl<'a> Iterator for CandIter<'a> {
@@ -225,12 +269,10 @@ pub fn cell_contains(polys: &[ConvexPolytope], cands: CandIter<'_>, p: Vec3) -> 
 /// Filter the candidate records `cand` (`[prim, k, plane_1 .. plane_k]`, see
 /// [`Octree::cands`]) against `cell` into `out` and return the cell's label: a primitive
 /// goes when one of its planes separates the cell; a plane that no longer cuts the cell is
-/// dropped; a primitive with no plane left contains the cell, which is then FULL when the
-/// primitives are solid; a cell no primitive meets gets `untouched(centre)`.
+/// dropped; a primitive with no plane left contains the cell, which is then FULL; a cell no
+/// primitive meets is EMPTY.
 pub(crate) fn classify_cell(
     polys: &[ConvexPolytope],
-    solid: bool,
-    untouched: &(dyn Fn(Vec3) -> Label + Sync),
     cell: &Aabb,
     cand: &[u32],
     out: &mut Vec<u32>,
@@ -267,14 +309,14 @@ pub(crate) fn classify_cell(
             continue;
         }
         let kept = out.len() - mark - 2;
-        if kept == 0 && solid {
+        if kept == 0 {
             out.clear();
             return Label::Full;
         }
         out[mark + 1] = kept as u32;
     }
     if out.is_empty() {
-        untouched(c)
+        Label::Empty
     } else {
         Label::Mixed
     }
@@ -295,8 +337,9 @@ impl Ctx<'_> {
     }
 
     /// Filter `cand` against `cell` into `out`; the cell's label.
-    fn classify(&self, cell: &Aabb, cand: &[u32], out: &mut Vec<u32>) -> Label {
-        classify_cell(self.polys, self.solid, self.src, cell, cand, out)
+    fn classify(&self, cell: &Aabb, cand: &[u32], finest: bool, out: &mut Vec<u32>) -> Label {
+        out.clear();
+        self.src.classify(cell, cand, finest, out)
     }
 
     fn leaf(&self, ijk: [u32; 3], level: u8, label: Label, cand_len: usize) -> Leaf {
@@ -310,7 +353,7 @@ impl Ctx<'_> {
         let mut out = (Vec::new(), Vec::new());
         if level >= 4 {
             let mut own = Vec::with_capacity(cand.len());
-            let label = self.classify(&self.cell(ijk, level), cand, &mut own);
+            let label = self.classify(&self.cell(ijk, level), cand, level == 0, &mut own);
             if label != Label::Mixed || level == 0 {
                 self.push_leaf(&mut out, ijk, level, label, &own);
                 return out;
@@ -343,7 +386,7 @@ impl Ctx<'_> {
             return;
         }
         let mut own = Vec::with_capacity(cand.len());
-        let label = self.classify(&self.cell(ijk, level), cand, &mut own);
+        let label = self.classify(&self.cell(ijk, level), cand, level == 0, &mut own);
         if label != Label::Mixed || level == 0 {
             self.push_leaf(out, ijk, level, label, &own);
             return;

@@ -12,8 +12,9 @@ use super::refine::{refine, rescale, RefineStats};
 use super::search::{astar, SearchResult};
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
+use crate::exact::{ExactSource, TriMesh, Witness};
 use crate::minkowski::PolytopeSet;
-use crate::octree::{Label, LevelCounts, Octree, MAX_DEPTH};
+use crate::octree::{CellSource, Label, LevelCounts, Octree, MAX_DEPTH};
 use crate::polytope::{clip_planes, ConvexPolytope};
 use std::collections::BTreeSet;
 
@@ -47,12 +48,88 @@ pub struct Certificate {
     pub n_components: usize,
 }
 
+/// The C-obstacles of a [`CSpace`] and the walls outside its bounds.
+#[derive(Clone, Debug)]
+pub enum Obstacles {
+    /// Convex primitives (pairwise sums of convex pieces, grown by the margin), then the
+    /// six wall slabs.
+    Union(PolytopeSet),
+    /// The exact boundary-convolution source over the obstacle meshes and the reflected
+    /// robot, grown by the margin, with walls.
+    Exact(ExactSource),
+}
+
+impl CellSource for Obstacles {
+    fn root_records(&self) -> Vec<u32> {
+        match self {
+            Obstacles::Union(s) => s.root_records(),
+            Obstacles::Exact(e) => e.root_records(),
+        }
+    }
+    fn classify(&self, cell: &Aabb, cand: &[u32], finest: bool, out: &mut Vec<u32>) -> Label {
+        match self {
+            Obstacles::Union(s) => s.classify(cell, cand, finest, out),
+            Obstacles::Exact(e) => e.classify(cell, cand, finest, out),
+        }
+    }
+    fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {
+        match self {
+            Obstacles::Union(s) => s.cell_contains(cand, p),
+            Obstacles::Exact(e) => e.cell_contains(cand, p),
+        }
+    }
+    fn solid_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, sa: bool, sb: bool, out: &mut Vec<(f64, f64)>) {
+        match self {
+            Obstacles::Union(s) => s.solid_intervals(cand, a, b, sa, sb, out),
+            Obstacles::Exact(e) => e.solid_intervals(cand, a, b, sa, sb, out),
+        }
+    }
+}
+
+impl Obstacles {
+    /// Whether `p` lies in a C-obstacle or a wall.
+    pub fn contains_point(&self, p: Vec3) -> bool {
+        match self {
+            Obstacles::Union(s) => s.contains_point(p),
+            Obstacles::Exact(e) => e.contains_point(p),
+        }
+    }
+
+    /// Signed distance (see [`PolytopeSet::signed_distance`] and
+    /// [`ExactSource::signed_distance`]).
+    pub fn signed_distance(&self, p: Vec3) -> f64 {
+        match self {
+            Obstacles::Union(s) => s.signed_distance(p),
+            Obstacles::Exact(e) => e.signed_distance(p),
+        }
+    }
+
+    /// Number of primitives (union: convex primitives and walls; exact: obstacles and
+    /// walls).
+    pub fn len(&self) -> usize {
+        match self {
+            Obstacles::Union(s) => s.len(),
+            Obstacles::Exact(e) => e.obstacles.len() + 6,
+        }
+    }
+
+    /// Whether there is nothing (never: the walls are always there).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Whether this is the exact source.
+    pub fn is_exact(&self) -> bool {
+        matches!(self, Obstacles::Exact(_))
+    }
+}
+
 /// The C-space of a translational planning problem (see the module documentation).
 #[derive(Clone, Debug)]
 pub struct CSpace {
-    /// Obstacle primitives (grown by `margin`), then the six walls.
-    pub set: PolytopeSet,
-    /// Number of obstacle primitives (the walls follow).
+    /// The C-obstacles (grown by `margin`) and the walls.
+    pub obstacles: Obstacles,
+    /// Number of obstacle primitives (union) or obstacles (exact); the six walls follow.
     pub n_obstacle: usize,
     /// The box of allowed translations.
     pub bounds: Aabb,
@@ -99,6 +176,22 @@ fn invalid(name: &str, value: f64, detail: &str) -> CoreError {
     CoreError::InvalidParameter { name: name.into(), value, detail: detail.into() }
 }
 
+fn check(bounds: &Aabb, h_floor: f64, h_coarse: f64, margin: f64) -> CoreResult<()> {
+    if !(bounds.min.is_finite() && bounds.max.is_finite() && bounds.min.cmplt(bounds.max).all()) {
+        return Err(invalid("bounds", f64::NAN, "need finite min < max on every axis"));
+    }
+    if !(h_floor > 0.0 && h_floor.is_finite()) {
+        return Err(invalid("floor cell size", h_floor, "must be positive and finite"));
+    }
+    if !(h_coarse.is_finite() && h_coarse >= h_floor) {
+        return Err(invalid("coarse cell size", h_coarse, "must be finite and at least the floor"));
+    }
+    if !(margin >= 0.0 && margin.is_finite()) {
+        return Err(invalid("margin", margin, "must be finite and >= 0"));
+    }
+    Ok(())
+}
+
 impl CSpace {
     /// Build the C-space over `obstacles` (C-obstacle primitives) within `bounds`: octree
     /// cells of size about `h_coarse` (a power-of-two multiple of the floor), refinable
@@ -111,31 +204,38 @@ impl CSpace {
     /// [`CoreError::InvalidParameter`] for bad bounds, sizes or margin,
     /// [`CoreError::ResourceLimit`] when the coarse octree exceeds `max_leaves`.
     pub fn build(obstacles: &[ConvexPolytope], bounds: Aabb, h_floor: f64, h_coarse: f64, margin: f64, max_leaves: usize) -> CoreResult<CSpace> {
-        if !(bounds.min.is_finite() && bounds.max.is_finite() && bounds.min.cmplt(bounds.max).all()) {
-            return Err(invalid("bounds", f64::NAN, "need finite min < max on every axis"));
-        }
-        if !(h_floor > 0.0 && h_floor.is_finite()) {
-            return Err(invalid("floor cell size", h_floor, "must be positive and finite"));
-        }
-        if !(h_coarse.is_finite() && h_coarse >= h_floor) {
-            return Err(invalid("coarse cell size", h_coarse, "must be finite and at least the floor"));
-        }
-        if !(margin >= 0.0 && margin.is_finite()) {
-            return Err(invalid("margin", margin, "must be finite and >= 0"));
-        }
-        let mut k = (h_coarse / h_floor).log2().floor().clamp(0.0, MAX_DEPTH as f64) as u32;
+        check(&bounds, h_floor, h_coarse, margin)?;
+        let k = (h_coarse / h_floor).log2().floor().clamp(0.0, MAX_DEPTH as f64) as u32;
         let h0 = h_floor * (1u64 << k) as f64;
         let mut polys: Vec<ConvexPolytope> =
             if margin > 0.0 { obstacles.iter().enumerate().map(|(i, p)| grow(p, margin, i)).collect::<CoreResult<_>>()? } else { obstacles.to_vec() };
         let n_obstacle = polys.len();
         let t = 2.0 * (bounds.extent().max_element() + 8.0 * h0) + 8.0 * h0;
         polys.extend(wall_slabs(&bounds, t));
-        let set = PolytopeSet::new(polys);
-        let oct0 = Octree::build(&set, &bounds, h0, max_leaves)?;
-        k = k.min(MAX_DEPTH - oct0.depth as u32);
+        Self::finish(Obstacles::Union(PolytopeSet::new(polys)), n_obstacle, bounds, margin, h0, k, max_leaves)
+    }
+
+    /// [`CSpace::build`] with the exact source: the C-obstacles `O_k ⊕ (−R)` of the closed
+    /// `meshes` for the closed `robot` mesh (in its own frame), grown by `margin`, no
+    /// decomposition.
+    ///
+    /// # Errors
+    /// As [`CSpace::build`].
+    pub fn build_exact(meshes: Vec<TriMesh>, robot: &TriMesh, bounds: Aabb, h_floor: f64, h_coarse: f64, margin: f64, max_leaves: usize) -> CoreResult<CSpace> {
+        check(&bounds, h_floor, h_coarse, margin)?;
+        let k = (h_coarse / h_floor).log2().floor().clamp(0.0, MAX_DEPTH as f64) as u32;
+        let h0 = h_floor * (1u64 << k) as f64;
+        let n_obstacle = meshes.len();
+        let src = ExactSource::new(meshes, robot.negated(), margin, Some(bounds));
+        Self::finish(Obstacles::Exact(src), n_obstacle, bounds, margin, h0, k, max_leaves)
+    }
+
+    fn finish(obstacles: Obstacles, n_obstacle: usize, bounds: Aabb, margin: f64, h0: f64, k: u32, max_leaves: usize) -> CoreResult<CSpace> {
+        let oct0 = Octree::build(&obstacles, &bounds, h0, max_leaves)?;
+        let k = k.min(MAX_DEPTH - oct0.depth as u32);
         let oct = rescale(oct0, k as u8)?;
         let index = LeafIndex::new(&oct);
-        Ok(CSpace { set, n_obstacle, bounds, margin, oct, index, coarse_level: k as u8 })
+        Ok(CSpace { obstacles, n_obstacle, bounds, margin, oct, index, coarse_level: k as u8 })
     }
 
     /// Finest cell size refinement can reach.
@@ -166,23 +266,43 @@ impl CSpace {
     }
 
     /// `(primitive, depth)` for every primitive containing `p`; depth = distance to its
-    /// nearest facet plane.
+    /// nearest facet plane. With the exact source, `(obstacle, depth)` with depth a lower
+    /// bound (0 when only nesting shows the collision); walls are `n_obstacle + side`.
     pub fn containing(&self, p: Vec3) -> Vec<(usize, f64)> {
-        self.set.containing(p).into_iter().map(|i| (i, -self.set.polys[i].plane_distance(p))).collect()
+        match &self.obstacles {
+            Obstacles::Union(set) => set.containing(p).into_iter().map(|i| (i, -set.polys[i].plane_distance(p))).collect(),
+            Obstacles::Exact(e) => {
+                let mut out: Vec<(usize, f64)> = e.containing(p).into_iter().map(|k| (k, (-e.signed_distance(p)).max(0.0))).collect();
+                if let Some(w) = e.walls {
+                    for side in 0..6 {
+                        let axis = side / 2;
+                        let d = if side % 2 == 0 { w.min[axis] - p[axis] } else { p[axis] - w.max[axis] };
+                        if d >= 0.0 {
+                            out.push((self.n_obstacle + side, d));
+                        }
+                    }
+                }
+                out
+            }
+        }
     }
 
     /// Whether the closed segment `a → b` stays farther than `margin` from every primitive
     /// (exact for `margin = 0`; for `margin > 0` each primitive's facet planes are pushed
     /// out by `margin`, which contains the primitive grown by a ball of that radius).
     pub fn segment_is_free(&self, a: Vec3, b: Vec3, margin: f64) -> bool {
+        let set = match &self.obstacles {
+            Obstacles::Union(set) => set,
+            Obstacles::Exact(e) => return e.segment_is_free(a, b, margin.max(0.0)),
+        };
         if margin <= 0.0 {
-            return self.set.segment_is_free(a, b);
+            return set.segment_is_free(a, b);
         }
         let q = Aabb::new(a.min(b), a.max(b)).inflated(margin);
         let mut free = true;
-        self.set.bvh.for_each_overlapping(&q, |i| {
+        set.bvh.for_each_overlapping(&q, |i| {
             if free {
-                let p = &self.set.polys[i];
+                let p = &set.polys[i];
                 if clip_planes(p.normals.iter().zip(&p.offsets).map(|(n, d)| (*n, *d + margin)), a, b).is_some() {
                     free = false;
                 }
@@ -220,7 +340,7 @@ impl CSpace {
                             let b = self.oct.cell_box(&l);
                             let inset = 0.25 * b.extent().x;
                             let q = p.clamp(b.min + Vec3::splat(inset), b.max - Vec3::splat(inset));
-                            if self.set.segment_is_free(p, q) {
+                            if self.segment_is_free(p, q, 0.0) {
                                 out.push(Attachment { leaf: m.leaf, via: q, cost: (p - q).length() + (q - b.center()).length() });
                             }
                         }
@@ -304,7 +424,7 @@ impl CSpace {
             }
         }
         let targets: Vec<usize> = targets.into_iter().collect();
-        refine(&self.set, &mut self.oct, &mut self.index, &targets, levels, max_leaves)
+        refine(&self.obstacles, &mut self.oct, &mut self.index, &targets, levels, max_leaves)
     }
 
     /// Leaves per level and label.
@@ -319,12 +439,23 @@ impl CSpace {
         (leaves.iter().filter(|l| l.label == Label::Empty).count(), pairs.len())
     }
 
-    /// A primitive whose closed polytope contains the closed box of leaf `i`.
+    /// A primitive whose closed polytope contains the closed box of leaf `i`; with the
+    /// exact source the obstacle (or `n_obstacle + side` for a wall) whose C-obstacle
+    /// contains it, shown by one triangle pair's piece or by nesting.
     pub fn primitive_containing_leaf(&self, i: usize) -> Option<usize> {
         let b = self.oct.cell_box(&self.oct.leaves[i]);
+        let set = match &self.obstacles {
+            Obstacles::Union(set) => set,
+            Obstacles::Exact(e) => {
+                return e.box_witness(&b).map(|w| match w {
+                    Witness::Piece { k, .. } | Witness::Nested { k } => k,
+                    Witness::Wall { side } => self.n_obstacle + side,
+                })
+            }
+        };
         let mut found: Option<usize> = None;
-        self.set.bvh.for_each_overlapping(&b, |k| {
-            if self.set.polys[k].contains_box(&b) {
+        set.bvh.for_each_overlapping(&b, |k| {
+            if set.polys[k].contains_box(&b) {
                 found = Some(found.map_or(k, |f| f.min(k)));
             }
         });

@@ -33,7 +33,7 @@ mod roadmap_tests;
 
 pub use adjacency::{face_adjacency, neighbors, shared_face, Adjacency, Neighbor};
 pub use components::{components, UnionFind};
-pub use cspace::{Attachment, CSpace, Certificate};
+pub use cspace::{Attachment, CSpace, Certificate, Obstacles};
 pub use index::{cell_key, LeafIndex};
 pub use refine::{refine, rescale, RefineStats};
 pub use search::{astar, SearchResult};

@@ -9,8 +9,7 @@
 use super::index::LeafIndex;
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
-use crate::octree::{classify_cell, lattice_cell, Label, Leaf, Octree, PrimitiveSource, MAX_DEPTH};
-use crate::polytope::ConvexPolytope;
+use crate::octree::{lattice_cell, CellSource, Label, Leaf, Octree, MAX_DEPTH};
 use rayon::prelude::*;
 
 /// What a [`refine`] call did.
@@ -49,9 +48,7 @@ pub fn rescale(mut oct: Octree, k: u8) -> CoreResult<Octree> {
 }
 
 struct Classifier<'a> {
-    polys: &'a [ConvexPolytope],
-    solid: bool,
-    untouched: &'a (dyn Fn(Vec3) -> Label + Sync),
+    src: &'a dyn CellSource,
     origin: Vec3,
     h: f64,
 }
@@ -62,9 +59,9 @@ impl Classifier<'_> {
     }
 
     /// Filter the candidate records `cand` against `cell` into `out`; the cell's label.
-    fn classify(&self, cell: &Aabb, cand: &[u32], out: &mut Vec<u32>) -> Label {
+    fn classify(&self, cell: &Aabb, cand: &[u32], finest: bool, out: &mut Vec<u32>) -> Label {
         out.clear();
-        classify_cell(self.polys, self.solid, self.untouched, cell, cand, out)
+        self.src.classify(cell, cand, finest, out)
     }
 
     /// Split `(level, ijk)` into its children, recursing into MIXED children down to `stop`.
@@ -73,7 +70,7 @@ impl Classifier<'_> {
         let mut own = Vec::with_capacity(cand.len());
         for c in 0..8u32 {
             let child = [ijk[0] + (c & 1) * half, ijk[1] + ((c >> 1) & 1) * half, ijk[2] + ((c >> 2) & 1) * half];
-            let label = self.classify(&self.cell(child, level - 1), cand, &mut own);
+            let label = self.classify(&self.cell(child, level - 1), cand, level == 1, &mut own);
             if label == Label::Mixed && level - 1 > stop {
                 self.split(child, level - 1, &own, stop, out);
             } else {
@@ -92,7 +89,7 @@ impl Classifier<'_> {
 /// # Errors
 /// [`CoreError::ResourceLimit`] when the octree would exceed `max_leaves` leaves (nothing
 /// is changed then).
-pub fn refine<S: PrimitiveSource + ?Sized>(
+pub fn refine<S: CellSource>(
     source: &S,
     oct: &mut Octree,
     index: &mut LeafIndex,
@@ -107,8 +104,7 @@ pub fn refine<S: PrimitiveSource + ?Sized>(
         .collect();
     todo.sort_unstable();
     todo.dedup();
-    let untouched = |c: Vec3| source.classify_untouched(c);
-    let cls = Classifier { polys: source.primitives(), solid: source.primitives_are_solid(), untouched: &untouched, origin: oct.origin, h: oct.h };
+    let cls = Classifier { src: source, origin: oct.origin, h: oct.h };
     let levels = levels.max(1);
     let parts: Vec<Vec<(Leaf, Vec<u32>)>> = {
         let oct_ref: &Octree = oct;

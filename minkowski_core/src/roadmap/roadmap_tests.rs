@@ -251,10 +251,10 @@ fn cspace_walls_and_margin() {
     let bounds = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
     let cs = CSpace::build(&[cuboid([-0.2, -0.2, -0.2], [0.2, 0.2, 0.2])], bounds, 1e-3, 0.1, 0.05, 1_000_000).unwrap();
     assert_eq!(cs.n_obstacle, 1);
-    assert_eq!(cs.set.len(), 7);
-    assert!(cs.set.contains_point(Vec3::new(0.24, 0.0, 0.0)), "grown by the margin");
-    assert!(!cs.set.contains_point(Vec3::new(0.26, 0.0, 0.0)));
-    assert!(cs.set.contains_point(Vec3::new(1.01, 0.0, 0.0)), "outside the bounds is a wall");
+    assert_eq!(cs.obstacles.len(), 7);
+    assert!(cs.obstacles.contains_point(Vec3::new(0.24, 0.0, 0.0)), "grown by the margin");
+    assert!(!cs.obstacles.contains_point(Vec3::new(0.26, 0.0, 0.0)));
+    assert!(cs.obstacles.contains_point(Vec3::new(1.01, 0.0, 0.0)), "outside the bounds is a wall");
     assert!(!cs.segment_is_free(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.5, 0.0, 0.0), 0.0));
     // margin test on segments
     let (a, b) = (Vec3::new(-0.5, 0.3, 0.0), Vec3::new(0.5, 0.3, 0.0));
@@ -285,7 +285,8 @@ fn certificate_walls_in_a_sealed_cavity() {
         let b = cs.oct.cell_box(&cs.oct.leaves[w]);
         assert_eq!(cs.oct.leaves[w].label, Label::Full);
         assert!(prim < cs.n_obstacle, "walls of the cavity are obstacle primitives");
-        assert!(cs.set.polys[prim].contains_box(&b));
+        let crate::roadmap::Obstacles::Union(set) = &cs.obstacles else { panic!("union source") };
+        assert!(set.polys[prim].contains_box(&b));
     }
     // the component's neighbours are all in it or walls
     let comp: BTreeSet<usize> = cert.start_component.iter().copied().collect();

@@ -19,9 +19,7 @@ mod surface_tests;
 pub use simplify::merge_coplanar;
 
 use crate::math::Vec3;
-use crate::minkowski::merge_intervals;
-use crate::octree::{cell_contains, Label, Octree};
-use crate::polytope::{clip_planes, ConvexPolytope};
+use crate::octree::{CellSource, Label, Octree};
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -29,21 +27,6 @@ use std::sync::OnceLock;
 /// vertices coincide (a boundary exactly through a lattice point would otherwise give
 /// zero-area triangles).
 pub const EDGE_CLAMP: f64 = 1e-4;
-
-/// Sort and merge `iv` into `out` (which must be at least as long); the merged count.
-fn merge_in_place(iv: &mut [(f64, f64)], out: &mut [(f64, f64)]) -> usize {
-    iv.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
-    let mut m = 0usize;
-    for &(a, b) in iv.iter() {
-        if m > 0 && a <= out[m - 1].1 + 1e-12 {
-            out[m - 1].1 = out[m - 1].1.max(b);
-        } else {
-            out[m] = (a, b);
-            m += 1;
-        }
-    }
-    m
-}
 
 struct EdgeInfo {
     t: Option<f64>,
@@ -181,8 +164,9 @@ fn case_table() -> &'static Vec<Vec<Vec<TriEdges>>> {
     T.get_or_init(|| tets().iter().map(|&t| (0..16u8).map(|m| tet_case(t, m)).collect()).collect())
 }
 
-/// Extract the surface of the union over the finest MIXED cells of `oct`.
-pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
+/// Extract the surface of the solid of `src` over the finest MIXED cells of `oct` (built
+/// over `src`).
+pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
     let band: Vec<usize> = (0..oct.leaves.len())
         .filter(|&i| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level == 0)
         .collect();
@@ -209,7 +193,7 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
     };
     let inside: Vec<bool> = pts
         .par_iter()
-        .map(|&(q, li)| cell_contains(polys, oct.candidates(&oct.leaves[li as usize]), point_of(q)))
+        .map(|&(q, li)| src.cell_contains(oct.records(&oct.leaves[li as usize]), point_of(q)))
         .collect();
     s.lattice_points = pts.len();
 
@@ -263,35 +247,11 @@ pub fn extract(oct: &Octree, polys: &[ConvexPolytope]) -> Surface {
     // ends: a thin feature or a clipped convex edge)
     let results: Vec<EdgeInfo> = edges
         .par_iter()
-        .map(|&(ka, kb, li, slot, ib)| {
+        .map_init(Vec::new, |merged: &mut Vec<(f64, f64)>, &(ka, kb, li, slot, ib)| {
             let (pa, pb) = (point_of(ka), point_of(kb));
             let (sa, sb) = (inside[slot / 7], inside[ib as usize]);
             let leaf = &oct.leaves[li as usize];
-            // intervals on the stack; a crowded cell spills to the heap
-            let mut buf = [(0.0f64, 0.0f64); 32];
-            let mut n = 0usize;
-            let mut spill: Vec<(f64, f64)> = Vec::new();
-            for (prim, planes) in oct.candidates(leaf) {
-                let poly = &polys[prim];
-                let it = planes.iter().map(|&k| (poly.normals[k as usize], poly.offsets[k as usize]));
-                if let Some(t) = clip_planes(it, pa, pb) {
-                    if n < buf.len() {
-                        buf[n] = t;
-                        n += 1;
-                    } else {
-                        spill.push(t);
-                    }
-                }
-            }
-            let mut merged_buf = [(0.0f64, 0.0f64); 32];
-            let merged: &[(f64, f64)] = if spill.is_empty() {
-                let m = merge_in_place(&mut buf[..n], &mut merged_buf);
-                &merged_buf[..m]
-            } else {
-                spill.extend_from_slice(&buf[..n]);
-                spill = merge_intervals(&mut spill);
-                &spill
-            };
+            src.solid_intervals(oct.records(leaf), pa, pb, sa, sb, merged);
             let tiny = 1e-12;
             let gap = merged.len() >= 2;
             let sliver = merged.iter().any(|&(a, b)| a > tiny && b < 1.0 - tiny);

@@ -1,0 +1,261 @@
+use super::*;
+use crate::octree::{Label, Octree};
+use crate::polytope::ConvexPolytope;
+use crate::union::{approximate_solid, UnionParams};
+
+/// Outward triangles of the box `[lo, hi]` (12 triangles), appended to `v`, `f`.
+fn push_box(lo: Vec3, hi: Vec3, v: &mut Vec<Vec3>, f: &mut Vec<[u32; 3]>) {
+    let o = v.len() as u32;
+    for k in 0..8 {
+        v.push(Vec3::new([lo.x, hi.x][k & 1], [lo.y, hi.y][(k >> 1) & 1], [lo.z, hi.z][(k >> 2) & 1]));
+    }
+    let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    for q in quads {
+        f.push([o + q[0], o + q[1], o + q[2]]);
+        f.push([o + q[0], o + q[2], o + q[3]]);
+    }
+}
+
+fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::from_array(lo), Vec3::from_array(hi), &mut v, &mut f);
+    TriMesh::new(v, &f, "box").unwrap()
+}
+
+/// A U-shaped block (a 3×1×2 bar with a 1×1×1 notch cut from the top middle), as one
+/// closed mesh, and its three convex boxes.
+fn u_block() -> (TriMesh, Vec<Aabb>) {
+    // vertices on the lattice x in {0,1,2,3}, y in {0,1}, z in {0,1,2}; build the surface
+    // of the union of three unit-height columns by keeping the faces between inside and
+    // outside voxels of a 3×1×2 grid with the notch (1, 0, 1) empty
+    let full = |x: i32, y: i32, z: i32| (0..3).contains(&x) && y == 0 && (0..2).contains(&z) && !(x == 1 && z == 1);
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    let mut index = std::collections::HashMap::new();
+    let mut vid = |p: [i32; 3], v: &mut Vec<Vec3>| -> u32 {
+        *index.entry(p).or_insert_with(|| {
+            v.push(Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+            (v.len() - 1) as u32
+        })
+    };
+    for x in -1..4 {
+        for y in -1..2 {
+            for z in -1..3 {
+                if !full(x, y, z) {
+                    continue;
+                }
+                for axis in 0..3 {
+                    for dir in [-1i32, 1] {
+                        let mut n = [x, y, z];
+                        n[axis] += dir;
+                        if full(n[0], n[1], n[2]) {
+                            continue;
+                        }
+                        // the face of voxel (x,y,z) towards n, as a quad with outward winding
+                        let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+                        let mut base = [x, y, z];
+                        if dir > 0 {
+                            base[axis] += 1;
+                        }
+                        let c = |du: i32, dw: i32| {
+                            let mut p = base;
+                            p[u] += du;
+                            p[w] += dw;
+                            p
+                        };
+                        let mut q = [c(0, 0), c(1, 0), c(1, 1), c(0, 1)];
+                        if dir < 0 {
+                            q.reverse();
+                        }
+                        let ids: Vec<u32> = q.iter().map(|&p| vid(p, &mut v)).collect();
+                        f.push([ids[0], ids[1], ids[2]]);
+                        f.push([ids[0], ids[2], ids[3]]);
+                    }
+                }
+            }
+        }
+    }
+    let boxes = vec![
+        Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0)),
+        Aabb::new(Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 1.0, 2.0)),
+        Aabb::new(Vec3::new(2.0, 0.0, 1.0), Vec3::new(3.0, 1.0, 2.0)),
+    ];
+    (TriMesh::new(v, &f, "u block").unwrap(), boxes)
+}
+
+fn sum_box(a: &Aabb, b: &Aabb) -> Aabb {
+    Aabb::new(a.min + b.min, a.max + b.max)
+}
+
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn point(&mut self, b: &Aabb) -> Vec3 {
+        let e = b.extent();
+        b.min + Vec3::new(self.next() * e.x, self.next() * e.y, self.next() * e.z)
+    }
+}
+
+#[test]
+fn mesh_must_be_closed_and_oriented() {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::ZERO, Vec3::ONE, &mut v, &mut f);
+    f.pop();
+    assert!(TriMesh::new(v.clone(), &f, "open").is_err());
+    let (mut v2, mut f2) = (Vec::new(), Vec::new());
+    push_box(Vec3::ZERO, Vec3::ONE, &mut v2, &mut f2);
+    f2[0] = [f2[0][0], f2[0][2], f2[0][1]];
+    let e = TriMesh::new(v2, &f2, "flipped").unwrap_err();
+    assert!(e.to_string().contains("flipped"), "{e}");
+}
+
+#[test]
+fn ray_parity_containment_matches_boxes() {
+    let (u, boxes) = u_block();
+    let mut rng = Lcg(7);
+    let region = Aabb::new(Vec3::splat(-0.5), Vec3::new(3.5, 1.5, 2.5));
+    for _ in 0..4000 {
+        let p = rng.point(&region);
+        let truth = boxes.iter().any(|b| b.contains_point(p));
+        assert_eq!(u.contains(p), truth, "{p:?}");
+    }
+    // points exactly on lattice edges and vertices are on the surface: inside (closed)
+    assert!(u.contains(Vec3::new(1.0, 0.0, 1.0)));
+    assert!(u.contains(Vec3::new(1.5, 0.5, 1.0)));
+    assert!(!u.contains(Vec3::new(1.5, 0.5, 1.5)));
+}
+
+#[test]
+fn point_membership_matches_exact_sum_of_convex_parts() {
+    // U block ⊕ a small box: exactly the union of the three box sums
+    let (u, boxes) = u_block();
+    let small = Aabb::new(Vec3::new(-0.2, -0.3, -0.1), Vec3::new(0.25, 0.1, 0.3));
+    let src = ExactSource::new(vec![u], box_mesh(small.min.to_array(), small.max.to_array()), 0.0, None);
+    let sums: Vec<Aabb> = boxes.iter().map(|b| sum_box(b, &small)).collect();
+    let mut rng = Lcg(11);
+    let region = src.aabb.inflated(0.3);
+    let mut inside = 0;
+    for _ in 0..5000 {
+        let p = rng.point(&region);
+        let truth = sums.iter().any(|b| b.contains_point(p));
+        inside += truth as usize;
+        assert_eq!(src.contains_point(p), truth, "{p:?}");
+    }
+    assert!(inside > 500 && inside < 4500);
+}
+
+#[test]
+fn nesting_is_detected_without_contact() {
+    // a small box deep inside a big one: no surfaces touch, yet the sum contains p
+    let big = box_mesh([-5.0; 3], [5.0; 3]);
+    let tiny = box_mesh([-0.1; 3], [0.1; 3]);
+    let src = ExactSource::new(vec![big], tiny, 0.0, None);
+    assert_eq!(src.point_witness(Vec3::ZERO), Some(Witness::Nested { k: 0 }));
+    assert!(matches!(src.point_witness(Vec3::new(5.05, 0.0, 0.0)), Some(Witness::Piece { k: 0, .. })));
+    assert_eq!(src.point_witness(Vec3::new(5.2, 0.0, 0.0)), None);
+    // and the other way round: B contains A
+    let src2 = ExactSource::new(vec![box_mesh([-0.1; 3], [0.1; 3])], box_mesh([-5.0; 3], [5.0; 3]), 0.0, None);
+    assert_eq!(src2.point_witness(Vec3::new(1.0, 2.0, -3.0)), Some(Witness::Nested { k: 0 }));
+}
+
+#[test]
+fn octree_labels_are_exact() {
+    let (u, boxes) = u_block();
+    let small = Aabb::new(Vec3::splat(-0.2), Vec3::splat(0.2));
+    let src = ExactSource::new(vec![u], box_mesh(small.min.to_array(), small.max.to_array()), 0.0, None);
+    let sums: Vec<Aabb> = boxes.iter().map(|b| sum_box(b, &small)).collect();
+    let oct = Octree::build(&src, &src.aabb, 0.05, 10_000_000).unwrap();
+    let mut rng = Lcg(3);
+    let mut counts = [0usize; 3];
+    for l in &oct.leaves {
+        counts[l.label as usize] += 1;
+        let b = oct.cell_box(l);
+        match l.label {
+            Label::Empty => {
+                for _ in 0..4 {
+                    let p = rng.point(&b);
+                    assert!(!sums.iter().any(|s| s.contains_point(p)), "EMPTY cell {b:?} has a solid point");
+                }
+            }
+            Label::Full => {
+                for _ in 0..4 {
+                    let p = rng.point(&b);
+                    assert!(sums.iter().any(|s| s.contains_point(p)), "FULL cell {b:?} has a free point");
+                }
+            }
+            Label::Mixed => assert_eq!(l.level, 0),
+        }
+    }
+    assert!(counts[0] > 0 && counts[1] > 0 && counts[2] > 0, "{counts:?}");
+}
+
+#[test]
+fn surface_of_exact_sum_is_closed_and_within_bound() {
+    let (u, boxes) = u_block();
+    let small = Aabb::new(Vec3::splat(-0.2), Vec3::splat(0.2));
+    let src = ExactSource::new(vec![u], box_mesh(small.min.to_array(), small.max.to_array()), 0.0, None);
+    let polys: Vec<ConvexPolytope> = boxes
+        .iter()
+        .map(|b| {
+            let s = sum_box(b, &small);
+            let pts: Vec<Vec3> = (0..8).map(|k| Vec3::new([s.min.x, s.max.x][k & 1], [s.min.y, s.max.y][(k >> 1) & 1], [s.min.z, s.max.z][(k >> 2) & 1])).collect();
+            ConvexPolytope::from_points(&pts)
+        })
+        .collect();
+    let params = UnionParams { eps: 0.08, max_cells: 20_000_000, max_refinements: 2, simplify: true };
+    let r = approximate_solid(&src, &src.aabb, &params).unwrap();
+    assert!(r.error_bound.is_finite());
+    assert_eq!(r.surface.inconsistent_edges, 0);
+    // closed: every directed edge once
+    let mut e = std::collections::HashMap::new();
+    for f in &r.surface.faces {
+        for k in 0..3 {
+            *e.entry((f[k], f[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    for (&(a, b), &c) in &e {
+        assert_eq!(c, 1);
+        assert_eq!(e.get(&(b, a)), Some(&1));
+    }
+    // every vertex lies on the true boundary (within rounding): inside the union of the
+    // sums but not in the interior of any
+    for v in &r.surface.vertices {
+        let d = polys.iter().map(|p| p.plane_distance(*v)).fold(f64::INFINITY, f64::min);
+        assert!(d.abs() < 1e-9 || polys.iter().any(|p| p.plane_distance(*v).abs() < 1e-9), "{v:?} {d}");
+        assert!(polys.iter().all(|p| p.plane_distance(*v) > -1e-9), "{v:?} inside");
+    }
+    // volume: 3 boxes summed with a 0.4 cube, union volume by inclusion–exclusion on a grid
+    let vol: f64 = r.surface.faces.iter().map(|f| {
+        let (a, b, c) = (r.surface.vertices[f[0] as usize], r.surface.vertices[f[1] as usize], r.surface.vertices[f[2] as usize]);
+        a.dot(b.cross(c)) / 6.0
+    }).sum();
+    // true volume: outer 3.4 × 1.4 × 2.4 minus the notch (1 − 0.4) × 1.4 × (1 − 0.2)
+    let truth = 3.4 * 1.4 * 2.4 - 0.6 * 1.4 * 0.8;
+    assert!((vol - truth).abs() < 0.05 * truth, "{vol} vs {truth}");
+}
+
+#[test]
+fn segments_and_walls() {
+    let (u, _) = u_block();
+    let small = box_mesh([-0.2; 3], [0.2; 3]);
+    let walls = Aabb::new(Vec3::splat(-2.0), Vec3::splat(5.0));
+    let src = ExactSource::new(vec![u], small, 0.0, Some(walls));
+    // down through the notch: the notch is 1 wide, the box 0.4: free
+    let (a, b) = (Vec3::new(1.5, 0.5, 3.0), Vec3::new(1.5, 0.5, 1.25));
+    assert!(src.segment_is_free(a, b, 0.0));
+    assert!(!src.segment_is_free(a, Vec3::new(1.5, 0.5, 1.1), 0.0));
+    // a margin of 0.35 closes the 0.3 gaps on each side
+    let b2 = Vec3::new(1.5, 0.5, 1.5);
+    assert!(!src.segment_is_free(a, b2, 0.35));
+    assert!(src.segment_is_free(a, b2, 0.25));
+    // the walls
+    assert!(src.contains_point(Vec3::new(6.0, 0.0, 0.0)));
+    assert!(!src.segment_is_free(Vec3::new(4.0, -1.0, -1.0), Vec3::new(6.0, -1.0, -1.0), 0.0));
+    assert!(matches!(src.box_witness(&Aabb::new(Vec3::new(5.5, 0.0, 0.0), Vec3::new(6.0, 1.0, 1.0))), Some(Witness::Wall { side: 1 })));
+    let oct = Octree::build(&src, &walls, 0.1, 10_000_000).unwrap();
+    let outside = oct.leaves.iter().filter(|l| !oct.cell_box(l).overlaps(&walls)).count();
+    assert!(outside > 0);
+    assert!(oct.leaves.iter().filter(|l| !oct.cell_box(l).overlaps(&walls)).all(|l| l.label == Label::Full));
+}

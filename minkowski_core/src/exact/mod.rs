@@ -1,0 +1,461 @@
+//! The exact source: Minkowski sums of triangle meshes by boundary convolution, no convex
+//! decomposition.
+//!
+//! For closed meshes `A` (triangles `T_i`) and `B` (triangles `S_j`), every boundary point
+//! `p` of `A ⊕ B` is a contact: `A` and `p − B` touch, so some `T_i` meets some `p − S_j`,
+//! that is `p ∈ T_i ⊕ S_j`. Hence:
+//!
+//! * a cell that no *piece* `T_i ⊕ S_j` meets holds no boundary point, so it lies wholly
+//!   inside or wholly outside the sum, and one exact point query labels it;
+//! * every piece lies in the sum (its points are contacts), so a cell inside one piece is
+//!   FULL;
+//! * the exact point query for `p` that no piece contains: `A` and `p − B` do not touch,
+//!   so they meet only if one contains the other — one vertex of each, tested for
+//!   containment in the other by ray parity ([`TriMesh::contains`]).
+//!
+//! The pieces fill a shell around the boundary (every translation where the surfaces
+//! cross), so they are not what the octree splits on: its boundary candidates are the
+//! facets of the *reduced convolution* ([`convolution`]), a surface. Pieces serve the point
+//! query and the FULL witness, found lazily by a traversal of pairs of BVH nodes of the two
+//! meshes (never all `n·m` pairs). The solid can be the union over several `A_k` with one
+//! `B` (C-obstacles of many obstacles for one robot, `B = −R`), optionally with the outside
+//! of a box of allowed translations (walls), each grown by a cube of half-width `margin`.
+//!
+//! Entry points: [`ExactSource`], [`TriMesh`].
+
+mod convolution;
+mod mesh;
+mod piece;
+#[cfg(test)]
+mod exact_tests;
+
+pub use convolution::{convolution, Facet};
+pub use mesh::{MeshNode, Tri, TriMesh};
+pub use piece::Piece;
+
+use crate::bvh::Bvh;
+use crate::math::{Aabb, Vec3};
+use crate::octree::{merge_sorted, CellSource, Label};
+
+/// Records at or above this are walls (`WALL + side`, side = 2 · axis + upper); below,
+/// facet indices.
+const WALL: u32 = u32::MAX - 7;
+
+/// The union of `A_k ⊕ B` over the obstacles `A_k`, grown by `margin`, plus optional walls.
+#[derive(Clone, Debug)]
+pub struct ExactSource {
+    /// The meshes `A_k`.
+    pub obstacles: Vec<TriMesh>,
+    /// The mesh `B` (for C-obstacles `O ⊕ (−R)`: the robot reflected through its origin).
+    pub b: TriMesh,
+    /// Growth of every sum by the cube `[-margin, margin]^3`.
+    pub margin: f64,
+    /// When set, everything outside this box is solid too (closed slabs beyond each face).
+    pub walls: Option<Aabb>,
+    /// Box around the sums (without walls).
+    pub aabb: Aabb,
+    /// Largest possible piece extent: no cell wider than this lies inside one piece.
+    max_piece: f64,
+    /// The reduced convolution facets of every `A_k` with `B`.
+    pub facets: Vec<Facet>,
+    /// BVH over the facets' boxes (grown by `margin`).
+    fbvh: Bvh,
+    /// Whether MIXED cells inside one triangle-pair piece are relabelled FULL (the planner
+    /// wants FULL walls for its certificates; the surface does not need them).
+    pub full_witness: bool,
+}
+
+/// Why a cell or point is solid: which obstacle (or wall) and how.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Witness {
+    /// Inside the piece of triangles `(i, j)` of obstacle `k` and `B`.
+    Piece {
+        /// Obstacle.
+        k: usize,
+        /// Triangle of the obstacle.
+        i: usize,
+        /// Triangle of `B`.
+        j: usize,
+    },
+    /// One mesh contains the other (no surface contact) for obstacle `k`.
+    Nested {
+        /// Obstacle.
+        k: usize,
+    },
+    /// Beyond the wall `side` (= 2 · axis + upper).
+    Wall {
+        /// Side.
+        side: usize,
+    },
+}
+
+impl ExactSource {
+    /// The sums `A_k ⊕ B`, grown by `margin`, with optional `walls`.
+    pub fn new(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>) -> ExactSource {
+        let aabb = obstacles.iter().fold(Aabb::empty(), |acc, a| {
+            acc.union(&Aabb::new(a.aabb.min + b.aabb.min, a.aabb.max + b.aabb.max).inflated(margin))
+        });
+        let tri_ext = |m: &TriMesh| m.tris.iter().map(|t| Aabb::from_points(&t.p).extent().max_element()).fold(0.0f64, f64::max);
+        let max_a = obstacles.iter().map(tri_ext).fold(0.0f64, f64::max);
+        let max_piece = (max_a + tri_ext(&b) + 2.0 * margin) * 1.000_001;
+        let facets: Vec<Facet> = obstacles.iter().enumerate().flat_map(|(k, a)| convolution(a, &b, k as u32)).collect();
+        let boxes: Vec<Aabb> = facets.iter().map(|f| f.aabb(margin)).collect();
+        let fbvh = Bvh::build(&boxes);
+        ExactSource { full_witness: walls.is_some(), obstacles, b, margin, walls, aabb, max_piece, facets, fbvh }
+    }
+
+    /// Whether `p` lies in the exact (ungrown) solid, walls excluded.
+    fn exact_point(&self, p: Vec3) -> bool {
+        (0..self.obstacles.len()).any(|k| self.any_piece(k, 0.0, false, |bx| bx.contains_point(p), |piece, _, _| piece.contains_point(p)))
+            || self.nested(p).is_some()
+    }
+
+    /// Whether a single triangle-pair piece (grown by the margin) contains `cell`.
+    fn piece_contains_box(&self, cell: &Aabb) -> Option<Witness> {
+        for k in 0..self.obstacles.len() {
+            let mut hit = None;
+            self.any_piece(
+                k,
+                self.margin,
+                true,
+                |bx| bx.min.cmple(cell.min).all() && cell.max.cmple(bx.max).all(),
+                |piece, i, j| {
+                    if piece.contains_box(cell) {
+                        hit = Some(Witness::Piece { k, i, j });
+                    }
+                    hit.is_some()
+                },
+            );
+            if hit.is_some() {
+                return hit;
+            }
+        }
+        None
+    }
+
+    #[inline]
+    fn sum_box(&self, k: usize, a: u32, b: u32, m: f64) -> Aabb {
+        let (na, nb) = (&self.obstacles[k].nodes[a as usize], &self.b.nodes[b as usize]);
+        Aabb::new(na.aabb.min + nb.aabb.min, na.aabb.max + nb.aabb.max).inflated(m)
+    }
+
+    /// The piece of a leaf pair grown by `m` (`None` unless both nodes are leaves).
+    #[inline]
+    fn leaf_piece(&self, k: usize, a: u32, b: u32, m: f64, with_axes: bool) -> Option<(Piece<'_>, usize, usize)> {
+        let (na, nb) = (&self.obstacles[k].nodes[a as usize], &self.b.nodes[b as usize]);
+        if na.is_leaf() && nb.is_leaf() {
+            let (i, j) = (na.tri as usize, nb.tri as usize);
+            Some((Piece::new(&self.obstacles[k].tris[i], &self.b.tris[j], m, with_axes), i, j))
+        } else {
+            None
+        }
+    }
+
+    /// Children of a node pair: split the larger inner node.
+    #[inline]
+    fn split(&self, k: usize, a: u32, b: u32) -> [[u32; 3]; 2] {
+        let (na, nb) = (&self.obstacles[k].nodes[a as usize], &self.b.nodes[b as usize]);
+        let k = k as u32;
+        if !na.is_leaf() && (nb.is_leaf() || na.size() >= nb.size()) {
+            [[k, na.left, b], [k, na.left + 1, b]]
+        } else {
+            [[k, a, nb.left], [k, a, nb.left + 1]]
+        }
+    }
+
+    /// Whether `p` lies beyond the wall `side` grown by `extra`.
+    #[inline]
+    fn in_wall(&self, side: usize, p: Vec3, extra: f64) -> bool {
+        let w = self.walls.expect("wall record without walls");
+        let axis = side / 2;
+        if side % 2 == 0 {
+            p[axis] <= w.min[axis] + extra
+        } else {
+            p[axis] >= w.max[axis] - extra
+        }
+    }
+
+    /// The obstacle whose sum contains `p` because one mesh contains the other.
+    pub fn nested(&self, p: Vec3) -> Option<usize> {
+        let b0 = self.b.anchor();
+        for (k, a) in self.obstacles.iter().enumerate() {
+            // (p − B) inside A: one vertex p − b0 in A; A inside p − B: p − a0 in B
+            if a.contains(p - b0) || self.b.contains(p - a.anchor()) {
+                return Some(k);
+            }
+        }
+        None
+    }
+
+    /// Visit the leaf pieces of obstacle `k` whose summed boxes pass `test`, until `f`
+    /// returns true; whether it did.
+    fn any_piece(&self, k: usize, m: f64, with_axes: bool, test: impl Fn(&Aabb) -> bool, mut f: impl FnMut(&Piece<'_>, usize, usize) -> bool) -> bool {
+        let mut stack = vec![[k as u32, 0u32, 0u32]];
+        while let Some([_, a, b]) = stack.pop() {
+            if !test(&self.sum_box(k, a, b, m)) {
+                continue;
+            }
+            match self.leaf_piece(k, a, b, m, with_axes) {
+                Some((piece, i, j)) => {
+                    if f(&piece, i, j) {
+                        return true;
+                    }
+                }
+                None => stack.extend(self.split(k, a, b)),
+            }
+        }
+        false
+    }
+
+    /// Why `p` is in the (grown) solid, or `None` when it is not.
+    pub fn point_witness(&self, p: Vec3) -> Option<Witness> {
+        if self.walls.is_some() {
+            if let Some(side) = (0..6).find(|&s| self.in_wall(s, p, 0.0)) {
+                return Some(Witness::Wall { side });
+            }
+        }
+        for k in 0..self.obstacles.len() {
+            let mut hit = None;
+            self.any_piece(k, self.margin, false, |bx| bx.contains_point(p), |piece, i, j| {
+                let inside = piece.contains_point(p);
+                if inside {
+                    hit = Some(Witness::Piece { k, i, j });
+                }
+                inside
+            });
+            if hit.is_some() {
+                return hit;
+            }
+        }
+        if let Some(k) = self.nested(p) {
+            return Some(Witness::Nested { k });
+        }
+        if self.margin > 0.0 {
+            // within the margin of the boundary: in a grown facet
+            let mut hit = None;
+            self.fbvh.for_each_at_point(p, |i| {
+                if hit.is_none() && self.facets[i].contains_point(p, self.margin) {
+                    hit = Some(Witness::Nested { k: self.facets[i].k as usize });
+                }
+            });
+            return hit;
+        }
+        None
+    }
+
+    /// Whether `p` lies in the closed (grown) solid.
+    pub fn contains_point(&self, p: Vec3) -> bool {
+        self.point_witness(p).is_some()
+    }
+
+    /// The obstacles whose (grown) sum contains `p`.
+    pub fn containing(&self, p: Vec3) -> Vec<usize> {
+        let b0 = self.b.anchor();
+        let mut out: Vec<usize> = (0..self.obstacles.len())
+            .filter(|&k| {
+                self.any_piece(k, self.margin, false, |bx| bx.contains_point(p), |piece, _, _| piece.contains_point(p))
+                    || self.obstacles[k].contains(p - b0)
+                    || self.b.contains(p - self.obstacles[k].anchor())
+            })
+            .collect();
+        if self.margin > 0.0 {
+            self.fbvh.for_each_at_point(p, |i| {
+                let k = self.facets[i].k as usize;
+                if !out.contains(&k) && self.facets[i].contains_point(p, self.margin) {
+                    out.push(k);
+                }
+            });
+            out.sort_unstable();
+        }
+        out
+    }
+
+    /// Signed distance bound: outside, a lower bound on the distance to the solid (the
+    /// nearest solid point is a boundary point, on a facet: each facet's separating-axis
+    /// distance; walls exact); inside, minus a lower bound on the depth (the largest depth
+    /// in one triangle-pair piece over its axes; 0 when only nesting shows it inside).
+    pub fn signed_distance(&self, p: Vec3) -> f64 {
+        let mut best = f64::INFINITY;
+        if let Some(w) = self.walls {
+            let d = (p - w.min).min(w.max - p).min_element();
+            if d <= 0.0 {
+                return d;
+            }
+            best = d;
+        }
+        if self.contains_point(p) {
+            let mut depth = 0.0f64;
+            for k in 0..self.obstacles.len() {
+                self.any_piece(k, self.margin, false, |bx| bx.contains_point(p), |piece, _, _| {
+                    depth = depth.max(-piece.separation(p));
+                    false
+                });
+            }
+            return -depth;
+        }
+        for f in &self.facets {
+            let bx = f.aabb(self.margin);
+            let gap = (bx.min - p).max(p - bx.max).max(Vec3::ZERO).length();
+            if gap >= best {
+                continue;
+            }
+            best = best.min(f.separation(p, self.margin).max(0.0));
+        }
+        best
+    }
+
+    /// Why the closed box `cell` lies in the (grown) solid: a wall, one triangle-pair
+    /// piece containing it, or — when no facet meets it — the solid at its centre.
+    pub fn box_witness(&self, cell: &Aabb) -> Option<Witness> {
+        if let Some(w) = self.walls {
+            for side in 0..6 {
+                let axis = side / 2;
+                if (side % 2 == 0 && cell.max[axis] <= w.min[axis]) || (side % 2 == 1 && cell.min[axis] >= w.max[axis]) {
+                    return Some(Witness::Wall { side });
+                }
+            }
+        }
+        if let Some(w) = self.piece_contains_box(cell) {
+            return Some(w);
+        }
+        let mut touched = false;
+        self.fbvh.for_each_overlapping(cell, |i| {
+            touched = touched || self.facets[i].overlaps_box(cell, self.margin);
+        });
+        if touched || self.walls.is_some_and(|w| !(w.min.cmplt(cell.min).all() && cell.max.cmplt(w.max).all())) {
+            return None;
+        }
+        self.point_witness(cell.center())
+    }
+
+    /// Whether the closed segment `a → b` stays out of the solid grown by a further cube of
+    /// half-width `extra` (walls pulled in by `extra`).
+    pub fn segment_is_free(&self, a: Vec3, b: Vec3, extra: f64) -> bool {
+        let extra = extra.max(0.0);
+        if self.walls.is_some() && (0..6).any(|s| self.in_wall(s, a, extra) || self.in_wall(s, b, extra)) {
+            return false; // slabs are convex and the segment is too: its ends decide
+        }
+        let m = self.margin + extra;
+        let q = Aabb::new(a.min(b), a.max(b)).inflated(extra);
+        let mut hit = false;
+        self.fbvh.for_each_overlapping(&q, |i| {
+            hit = hit || self.facets[i].clip(a, b, m).is_some();
+        });
+        // no grown facet meets the segment: all of it is inside or all outside
+        !hit && !self.exact_point(a)
+    }
+}
+
+impl CellSource for ExactSource {
+    fn root_records(&self) -> Vec<u32> {
+        let mut r: Vec<u32> = (0..self.facets.len() as u32).collect();
+        if self.walls.is_some() {
+            r.extend((0..6).map(|s| WALL + s));
+        }
+        r
+    }
+
+    fn classify(&self, cell: &Aabb, cand: &[u32], _finest: bool, out: &mut Vec<u32>) -> Label {
+        for &r in cand {
+            if r >= WALL {
+                let w = self.walls.expect("wall record without walls");
+                let (side, axis) = ((r - WALL) as usize, (r - WALL) as usize / 2);
+                let (inside, meets) = if side % 2 == 0 {
+                    (cell.max[axis] <= w.min[axis], cell.min[axis] <= w.min[axis])
+                } else {
+                    (cell.min[axis] >= w.max[axis], cell.max[axis] >= w.max[axis])
+                };
+                if inside {
+                    out.clear();
+                    return Label::Full;
+                }
+                if meets {
+                    out.push(r);
+                }
+                continue;
+            }
+            let f = &self.facets[r as usize];
+            if f.aabb(self.margin).overlaps(cell) && f.overlaps_box(cell, self.margin) {
+                out.push(r);
+            }
+        }
+        if out.is_empty() {
+            // no boundary in the cell: its centre decides (not in any grown facet)
+            return if self.exact_point(cell.center()) { Label::Full } else { Label::Empty };
+        }
+        if self.full_witness && cell.extent().max_element() <= self.max_piece && self.piece_contains_box(cell).is_some() {
+            out.clear();
+            return Label::Full;
+        }
+        Label::Mixed
+    }
+
+    fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {
+        for &r in cand {
+            if r >= WALL {
+                if self.in_wall((r - WALL) as usize, p, 0.0) {
+                    return true;
+                }
+            } else if self.facets[r as usize].contains_point(p, self.margin) {
+                return true;
+            }
+        }
+        self.exact_point(p)
+    }
+
+    fn solid_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, sa: bool, sb: bool, out: &mut Vec<(f64, f64)>) {
+        out.clear();
+        for &r in cand {
+            if r >= WALL {
+                let w = self.walls.expect("wall record without walls");
+                let (side, axis) = ((r - WALL) as usize, (r - WALL) as usize / 2);
+                let lim = if side % 2 == 0 { w.min[axis] } else { w.max[axis] };
+                // inside the slab: f <= 0
+                let (fa, fb) = if side % 2 == 0 { (a[axis] - lim, b[axis] - lim) } else { (lim - a[axis], lim - b[axis]) };
+                if fa <= 0.0 && fb <= 0.0 {
+                    out.push((0.0, 1.0));
+                } else if fa <= 0.0 {
+                    out.push((0.0, fa / (fa - fb)));
+                } else if fb <= 0.0 {
+                    out.push((fa / (fa - fb), 1.0));
+                }
+            } else if let Some(t) = self.facets[r as usize].clip(a, b, self.margin) {
+                out.push(t);
+            }
+        }
+        merge_sorted(out);
+        // between the facets the segment meets no boundary: each gap is all in or all out
+        let tiny = 1e-12;
+        if out.is_empty() {
+            if sa {
+                out.push((0.0, 1.0));
+            }
+            return;
+        }
+        let mut gaps = Vec::new();
+        let mut prev = 0.0f64;
+        let n = out.len();
+        for idx in 0..=n {
+            let next = if idx < n { out[idx].0 } else { 1.0 };
+            if next > prev + tiny {
+                let inside = if prev <= tiny && idx == 0 {
+                    sa
+                } else if idx == n {
+                    sb
+                } else {
+                    self.exact_point(a + (b - a) * (0.5 * (prev + next)))
+                };
+                if inside {
+                    gaps.push((prev, next));
+                }
+            }
+            if idx < n {
+                prev = prev.max(out[idx].1);
+            }
+        }
+        if !gaps.is_empty() {
+            out.extend(gaps);
+            merge_sorted(out);
+        }
+    }
+}

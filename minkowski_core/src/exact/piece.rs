@@ -1,0 +1,133 @@
+//! [`Piece`]: the convex set `T ⊕ S` of two triangles (the hull of the nine vertex sums),
+//! optionally grown by the cube `[-m, m]^3`, with exact tests against points, boxes and
+//! segments through its support function. No hull is built: the tests use a set of
+//! directions that contains every facet normal of the (grown) piece — the two triangle
+//! normals, the in-plane edge normals (for flat pieces), the nine edge × edge cross
+//! products, the axes and the edge × axis cross products — so each test is exact.
+
+use super::mesh::{unit, Tri};
+use crate::math::{Aabb, Vec3};
+
+/// Most directions a piece tests: 2 normals + 6 in-plane + 9 edge pairs + 3 axes + 18.
+const MAX_DIRS: usize = 38;
+
+/// The pair `T ⊕ S` grown by the cube of half-width `margin`.
+pub struct Piece<'a> {
+    t: &'a Tri,
+    s: &'a Tri,
+    margin: f64,
+    dirs: [Vec3; MAX_DIRS],
+    n: usize,
+}
+
+impl<'a> Piece<'a> {
+    /// The piece of `t` and `s`. `with_axes`: also the directions a box or the margin
+    /// cube needs (box tests, or any test with a margin).
+    pub fn new(t: &'a Tri, s: &'a Tri, margin: f64, with_axes: bool) -> Piece<'a> {
+        let mut dirs = [Vec3::ZERO; MAX_DIRS];
+        let mut n = 0;
+        let mut push = |d: Vec3| {
+            if d != Vec3::ZERO {
+                dirs[n] = d;
+                n += 1;
+            }
+        };
+        push(t.n);
+        push(s.n);
+        for k in 0..3 {
+            push(t.m[k]);
+            push(s.m[k]);
+        }
+        for et in &t.e {
+            for es in &s.e {
+                push(unit(et.cross(*es), 1e3 * et.length() * es.length()));
+            }
+        }
+        if with_axes || margin > 0.0 {
+            for a in [Vec3::X, Vec3::Y, Vec3::Z] {
+                push(a);
+                for e in t.e.iter().chain(&s.e) {
+                    push(unit(e.cross(a), 1e3 * e.length()));
+                }
+            }
+        }
+        Piece { t, s, margin, dirs, n }
+    }
+
+    /// The support function `max_{x ∈ piece} x · d`.
+    #[inline]
+    pub fn support(&self, d: Vec3) -> f64 {
+        self.t.support(d) + self.s.support(d) + self.margin * (d.x.abs() + d.y.abs() + d.z.abs())
+    }
+
+    /// `max_d (d · p − h(d))` over the piece's directions (both signs): positive outside
+    /// (a lower bound on the distance), minus the smallest facet-plane depth inside.
+    pub fn separation(&self, p: Vec3) -> f64 {
+        let mut s = f64::NEG_INFINITY;
+        for &d in &self.dirs[..self.n] {
+            let x = p.dot(d);
+            s = s.max(x - self.support(d)).max(-x - self.support(-d));
+        }
+        s
+    }
+
+    /// Whether `p` lies in the closed piece.
+    pub fn contains_point(&self, p: Vec3) -> bool {
+        self.dirs[..self.n].iter().all(|&d| {
+            let x = p.dot(d);
+            x <= self.support(d) && -x <= self.support(-d)
+        })
+    }
+
+    /// Whether the closed piece meets the closed box `b` (separating axes; exact).
+    pub fn overlaps_box(&self, b: &Aabb) -> bool {
+        debug_assert!(self.n >= 3);
+        let (c, h) = (b.center(), b.half());
+        for a in 0..3 {
+            // the axes first: the cheapest rejections
+            let mut d = Vec3::ZERO;
+            d[a] = 1.0;
+            if self.support(d) < b.min[a] || -self.support(-d) > b.max[a] {
+                return false;
+            }
+        }
+        self.dirs[..self.n].iter().all(|&d| {
+            let (x, r) = (c.dot(d), h.dot(d.abs()));
+            self.support(d) >= x - r && -self.support(-d) <= x + r
+        })
+    }
+
+    /// Whether the closed piece contains the closed box `b`.
+    pub fn contains_box(&self, b: &Aabb) -> bool {
+        let (c, h) = (b.center(), b.half());
+        self.dirs[..self.n].iter().all(|&d| {
+            let (x, r) = (c.dot(d), h.dot(d.abs()));
+            x + r <= self.support(d) && -x + r <= self.support(-d)
+        })
+    }
+
+    /// The parameter interval of the segment `a → b` inside the closed piece.
+    pub fn clip(&self, a: Vec3, b: Vec3) -> Option<(f64, f64)> {
+        let dir = b - a;
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        for &d0 in &self.dirs[..self.n] {
+            for d in [d0, -d0] {
+                let (num, den) = (self.support(d) - a.dot(d), dir.dot(d));
+                // a + t dir inside the half-space: den t <= num
+                if den.abs() <= 1e-300 {
+                    if num < 0.0 {
+                        return None;
+                    }
+                } else if den > 0.0 {
+                    t1 = t1.min(num / den);
+                } else {
+                    t0 = t0.max(num / den);
+                }
+                if t0 > t1 {
+                    return None;
+                }
+            }
+        }
+        Some((t0, t1))
+    }
+}
