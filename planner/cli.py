@@ -63,6 +63,14 @@ def _parser() -> argparse.ArgumentParser:
     )
     m.add_argument("--seed", type=int, default=0, help="CoACD seed")
     m.add_argument(
+        "--exact",
+        choices=("auto", "true", "false"),
+        default="auto",
+        help="true: exact boundary-convolution source (no decomposition, two-sided bound); "
+        "false: convex decomposition (CoACD for non-convex bodies); auto (default): the "
+        "decomposition when every body is convex, else exact",
+    )
+    m.add_argument(
         "--stats", default=None, help="also write error bound and statistics as JSON here"
     )
     m.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -90,6 +98,14 @@ def _parser() -> argparse.ArgumentParser:
                     help="seed (default: the scenario's planner.seed)")
     pl.add_argument("--cache-dir", default=None, help="decomposition cache directory")
     pl.add_argument("--no-progress", action="store_true", help="no progress line")
+    pl.add_argument(
+        "--exact",
+        choices=("auto", "true", "false"),
+        default=None,
+        help="C-obstacle source (default: the scenario's planner.exact): true exact "
+        "boundary convolution of the meshes, false convex decomposition, auto the "
+        "decomposition only when every body is convex",
+    )
     pl.add_argument(
         "--html",
         action="store_true",
@@ -160,6 +176,7 @@ def _cmd_minkowski(args) -> int:
         eps=args.eps,
         seed=args.seed,
         progress=False if args.no_progress else None,
+        exact={"auto": "auto", "true": True, "false": False}[args.exact],
         **kwargs,
     )
     _atomic_write(
@@ -170,14 +187,17 @@ def _cmd_minkowski(args) -> int:
         "error_bound": result.error_bound,
         "eps": result.eps,
         "bound_guaranteed": result.bound_guaranteed,
-        "exact_decomposition": result.exact,
+        "bound_kind": result.bound_kind,
+        "source": result.stats["source"],
+        "exact": result.exact,
         "stats": result.stats,
     }
     if args.stats:
         stats_path = Path(args.stats)
         _atomic_write(stats_path, lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))
     sys.stdout.write(
-        f"wrote {out}: {result.stats['triangles']} triangles, error bound {result.error_bound:.4g} "
+        f"wrote {out}: {result.stats['triangles']} triangles ({result.stats['source']} source), "
+        f"error bound {result.error_bound:.4g} "
         f"(grid {result.stats['grid_error_bound']:.4g} + decomposition "
         f"{result.stats['decomposition_excess']:.4g}), {result.stats['seconds']['total']:.2f} s\n"
     )
@@ -212,6 +232,8 @@ def _cmd_plan(args) -> int:
         overrides["time_limit"] = args.time_limit
     if args.seed is not None:
         overrides["seed"] = args.seed
+    if args.exact is not None:
+        overrides["exact"] = {"auto": "auto", "true": True, "false": False}[args.exact]
     if overrides:
         from planner.errors import InvalidParameterError
 

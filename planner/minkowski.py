@@ -25,7 +25,7 @@ import numpy as np
 import trimesh
 
 from . import _minkowski_core as core
-from .decompose import Decomposition, decompose
+from .decompose import Decomposition, _check_threshold, decompose
 from .errors import GeometryError, InvalidMeshError, InvalidParameterError, ResourceLimitError
 from .tolerances import tol
 
@@ -135,13 +135,20 @@ def _sum(
     max_refinements: int,
     simplify: bool,
     names: tuple[str, str],
+    exact="auto",
 ) -> MinkowskiResult:
     t_start = time.perf_counter()
+    exact = check_exact(exact, "exact")
+    _check_threshold(threshold)
     a = _as_mesh(a, names[0])
     b = _as_mesh(b, names[1])
     max_cells = tol.max_cells if max_cells is None else int(max_cells)
     if max_refinements < 0:
         raise InvalidParameterError(f"max_refinements = {max_refinements}: must be >= 0")
+    if exact is True or (exact == "auto" and not (convex_bodies(a) and convex_bodies(b))):
+        return _exact_sum(a, b, mirror_b=mirror_b, eps=eps, max_cells=max_cells,
+                          max_refinements=max_refinements, simplify=simplify, names=names,
+                          t_start=t_start, chosen="asked" if exact is True else "auto")
     bar = _progress_bar(progress, 4, "minkowski")
 
     def step(label: str) -> None:
@@ -230,6 +237,7 @@ def _sum(
         }
 
     stats = {
+        "source": "decomposition",
         "pieces_a": len(dec_a.pieces),
         "pieces_b": len(dec_b.pieces),
         "primitives": len(prims),
@@ -283,6 +291,119 @@ def _sum(
     )
 
 
+def check_exact(value, field: str = "exact"):
+    """``True``, ``False`` or ``"auto"`` (also the strings ``"true"``/``"false"``)."""
+    if isinstance(value, str) and value.lower() in ("true", "false", "auto"):
+        value = {"true": True, "false": False, "auto": "auto"}[value.lower()]
+    if value is True or value is False or value == "auto":
+        return value
+    raise InvalidParameterError(f"{field} = {value!r}: expected true, false or auto")
+
+
+def convex_bodies(mesh: trimesh.Trimesh) -> bool:
+    """Whether every body of ``mesh`` is convex (its decomposition is then exact and
+    cheap, no CoACD)."""
+    from .meshes import split_solid, validate_solid
+
+    try:
+        bodies = split_solid(validate_solid(mesh, name="mesh"))
+    except InvalidMeshError:
+        return False
+    for body in bodies:
+        hull = body.convex_hull
+        if abs(hull.volume - body.volume) > 1e-9 * max(hull.volume, 1e-300):
+            return False
+    return True
+
+
+def mesh_arrays(mesh: trimesh.Trimesh, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (float64) and faces (int64) of a closed, outward solid for the exact
+    source (checked and cleaned by :func:`planner.meshes.validate_solid`)."""
+    from .meshes import validate_solid
+
+    solid = validate_solid(mesh, name=name)
+    return (np.ascontiguousarray(solid.vertices, dtype=np.float64),
+            np.ascontiguousarray(solid.faces, dtype=np.int64))
+
+
+def _exact_sum(a, b, *, mirror_b, eps, max_cells, max_refinements, simplify, names, t_start,
+               chosen) -> MinkowskiResult:
+    from .meshes import mirror
+
+    bb = mirror(b) if mirror_b else b
+    va, fa = mesh_arrays(a, names[0])
+    vb, fb = mesh_arrays(bb, names[1])
+    t0 = time.perf_counter()
+    source = core.ExactSum((va, fa), (vb, fb))
+    t_source = time.perf_counter() - t0
+    box = np.asarray(source.bounds)
+    diag = float(np.linalg.norm(box[1] - box[0]))
+    eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
+    estimate = _estimate_cells(box, eps_value)
+    if estimate > max_cells:
+        floor = eps_value * math.sqrt(estimate / max_cells)
+        raise ResourceLimitError(
+            f"eps = {eps_value:.3g}: the grid would need about {estimate:.2g} cells, over the "
+            f"budget of {max_cells:.2g}; use eps >= {floor:.3g} or raise max_cells"
+        )
+    surf = source.surface(eps_value, max_cells=max_cells, max_refinements=max_refinements,
+                          simplify=simplify)
+    mesh = trimesh.Trimesh(vertices=surf["vertices"], faces=surf["faces"], process=False)
+    if len(mesh.faces) == 0:
+        raise GeometryError(
+            f"{names[0]} ⊕ {names[1]}: the extracted surface is empty; please report this input"
+        )
+    complex_cells = int(surf["complex_cells"])
+    if complex_cells:
+        log.warning("%s ⊕ %s: %d complex cells remain after %d refinements: the bound is not "
+                    "guaranteed there; use a smaller eps", names[0], names[1], complex_cells,
+                    surf["refinements"])
+    per_level = surf["cells_per_level"]
+    cells = {name: int(sum(c[i] for c in per_level))
+             for i, name in enumerate(("empty", "full", "mixed"))}
+    stats = {
+        "source": "exact",
+        "exact_chosen": chosen,
+        "triangles_a": int(source.triangles[0]),
+        "triangles_b": int(source.triangles[1]),
+        "cells": cells,
+        "cells_per_level": [list(map(int, c)) for c in per_level],
+        "band_cells": int(surf["band_cells"]),
+        "triangles": int(len(mesh.faces)),
+        "triangles_extracted": int(surf["triangles_extracted"]),
+        "vertices": int(len(mesh.vertices)),
+        "eps": eps_value,
+        "h": float(surf["h"]),
+        "grid_error_bound": float(surf["error_bound"]),
+        "decomposition_excess": 0.0,
+        "complex_cells": complex_cells,
+        "unresolved_cells": int(surf["unresolved_cells"]),
+        "complex_edges": int(surf["complex_edges"]),
+        "refinements": int(surf["refinements"]),
+        "exact": True,
+        "threads": core.num_threads(),
+        "seconds": {
+            "source": t_source,
+            "octree": float(surf["seconds_octree"]),
+            "surface": float(surf["seconds_surface"]),
+            "simplify": float(surf["seconds_simplify"]),
+            "total": time.perf_counter() - t_start,
+        },
+    }
+    log.info("%s ⊕ %s (exact source): %d triangles, bound %.4g, %.3fs", names[0], names[1],
+             len(mesh.faces), surf["error_bound"], stats["seconds"]["total"])
+    return MinkowskiResult(
+        mesh=mesh,
+        error_bound=float(surf["error_bound"]),
+        eps=eps_value,
+        bound_kind="two-sided",
+        bound_guaranteed=complex_cells == 0,
+        exact=True,
+        stats=stats,
+        primitives=source,
+    )
+
+
 def minkowski_sum(
     a,
     b,
@@ -295,6 +416,7 @@ def minkowski_sum(
     max_cells: int | None = None,
     max_refinements: int = 2,
     simplify: bool = True,
+    exact: bool | str = "auto",
 ) -> MinkowskiResult:
     """Approximate ``A ⊕ B = {a + b : a ∈ A, b ∈ B}`` of two closed meshes.
 
@@ -311,6 +433,12 @@ def minkowski_sum(
         max_refinements: how often the grid may be halved while complex cells remain.
         simplify: collapse the interiors of flat patches (the same surface with far fewer
             triangles; the bound is unchanged).
+        exact: ``True``: the exact source (boundary convolution of the two meshes, no
+            decomposition; the bound is two-sided and proved for the meshes as given);
+            ``False``: convex decomposition (CoACD for non-convex bodies, whose hulls make
+            the bound one-sided); ``"auto"`` (default): the decomposition when every body
+            is convex (exact and fastest), else the exact source. ``stats["source"]``
+            says which was used.
 
     Returns:
         :class:`MinkowskiResult` with ``.mesh``, ``.error_bound`` and ``.stats``.
@@ -334,6 +462,7 @@ def minkowski_sum(
         max_refinements=max_refinements,
         simplify=simplify,
         names=("a", "b"),
+        exact=exact,
     )
 
 
@@ -349,6 +478,7 @@ def c_obstacle(
     max_cells: int | None = None,
     max_refinements: int = 2,
     simplify: bool = True,
+    exact: bool | str = "auto",
 ) -> MinkowskiResult:
     """The translational C-obstacle ``O ⊕ (−R) = {t : (R + t) ∩ O ≠ ∅}``.
 
@@ -369,4 +499,5 @@ def c_obstacle(
         max_refinements=max_refinements,
         simplify=simplify,
         names=("obstacle", "robot"),
+        exact=exact,
     )

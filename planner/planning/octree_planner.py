@@ -47,7 +47,8 @@ import numpy as np
 
 from planner._minkowski_core import CSpace, Primitives
 from planner.decompose import decompose
-from planner.errors import InvalidParameterError, ResourceLimitError
+from planner.errors import ResourceLimitError
+from planner.minkowski import convex_bodies, mesh_arrays
 from planner.scenario import Scenario
 from planner.validation import FclChecker
 
@@ -145,20 +146,29 @@ class _Progress:
             sys.stderr.flush()
 
 
+def choose_source(scenario: Scenario) -> tuple[str, str]:
+    """``("exact" | "decomposition", why)`` for the scenario's ``planner.exact``: ``true``
+    the exact boundary-convolution source, ``false`` the convex decomposition, ``auto``
+    the decomposition when every body of every part is convex (then it is exact, and the
+    fastest), else the exact source (CoACD's hulls would over-approximate)."""
+    setting = scenario.settings.exact
+    if setting is True:
+        return "exact", "planner.exact: true"
+    if setting is False:
+        return "decomposition", "planner.exact: false"
+    parts = [scenario.robot, *scenario.obstacles]
+    nonconvex = [p.name for p in parts if not convex_bodies(p.mesh)]
+    if nonconvex:
+        return "exact", f"auto: {', '.join(nonconvex)} not convex"
+    return "decomposition", "auto: every body is convex (the decomposition is exact)"
+
+
 def _decompositions(scenario: Scenario, cache_dir, progress: bool | None):
     settings = scenario.settings
     kwargs = dict(threshold=settings.decomposition_threshold, seed=settings.seed % 2**32,
                   cache_dir=cache_dir, progress=progress)
     robot = decompose(scenario.robot.mesh, name=scenario.robot.name, **kwargs)
     obstacles = [decompose(b.mesh, name=b.name, **kwargs) for b in scenario.obstacles]
-    if settings.exact is True:
-        inexact = [scenario.robot.name] if not robot.exact else []
-        inexact += [b.name for b, d in zip(scenario.obstacles, obstacles) if not d.exact]
-        if inexact:
-            raise InvalidParameterError(
-                f"planner.exact: true, but {', '.join(inexact)} is not a union of convex "
-                f"bodies (it needs an approximate CoACD decomposition); use exact: auto"
-            )
     return robot, obstacles
 
 
@@ -169,23 +179,32 @@ def _describe_decomposition(name: str, d) -> dict[str, Any]:
 
 
 class _Problem:
-    """Primitives, their owners and the C-space of one scenario."""
+    """Primitives (or meshes, with the exact source), their owners and the C-space of one
+    scenario. ``robot_dec`` ``None``: the exact source."""
 
     def __init__(self, scenario: Scenario, params: OctreeParams, robot_dec, obstacle_decs,
                  clock: _Clock) -> None:
         self.scenario = scenario
         self.params = params
         names = [b.name for b in scenario.obstacles]
+        self.source = "decomposition" if robot_dec is not None else "exact"
         with clock.stage("primitives"):
-            pieces, owner = [], []
-            for k, d in enumerate(obstacle_decs):
-                pieces += [np.ascontiguousarray(p, dtype=np.float64) for p in d.pieces]
-                owner += [k] * len(d.pieces)
-            robot_pieces = [np.ascontiguousarray(p, dtype=np.float64) for p in robot_dec.pieces]
-            self.prims = (
-                Primitives.pairwise_sums(pieces, robot_pieces, subtract=True) if pieces else None
-            )
-            self.owner = np.repeat(np.asarray(owner, dtype=np.int64), len(robot_pieces))
+            if self.source == "exact":
+                self.meshes = [mesh_arrays(b.mesh, b.name) for b in scenario.obstacles]
+                self.robot_mesh = mesh_arrays(scenario.robot.mesh, scenario.robot.name)
+                self.prims = None
+                self.owner = np.arange(len(names), dtype=np.int64)
+                robot_dec, obstacle_decs = _ExactDec(), [_ExactDec() for _ in names]
+            else:
+                pieces, owner = [], []
+                for k, d in enumerate(obstacle_decs):
+                    pieces += [np.ascontiguousarray(p, dtype=np.float64) for p in d.pieces]
+                    owner += [k] * len(d.pieces)
+                robot_pieces = [np.ascontiguousarray(p, dtype=np.float64)
+                                for p in robot_dec.pieces]
+                self.prims = (Primitives.pairwise_sums(pieces, robot_pieces, subtract=True)
+                              if pieces else None)
+                self.owner = np.repeat(np.asarray(owner, dtype=np.int64), len(robot_pieces))
         self.names = names
         self.exact = robot_dec.exact and all(d.exact for d in obstacle_decs)
         self.deficit = robot_dec.deficit + max((d.deficit for d in obstacle_decs), default=0.0)
@@ -207,8 +226,21 @@ class _Problem:
 
     def build(self, margin: float, clock: _Clock) -> CSpace:
         with clock.stage("octree"):
+            if self.source == "exact":
+                return CSpace.exact(self.meshes, self.robot_mesh, self.bounds, self.floor_asked,
+                                    self.coarse, margin=margin,
+                                    max_leaves=self.params.max_leaves)
             return CSpace(self.prims, self.bounds, self.floor_asked, self.coarse, margin=margin,
                           max_leaves=self.params.max_leaves)
+
+
+@dataclass
+class _ExactDec:
+    """Stands in for a decomposition when the exact source is used: exact, no hulls."""
+
+    exact: bool = True
+    deficit: float = 0.0
+    excess: float = 0.0
 
 
 @dataclass
@@ -347,25 +379,37 @@ def plan_octree(scenario: Scenario, *, params: OctreeParams | None = None, cache
     checker = FclChecker(scenario.robot.mesh, [b.mesh for b in scenario.obstacles],
                          contact_tolerance=delta, names=[b.name for b in scenario.obstacles])
 
-    bar.show("minkplan: decomposing")
-    with clock.stage("decompose"):
-        robot_dec, obstacle_decs = _decompositions(scenario, cache_dir, progress)
+    source, why = choose_source(scenario)
+    robot_dec, obstacle_decs = None, None
+    if source == "decomposition":
+        bar.show("minkplan: decomposing")
+        with clock.stage("decompose"):
+            robot_dec, obstacle_decs = _decompositions(scenario, cache_dir, progress)
     # The time limit is for planning; a (cached) decomposition is preprocessing.
     deadline = time.perf_counter() + settings.time_limit
     problem = _Problem(scenario, params, robot_dec, obstacle_decs, clock)
     margin = settings.clearance + problem.deficit
     bar.show("minkplan: building the C-space")
     cs = problem.build(margin, clock)
-    report: dict[str, Any] = {
-        "scenario": scenario.describe(),
-        "decomposition": {
+    if source == "exact":
+        decomposition = {"method": "none (exact boundary-convolution source)", "exact": True,
+                         "excess": 0.0, "deficit": 0.0}
+        triangles = {"robot": int(len(problem.robot_mesh[1])),
+                     "obstacles": [int(len(f)) for _, f in problem.meshes]}
+    else:
+        decomposition = {
             "robot": _describe_decomposition(scenario.robot.name, robot_dec),
             "obstacles": [_describe_decomposition(b.name, d)
                           for b, d in zip(scenario.obstacles, obstacle_decs)],
             "exact": problem.exact,
             "excess": problem.excess,
             "deficit": problem.deficit,
-        },
+        }
+        triangles = None
+    report: dict[str, Any] = {
+        "scenario": scenario.describe(),
+        "source": {"used": source, "why": why, "triangles": triangles},
+        "decomposition": decomposition,
         "primitives": {"obstacle": cs.n_obstacle_prims, "walls": cs.n_primitives
                        - cs.n_obstacle_prims, "margin": margin},
         "contact_tolerance": delta,
@@ -519,10 +563,17 @@ def _certificate(problem: _Problem, cs: CSpace, raw: dict[str, Any],
     component = [int(i) for i in raw["component_leaves"]]
     comp_boxes = np.array([cs.cell_box(i) for i in component]).reshape(-1, 2, 3)
     volume = float(np.prod(comp_boxes[:, 1] - comp_boxes[:, 0], axis=1).sum())
-    exact = problem.exact and problem.scenario.settings.exact is not False
+    exact = problem.exact
+    if problem.source == "exact":
+        relative_to = "the meshes as given (exact boundary-convolution source)"
+    elif exact:
+        relative_to = "the obstacles (exact convex decomposition)"
+    else:
+        relative_to = None
     return {
         "exact": exact,
-        "relative_to": ("the obstacles (exact convex decomposition)" if exact else
+        "source": problem.source,
+        "relative_to": (relative_to if relative_to else
                         f"the convex hulls of CoACD's decomposition (excess about "
                         f"{problem.excess:.3g})"),
         "walled": walled,

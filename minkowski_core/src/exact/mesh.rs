@@ -81,6 +81,8 @@ pub struct TriMesh {
     pub nodes: Vec<MeshNode>,
     /// Box around the mesh.
     pub aabb: Aabb,
+    /// One vertex of every connected shell.
+    pub anchors: Vec<Vec3>,
 }
 
 /// Ray directions for the parity test, tried in order until one meets no edge or vertex.
@@ -132,7 +134,31 @@ impl TriMesh {
             faces.iter().map(|f| Tri::new([vertices[f[0] as usize], vertices[f[1] as usize], vertices[f[2] as usize]])).collect();
         let aabb = Aabb::from_points(&vertices);
         let nodes = build_nodes(&tris);
-        Ok(TriMesh { vertices, tris, nodes, aabb })
+        // one vertex per connected shell (union-find over the triangles' corners)
+        let mut parent: Vec<u32> = (0..nv).collect();
+        fn find(parent: &mut [u32], mut x: u32) -> u32 {
+            while parent[x as usize] != x {
+                parent[x as usize] = parent[parent[x as usize] as usize];
+                x = parent[x as usize];
+            }
+            x
+        }
+        for f in faces {
+            for k in 1..3 {
+                let (a, b) = (find(&mut parent, f[0]), find(&mut parent, f[k]));
+                if a != b {
+                    parent[a as usize] = b;
+                }
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        let mut anchors = Vec::new();
+        for f in faces {
+            if seen.insert(find(&mut parent, f[0])) {
+                anchors.push(vertices[f[0] as usize]);
+            }
+        }
+        Ok(TriMesh { vertices, tris, nodes, aabb, anchors })
     }
 
     /// The same mesh reflected through the origin (`-v`), still outward oriented.
@@ -141,13 +167,10 @@ impl TriMesh {
         let vertices: Vec<Vec3> = self.vertices.iter().map(|v| -*v).collect();
         let aabb = Aabb::from_points(&vertices);
         let nodes = build_nodes(&tris);
-        TriMesh { vertices, tris, nodes, aabb }
+        let anchors = self.anchors.iter().map(|v| -*v).collect();
+        TriMesh { vertices, tris, nodes, aabb, anchors }
     }
 
-    /// A vertex of the mesh (the first triangle's first corner).
-    pub fn anchor(&self) -> Vec3 {
-        self.tris[0].p[0]
-    }
 
     /// Whether `q` lies in the closed solid bounded by the mesh (ray parity; a ray that
     /// passes within rounding of an edge or vertex is replaced by the next direction; a

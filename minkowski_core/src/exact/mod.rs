@@ -175,16 +175,17 @@ impl ExactSource {
         }
     }
 
-    /// The obstacle whose sum contains `p` because one mesh contains the other.
+    /// The obstacle whose sum contains `p` because a shell of one mesh lies inside the
+    /// other (no surface contact: then one vertex of the shell decides).
     pub fn nested(&self, p: Vec3) -> Option<usize> {
-        let b0 = self.b.anchor();
-        for (k, a) in self.obstacles.iter().enumerate() {
-            // (p − B) inside A: one vertex p − b0 in A; A inside p − B: p − a0 in B
-            if a.contains(p - b0) || self.b.contains(p - a.anchor()) {
-                return Some(k);
-            }
-        }
-        None
+        (0..self.obstacles.len()).find(|&k| self.nested_k(k, p))
+    }
+
+    fn nested_k(&self, k: usize, p: Vec3) -> bool {
+        let a = &self.obstacles[k];
+        // a shell of p − B inside A: its vertex p − b in A; a shell of A inside p − B:
+        // p − a in B
+        self.b.anchors.iter().any(|&b0| a.contains(p - b0)) || a.anchors.iter().any(|&a0| self.b.contains(p - a0))
     }
 
     /// Visit the leaf pieces of obstacle `k` whose summed boxes pass `test`, until `f`
@@ -250,13 +251,8 @@ impl ExactSource {
 
     /// The obstacles whose (grown) sum contains `p`.
     pub fn containing(&self, p: Vec3) -> Vec<usize> {
-        let b0 = self.b.anchor();
         let mut out: Vec<usize> = (0..self.obstacles.len())
-            .filter(|&k| {
-                self.any_piece(k, self.margin, false, |bx| bx.contains_point(p), |piece, _, _| piece.contains_point(p))
-                    || self.obstacles[k].contains(p - b0)
-                    || self.b.contains(p - self.obstacles[k].anchor())
-            })
+            .filter(|&k| self.any_piece(k, self.margin, false, |bx| bx.contains_point(p), |piece, _, _| piece.contains_point(p)) || self.nested_k(k, p))
             .collect();
         if self.margin > 0.0 {
             self.fbvh.for_each_at_point(p, |i| {
