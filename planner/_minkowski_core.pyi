@@ -7,7 +7,7 @@ from typing import Any, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["CSpace", "Primitives", "__version__", "build_octree", "num_threads", "union_surface"]
+__all__ = ["CSpace", "ExactSum", "Primitives", "__version__", "build_octree", "num_threads", "union_surface"]
 __version__: str
 
 @final
@@ -50,6 +50,25 @@ def build_octree(
 def num_threads() -> int: ...
 
 @final
+class ExactSum:
+    """The exact Minkowski sum ``A ⊕ B`` of two closed meshes (boundary convolution)."""
+
+    def __new__(
+        cls,
+        a: tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]],
+        b: tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]],
+    ) -> ExactSum: ...
+    @property
+    def bounds(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def triangles(self) -> tuple[int, int]: ...
+    def contains(self, points: npt.NDArray[np.float64]) -> npt.NDArray[np.bool_]: ...
+    def segment_is_free(self, a: list[float], b: list[float], margin: float = 0.0) -> bool: ...
+    def surface(
+        self, eps: float, max_cells: int = 8000000, max_refinements: int = 2, simplify: bool = True
+    ) -> dict[str, Any]: ...
+
+@final
 class CSpace:
     """The translational C-space of a planning problem: C-obstacle primitives (grown by
     ``margin``), walls outside ``bounds`` and a refinable octree with its roadmap."""
@@ -63,6 +82,19 @@ class CSpace:
         margin: float = 0.0,
         max_leaves: int = 20000000,
     ) -> CSpace: ...
+    @staticmethod
+    def exact(
+        obstacles: list[tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]],
+        robot: tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]],
+        bounds: npt.NDArray[np.float64],
+        h_floor: float,
+        h_coarse: float,
+        margin: float = 0.0,
+        max_leaves: int = 20000000,
+    ) -> CSpace:
+        """C-space of the exact source: C-obstacles of closed meshes, no decomposition."""
+    @property
+    def is_exact(self) -> bool: ...
     def __len__(self) -> int: ...
     @property
     def n_obstacle_prims(self) -> int: ...

@@ -173,4 +173,5 @@ def test_omplapp_problem_file(tmp_path, capsys, cache_dir):
     assert doc["status"] == "found"
     assert doc["validation"]["fcl"]["valid"] and doc["validation"]["ompl"]["valid"]
     report = json.loads((out / "report.json").read_text())
-    assert report["decomposition"]["exact"] is False  # the Easy world goes through CoACD
+    # the Easy world is not convex: auto takes the exact source, no CoACD
+    assert report["source"]["used"] == "exact" and report["decomposition"]["exact"] is True

@@ -116,9 +116,13 @@ impl ConvexPolytope {
                 }
             }
         }
+        // sliver triangles (near-coplanar hull points) have no reliable plane: they join a
+        // neighbouring facet afterwards instead of forming (or bridging) facets
+        let deg: Vec<bool> = tri_n.iter().map(|n| n.length() <= 1e-12 * scale * scale).collect();
         let coplanar = |i: usize, j: usize| -> bool {
             // same plane when each triangle's vertices lie on the other's plane
-            unit[i].dot(unit[j]) > 1.0 - 1e-10
+            !deg[i] && !deg[j]
+                && unit[i].dot(unit[j]) > 1.0 - 1e-10
                 && tris[j].iter().all(|&v| (unit[i].dot(vertices[v as usize]) - off[i]).abs() <= plane_tol)
         };
         for &(i, j) in &adjacent {
@@ -133,15 +137,36 @@ impl ConvexPolytope {
         // (so every hull vertex satisfies n·v <= d exactly).
         let mut facet_of_root: HashMap<usize, u32> = HashMap::new();
         let mut normals: Vec<Vec3> = Vec::new();
-        let mut triangle_facet = Vec::with_capacity(tris.len());
+        let mut triangle_facet = vec![u32::MAX; tris.len()];
         for ti in 0..tris.len() {
+            if deg[ti] {
+                continue;
+            }
             let r = find(&mut parent, ti);
             let f = *facet_of_root.entry(r).or_insert_with(|| {
                 normals.push(Vec3::ZERO);
                 (normals.len() - 1) as u32
             });
             normals[f as usize] += tri_n[ti];
-            triangle_facet.push(f);
+            triangle_facet[ti] = f;
+        }
+        // slivers take the facet of a neighbour (repeated for chains of slivers)
+        loop {
+            let mut changed = false;
+            for &(i, j) in &adjacent {
+                for (a, b) in [(i, j), (j, i)] {
+                    if triangle_facet[a] == u32::MAX && triangle_facet[b] != u32::MAX {
+                        triangle_facet[a] = triangle_facet[b];
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        if triangle_facet.contains(&u32::MAX) {
+            return Err(degenerate("zero-area facet"));
         }
         for n in normals.iter_mut() {
             *n = n.normalize_or_zero();
@@ -149,13 +174,10 @@ impl ConvexPolytope {
         if normals.iter().any(|n| *n == Vec3::ZERO) {
             return Err(degenerate("zero-area facet"));
         }
-        let mut offsets = vec![f64::NEG_INFINITY; normals.len()];
-        for (ti, t) in tris.iter().enumerate() {
-            let f = triangle_facet[ti] as usize;
-            for &v in t {
-                offsets[f] = offsets[f].max(normals[f].dot(vertices[v as usize]));
-            }
-        }
+        // Offsets: the support over all hull vertices, so every plane is a supporting plane
+        // even when rounding in the hull left a tilted sliver facet (then the polytope is a
+        // hair larger than the hull, never smaller).
+        let offsets: Vec<f64> = normals.iter().map(|n| vertices.iter().map(|v| n.dot(*v)).fold(f64::NEG_INFINITY, f64::max)).collect();
         let aabb = Aabb::from_points(&vertices);
         Ok(ConvexPolytope { vertices, normals, offsets, triangles: tris, triangle_facet, aabb })
     }

@@ -98,3 +98,44 @@ fn hull_of_many_points_contains_them_all() {
         assert!(p.plane_distance(*v).abs() <= 1e-9, "hull vertex on the boundary");
     }
 }
+
+/// Two boxes tilted the same way (30° about y, from float32 mesh data): the hull of their
+/// difference has near-coplanar points that give sliver hull triangles; they must join a
+/// neighbouring facet, not fail as a "zero-area facet" (found by the assembly tests).
+#[test]
+fn tilted_box_difference_has_no_zero_area_facet() {
+    let a = [
+        [1.2165063509461096, -0.3499999940395355, 1.6070508075688774],
+        [1.2165063509461096, 0.3499999940395355, 1.6070508075688774],
+        [0.16650635020105162, -0.3499999940395355, -0.21160254166892228],
+        [0.2531088854175818, -0.3499999940395355, -0.26160253868869005],
+        [0.16650635020105162, 0.3499999940395355, -0.21160254166892228],
+        [1.3031088861626396, 0.3499999940395355, 1.5570508105491097],
+        [1.3031088861626396, -0.3499999940395355, 1.5570508105491097],
+        [0.2531088854175818, 0.3499999940395355, -0.26160253868869005],
+    ];
+    let b = [
+        [0.3267949166621554, -0.20000000298023224, 0.9660254052745548],
+        [0.3267949166621554, 0.20000000298023224, 0.9660254052745548],
+        [-0.17320508333784457, -0.20000000298023224, 0.1000000014901161],
+        [0.17320508333784457, -0.20000000298023224, -0.1000000014901161],
+        [-0.17320508333784457, 0.20000000298023224, 0.1000000014901161],
+        [0.6732050833378445, 0.20000000298023224, 0.7660254022943226],
+        [0.6732050833378445, -0.20000000298023224, 0.7660254022943226],
+        [0.17320508333784457, 0.20000000298023224, -0.1000000014901161],
+    ];
+    let mut pts = Vec::new();
+    for p in &a {
+        for q in &b {
+            pts.push(Vec3::from_array(*p) - Vec3::from_array(*q));
+        }
+    }
+    let poly = ConvexPolytope::try_from_points(&pts, "difference").expect("a valid hull");
+    // every point satisfies every facet plane, and the facets are those of a tilted box sum
+    for p in &pts {
+        assert!(poly.plane_distance(*p) <= 1e-9, "{}", poly.plane_distance(*p));
+    }
+    assert!(poly.normals.len() <= 6 + 8, "{} facets", poly.normals.len());
+    let bx = Aabb::from_points(&pts);
+    assert!(poly.volume() > 0.0 && poly.volume() <= bx.extent().x * bx.extent().y * bx.extent().z);
+}
