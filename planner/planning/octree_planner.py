@@ -337,11 +337,17 @@ def _escape(cs: CSpace, checker: FclChecker, p: np.ndarray, reach: float) -> np.
     """A point outside every primitive within ``reach`` of ``p`` whose segment from ``p``
     FCL accepts (for a ``p`` in tolerated contact), or ``None``."""
     directions = [s * e for e in np.eye(3) for s in (1.0, -1.0)]
-    for prim, _depth in cs.containing(p.tolist()):
-        normals, offsets = cs.primitive_planes(prim)
-        slack = offsets - normals @ p
-        for k in np.argsort(slack, kind="stable")[:3]:
-            directions.append(normals[k])
+    if cs.is_exact:
+        # no facet planes to follow: a fan of directions (cube faces, edges and corners)
+        fan = np.array([(x, y, z) for x in (-1, 0, 1) for y in (-1, 0, 1) for z in (-1, 0, 1)
+                        if (x, y, z) != (0, 0, 0) and abs(x) + abs(y) + abs(z) > 1], float)
+        directions += list(fan / np.linalg.norm(fan, axis=1)[:, None])
+    else:
+        for prim, _depth in cs.containing(p.tolist()):
+            normals, offsets = cs.primitive_planes(prim)
+            slack = offsets - normals @ p
+            for k in np.argsort(slack, kind="stable")[:3]:
+                directions.append(normals[k])
     candidates = []
     for d in directions:
         for length in reach * np.array([0.05, 0.1, 0.25, 0.5, 1.0]):
