@@ -7,7 +7,15 @@ from typing import Any, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["CSpace", "ExactSum", "Primitives", "__version__", "build_octree", "num_threads", "union_surface"]
+__all__ = [
+    "CSpace",
+    "ExactSum",
+    "Primitives",
+    "__version__",
+    "build_octree",
+    "num_threads",
+    "union_surface",
+]
 __version__: str
 
 @final
