@@ -259,3 +259,32 @@ fn segments_and_walls() {
     assert!(outside > 0);
     assert!(oct.leaves.iter().filter(|l| !oct.cell_box(l).overlaps(&walls)).all(|l| l.label == Label::Full));
 }
+
+#[test]
+fn overlapping_shells_are_their_union_and_cavities_are_holes() {
+    // two overlapping boxes as one mesh: the overlap is inside (winding 2, not parity 0)
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::new(0.0, 0.0, 0.0), Vec3::new(2.0, 1.0, 1.0), &mut v, &mut f);
+    push_box(Vec3::new(1.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0), &mut v, &mut f);
+    let m = TriMesh::new(v, &f, "two boxes").unwrap();
+    assert!(m.contains(Vec3::new(1.5, 0.5, 0.5)));
+    assert!(m.contains(Vec3::new(0.5, 0.5, 0.5)));
+    assert!(!m.contains(Vec3::new(3.5, 0.5, 0.5)));
+    // a hollow box: the inner shell is inward oriented (reversed faces)
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::splat(0.0), Vec3::splat(3.0), &mut v, &mut f);
+    let n0 = f.len();
+    push_box(Vec3::splat(1.0), Vec3::splat(2.0), &mut v, &mut f);
+    for t in &mut f[n0..] {
+        t.swap(1, 2);
+    }
+    let hollow = TriMesh::new(v, &f, "hollow").unwrap();
+    assert!(!hollow.contains(Vec3::splat(1.5)));
+    assert!(hollow.contains(Vec3::splat(0.5)));
+    // the sum: a small box in the overlap of the two shells collides without contact
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::new(0.0, 0.0, 0.0), Vec3::new(2.0, 1.0, 1.0), &mut v, &mut f);
+    push_box(Vec3::new(1.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0), &mut v, &mut f);
+    let src = ExactSource::new(vec![TriMesh::new(v, &f, "two boxes").unwrap()], box_mesh([-0.1; 3], [0.1; 3]), 0.0, None);
+    assert!(src.contains_point(Vec3::new(1.5, 0.5, 0.5)));
+}

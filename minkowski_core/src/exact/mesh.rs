@@ -172,9 +172,10 @@ impl TriMesh {
     }
 
 
-    /// Whether `q` lies in the closed solid bounded by the mesh (ray parity; a ray that
-    /// passes within rounding of an edge or vertex is replaced by the next direction; a
-    /// point on the surface counts as inside).
+    /// Whether `q` lies in the closed solid bounded by the mesh: the winding number along a
+    /// ray (exits minus entries) is non-zero, so overlapping shells are their union and
+    /// inward cavity shells are holes. A ray that passes within rounding of an edge or
+    /// vertex is replaced by the next direction; a point on the surface counts as inside.
     pub fn contains(&self, q: Vec3) -> bool {
         if !self.aabb.contains_point(q) {
             return false;
@@ -185,8 +186,8 @@ impl TriMesh {
             let d = Vec3::from_array(d).normalize();
             match self.parity(q, d, reach) {
                 Parity::Surface => return true,
-                Parity::Count(c) => return c % 2 == 1,
-                Parity::Degenerate(c) => last = c % 2 == 1,
+                Parity::Count(c) => return c != 0,
+                Parity::Degenerate(c) => last = c != 0,
             }
         }
         last
@@ -195,7 +196,7 @@ impl TriMesh {
     fn parity(&self, q: Vec3, d: Vec3, reach: f64) -> Parity {
         let far = q + d * reach;
         let scale = self.aabb.diagonal().max(1e-300);
-        let mut count = 0usize;
+        let mut count = 0i64;
         let mut degenerate = false;
         let mut stack = vec![0u32];
         while let Some(ni) = stack.pop() {
@@ -243,7 +244,8 @@ impl TriMesh {
                 degenerate = true;
                 continue;
             }
-            count += 1;
+            // det = −d · n: negative when the ray leaves through an outward face
+            count += if det < 0.0 { 1 } else { -1 };
         }
         if degenerate {
             Parity::Degenerate(count)
@@ -255,8 +257,8 @@ impl TriMesh {
 
 enum Parity {
     Surface,
-    Count(usize),
-    Degenerate(usize),
+    Count(i64),
+    Degenerate(i64),
 }
 
 /// Median-split BVH with one triangle per leaf.
