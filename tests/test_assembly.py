@@ -142,7 +142,7 @@ def test_schema_errors_are_one_line(text, expected):
 
 
 def test_a_scenario_is_not_an_assembly():
-    with pytest.raises(ScenarioError, match=r"peg_in_hole.yaml:6: robot: this looks like"):
+    with pytest.raises(ScenarioError, match=r"peg_in_hole.yaml:7: robot: this looks like"):
         load_assembly(DEMOS.parent / "peg_in_hole.yaml")
 
 
