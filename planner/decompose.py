@@ -317,6 +317,13 @@ def _hull_volume(points: np.ndarray) -> float:
     return float(ConvexHull(points).volume)
 
 
+def is_convex_body(body: trimesh.Trimesh) -> bool:
+    """Whether a body (see :func:`planner.meshes.split_solid`) is convex by the test
+    :func:`decompose` uses to keep a body as one exact piece."""
+    hull_points = _hull_points(np.asarray(body.vertices))
+    return hull_points is not None and _is_convex(body, hull_points)
+
+
 def _is_convex(body: trimesh.Trimesh, hull_points: np.ndarray) -> bool:
     hull_volume = _hull_volume(hull_points)
     return hull_volume - float(body.volume) <= tol.convex_volume_rel * hull_volume

@@ -111,6 +111,26 @@ def _estimate_cells(box: np.ndarray, eps: float) -> float:
     return _CELLS_PER_AREA * area / (h * h)
 
 
+def _grid_eps(box: np.ndarray, diag: float, eps, max_cells: int) -> float:
+    """``eps`` (default ``tol.eps_rel`` of the diagonal), refused before any work when the
+    grid would not fit the cell budget."""
+    eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
+    estimate = _estimate_cells(box, eps_value)
+    if estimate > max_cells:
+        floor = eps_value * math.sqrt(estimate / max_cells)
+        raise ResourceLimitError(
+            f"eps = {eps_value:.3g}: the grid would need about {estimate:.2g} cells, over the "
+            f"budget of {max_cells:.2g}; use eps >= {floor:.3g} or raise max_cells"
+        )
+    return eps_value
+
+
+def _cell_totals(per_level) -> dict[str, int]:
+    """Leaves per label over all levels."""
+    return {name: int(sum(c[i] for c in per_level))
+            for i, name in enumerate(("empty", "full", "mixed"))}
+
+
 def _progress_bar(show: bool | None, total: int, desc: str):
     if show is None:
         show = sys.stderr.isatty()
@@ -169,14 +189,7 @@ def _sum(
 
         box = _result_box(a, b, mirror_b)
         diag = float(np.linalg.norm(box[1] - box[0]))
-        eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
-        estimate = _estimate_cells(box, eps_value)
-        if estimate > max_cells:
-            floor = eps_value * math.sqrt(estimate / max_cells)
-            raise ResourceLimitError(
-                f"eps = {eps_value:.3g}: the grid would need about {estimate:.2g} cells, over the "
-                f"budget of {max_cells:.2g}; use eps >= {floor:.3g} or raise max_cells"
-            )
+        eps_value = _grid_eps(box, diag, eps, max_cells)
 
         t0 = time.perf_counter()
         prims = core.Primitives.pairwise_sums(dec_a.pieces, dec_b.pieces, subtract=mirror_b)
@@ -214,11 +227,7 @@ def _sum(
             surf["h"],
         )
     per_level = surf["cells_per_level"]
-    cells = {
-        "empty": int(sum(c[0] for c in per_level)),
-        "full": int(sum(c[1] for c in per_level)),
-        "mixed": int(sum(c[2] for c in per_level)),
-    }
+    cells = _cell_totals(per_level)
     excess_a = max(dec_a.excess, dec_a.deficit)
     excess_b = max(dec_b.excess, dec_b.deficit)
     error_bound = float(surf["error_bound"]) + excess_a + excess_b
@@ -302,18 +311,15 @@ def check_exact(value, field: str = "exact"):
 
 def convex_bodies(mesh: trimesh.Trimesh) -> bool:
     """Whether every body of ``mesh`` is convex (its decomposition is then exact and
-    cheap, no CoACD)."""
+    cheap, no CoACD), by the same test :func:`planner.decompose.decompose` uses."""
+    from .decompose import is_convex_body
     from .meshes import split_solid, validate_solid
 
     try:
         bodies = split_solid(validate_solid(mesh, name="mesh"))
     except InvalidMeshError:
         return False
-    for body in bodies:
-        hull = body.convex_hull
-        if abs(hull.volume - body.volume) > 1e-9 * max(hull.volume, 1e-300):
-            return False
-    return True
+    return all(is_convex_body(body) for body in bodies)
 
 
 def mesh_arrays(mesh: trimesh.Trimesh, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -338,14 +344,7 @@ def _exact_sum(a, b, *, mirror_b, eps, max_cells, max_refinements, simplify, nam
     t_source = time.perf_counter() - t0
     box = np.asarray(source.bounds)
     diag = float(np.linalg.norm(box[1] - box[0]))
-    eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
-    estimate = _estimate_cells(box, eps_value)
-    if estimate > max_cells:
-        floor = eps_value * math.sqrt(estimate / max_cells)
-        raise ResourceLimitError(
-            f"eps = {eps_value:.3g}: the grid would need about {estimate:.2g} cells, over the "
-            f"budget of {max_cells:.2g}; use eps >= {floor:.3g} or raise max_cells"
-        )
+    eps_value = _grid_eps(box, diag, eps, max_cells)
     surf = source.surface(eps_value, max_cells=max_cells, max_refinements=max_refinements,
                           simplify=simplify)
     mesh = trimesh.Trimesh(vertices=surf["vertices"], faces=surf["faces"], process=False)
@@ -359,8 +358,7 @@ def _exact_sum(a, b, *, mirror_b, eps, max_cells, max_refinements, simplify, nam
                     "guaranteed there; use a smaller eps", names[0], names[1], complex_cells,
                     surf["refinements"])
     per_level = surf["cells_per_level"]
-    cells = {name: int(sum(c[i] for c in per_level))
-             for i, name in enumerate(("empty", "full", "mixed"))}
+    cells = _cell_totals(per_level)
     stats = {
         "source": "exact",
         "exact_chosen": chosen,

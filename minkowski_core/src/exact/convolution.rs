@@ -10,6 +10,7 @@
 
 use super::mesh::{unit, TriMesh};
 use crate::math::{Aabb, Vec3};
+use crate::polytope::clip_planes;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -108,27 +109,10 @@ impl Facet {
 
     /// The parameter interval of `a → b` in the facet grown by `m`.
     pub fn clip(&self, a: Vec3, b: Vec3, m: f64) -> Option<(f64, f64)> {
-        let dir = b - a;
-        let (mut t0, mut t1) = (0.0f64, 1.0f64);
         let dirs = self.dirs();
-        for &d0 in &dirs.d[..dirs.n] {
-            for d in [d0, -d0] {
-                let (num, den) = (self.support(d, m) - a.dot(d), dir.dot(d));
-                if den.abs() <= 1e-300 {
-                    if num < 0.0 {
-                        return None;
-                    }
-                } else if den > 0.0 {
-                    t1 = t1.min(num / den);
-                } else {
-                    t0 = t0.max(num / den);
-                }
-                if t0 > t1 {
-                    return None;
-                }
-            }
-        }
-        Some((t0, t1))
+        // every direction and its opposite, as half-spaces `x · d <= support(d)`
+        let planes = dirs.d[..dirs.n].iter().flat_map(|&d0| [d0, -d0]).map(|d| (d, self.support(d, m)));
+        clip_planes(planes, a, b)
     }
 }
 

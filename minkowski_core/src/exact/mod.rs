@@ -163,16 +163,30 @@ impl ExactSource {
         }
     }
 
-    /// Whether `p` lies beyond the wall `side` grown by `extra`.
+    /// How far `p` lies outside the slab beyond wall `side` (= 2 · axis + upper): `<= 0`
+    /// in the slab, minus its depth there.
     #[inline]
-    fn in_wall(&self, side: usize, p: Vec3, extra: f64) -> bool {
+    pub fn wall_gap(&self, side: usize, p: Vec3) -> f64 {
         let w = self.walls.expect("wall record without walls");
         let axis = side / 2;
         if side % 2 == 0 {
-            p[axis] <= w.min[axis] + extra
+            p[axis] - w.min[axis]
         } else {
-            p[axis] >= w.max[axis] - extra
+            w.max[axis] - p[axis]
         }
+    }
+
+    /// Whether `p` lies beyond the wall `side` grown by `extra`.
+    #[inline]
+    fn in_wall(&self, side: usize, p: Vec3, extra: f64) -> bool {
+        self.wall_gap(side, p) <= extra
+    }
+
+    /// `(inside, meets)`: whether the closed box lies in / meets the slab beyond `side`.
+    #[inline]
+    fn wall_box(&self, side: usize, cell: &Aabb) -> (bool, bool) {
+        let (near, far) = if side % 2 == 0 { (cell.min, cell.max) } else { (cell.max, cell.min) };
+        (self.wall_gap(side, far) <= 0.0, self.wall_gap(side, near) <= 0.0)
     }
 
     /// The obstacle whose sum contains `p` because a shell of one mesh lies inside the
@@ -303,12 +317,9 @@ impl ExactSource {
     /// Why the closed box `cell` lies in the (grown) solid: a wall, one triangle-pair
     /// piece containing it, or — when no facet meets it — the solid at its centre.
     pub fn box_witness(&self, cell: &Aabb) -> Option<Witness> {
-        if let Some(w) = self.walls {
-            for side in 0..6 {
-                let axis = side / 2;
-                if (side % 2 == 0 && cell.max[axis] <= w.min[axis]) || (side % 2 == 1 && cell.min[axis] >= w.max[axis]) {
-                    return Some(Witness::Wall { side });
-                }
+        if self.walls.is_some() {
+            if let Some(side) = (0..6).find(|&side| self.wall_box(side, cell).0) {
+                return Some(Witness::Wall { side });
             }
         }
         if let Some(w) = self.piece_contains_box(cell) {
@@ -354,13 +365,7 @@ impl CellSource for ExactSource {
     fn classify(&self, cell: &Aabb, cand: &[u32], _finest: bool, out: &mut Vec<u32>) -> Label {
         for &r in cand {
             if r >= WALL {
-                let w = self.walls.expect("wall record without walls");
-                let (side, axis) = ((r - WALL) as usize, (r - WALL) as usize / 2);
-                let (inside, meets) = if side % 2 == 0 {
-                    (cell.max[axis] <= w.min[axis], cell.min[axis] <= w.min[axis])
-                } else {
-                    (cell.min[axis] >= w.max[axis], cell.max[axis] >= w.max[axis])
-                };
+                let (inside, meets) = self.wall_box((r - WALL) as usize, cell);
                 if inside {
                     out.clear();
                     return Label::Full;
@@ -403,11 +408,9 @@ impl CellSource for ExactSource {
         out.clear();
         for &r in cand {
             if r >= WALL {
-                let w = self.walls.expect("wall record without walls");
-                let (side, axis) = ((r - WALL) as usize, (r - WALL) as usize / 2);
-                let lim = if side % 2 == 0 { w.min[axis] } else { w.max[axis] };
-                // inside the slab: f <= 0
-                let (fa, fb) = if side % 2 == 0 { (a[axis] - lim, b[axis] - lim) } else { (lim - a[axis], lim - b[axis]) };
+                // inside the slab: gap <= 0, linear along the segment
+                let side = (r - WALL) as usize;
+                let (fa, fb) = (self.wall_gap(side, a), self.wall_gap(side, b));
                 if fa <= 0.0 && fb <= 0.0 {
                     out.push((0.0, 1.0));
                 } else if fa <= 0.0 {

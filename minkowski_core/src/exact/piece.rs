@@ -7,6 +7,7 @@
 
 use super::mesh::{unit, Tri};
 use crate::math::{Aabb, Vec3};
+use crate::polytope::clip_planes;
 
 /// Most directions a piece tests: 2 normals + 6 in-plane + 9 edge pairs + 3 axes + 18.
 const MAX_DIRS: usize = 38;
@@ -108,26 +109,8 @@ impl<'a> Piece<'a> {
 
     /// The parameter interval of the segment `a → b` inside the closed piece.
     pub fn clip(&self, a: Vec3, b: Vec3) -> Option<(f64, f64)> {
-        let dir = b - a;
-        let (mut t0, mut t1) = (0.0f64, 1.0f64);
-        for &d0 in &self.dirs[..self.n] {
-            for d in [d0, -d0] {
-                let (num, den) = (self.support(d) - a.dot(d), dir.dot(d));
-                // a + t dir inside the half-space: den t <= num
-                if den.abs() <= 1e-300 {
-                    if num < 0.0 {
-                        return None;
-                    }
-                } else if den > 0.0 {
-                    t1 = t1.min(num / den);
-                } else {
-                    t0 = t0.max(num / den);
-                }
-                if t0 > t1 {
-                    return None;
-                }
-            }
-        }
-        Some((t0, t1))
+        // every direction and its opposite, as half-spaces `x · d <= support(d)`
+        let planes = self.dirs[..self.n].iter().flat_map(|&d0| [d0, -d0]).map(|d| (d, self.support(d)));
+        clip_planes(planes, a, b)
     }
 }

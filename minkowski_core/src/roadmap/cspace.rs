@@ -273,10 +273,9 @@ impl CSpace {
             Obstacles::Union(set) => set.containing(p).into_iter().map(|i| (i, -set.polys[i].plane_distance(p))).collect(),
             Obstacles::Exact(e) => {
                 let mut out: Vec<(usize, f64)> = e.containing(p).into_iter().map(|k| (k, (-e.signed_distance(p)).max(0.0))).collect();
-                if let Some(w) = e.walls {
+                if e.walls.is_some() {
                     for side in 0..6 {
-                        let axis = side / 2;
-                        let d = if side % 2 == 0 { w.min[axis] - p[axis] } else { p[axis] - w.max[axis] };
+                        let d = -e.wall_gap(side, p);
                         if d >= 0.0 {
                             out.push((self.n_obstacle + side, d));
                         }
