@@ -8,7 +8,7 @@
 //! The compatibility tests are conservative (a tolerance admits borderline pairs), so the
 //! facet set can only grow: extra facets cost time, never correctness.
 
-use super::mesh::{unit, TriMesh};
+use super::mesh::TriMesh;
 use crate::math::{Aabb, Vec3};
 use crate::polytope::clip_planes;
 use rayon::prelude::*;
@@ -34,6 +34,10 @@ pub struct Facet {
 struct Dirs {
     d: [Vec3; 20],
     n: usize,
+    /// Rounding slack added to every support value: a flat facet's slabs have zero width,
+    /// and nearly parallel directions (the normal and an edge × axis) would otherwise cut
+    /// a crossing segment down to nothing.
+    slack: f64,
 }
 
 impl Facet {
@@ -51,26 +55,36 @@ impl Facet {
         s + m * (d.x.abs() + d.y.abs() + d.z.abs())
     }
 
+    /// The test directions (unit; ones negligible against the edge lengths are left out,
+    /// as rounding noise).
     fn dirs(&self) -> Dirs {
         let k = self.n as usize;
-        let mut out = Dirs { d: [Vec3::ZERO; 20], n: 0 };
-        let mut push = |d: Vec3| {
-            if d != Vec3::ZERO {
-                out.d[out.n] = d;
+        let big = self.p[..k].iter().fold(0.0f64, |acc, q| acc.max(q.abs().max_element()));
+        let mut out = Dirs { d: [Vec3::ZERO; 20], n: 0, slack: 1e-12 * big.max(1e-300) };
+        let mut push = |d: Vec3, scale2: f64| {
+            if d.length_squared() > 1e-24 * scale2 && d.length_squared() > 0.0 {
+                out.d[out.n] = d.normalize();
                 out.n += 1;
             }
         };
-        let e: Vec<Vec3> = (0..k).map(|i| self.p[(i + 1) % k] - self.p[i]).collect();
-        let normal = unit(e[0].cross(e[1]), e[0].length() * e[1].length());
-        push(normal);
+        let mut e = [Vec3::ZERO; 4];
+        for i in 0..k {
+            e[i] = self.p[(i + 1) % k] - self.p[i];
+        }
+        let l2 = [e[0].length_squared(), e[1].length_squared(), e[2].length_squared()];
+        let normal = e[0].cross(e[1]);
+        let nl2 = l2[0] * l2[1];
+        push(normal, nl2);
         let distinct = if k == 4 { 2 } else { 3 }; // a parallelogram has two edge directions
-        for ei in &e[..distinct] {
-            push(unit(normal.cross(*ei), ei.length()));
+        if normal.length_squared() > 1e-24 * nl2 {
+            for i in 0..distinct {
+                push(normal.cross(e[i]), normal.length_squared() * l2[i]);
+            }
         }
         for a in [Vec3::X, Vec3::Y, Vec3::Z] {
-            push(a);
-            for ei in &e[..distinct] {
-                push(unit(ei.cross(a), 1e3 * ei.length()));
+            push(a, 1.0);
+            for i in 0..distinct {
+                push(e[i].cross(a), 1e6 * l2[i]);
             }
         }
         out
@@ -80,6 +94,7 @@ impl Facet {
     pub fn overlaps_box(&self, b: &Aabb, m: f64) -> bool {
         let (c, h) = (b.center(), b.half());
         let dirs = self.dirs();
+        let m = m + dirs.slack;
         dirs.d[..dirs.n].iter().all(|&d| {
             let (x, r) = (c.dot(d), h.dot(d.abs()));
             self.support(d, m) >= x - r && -self.support(-d, m) <= x + r
@@ -101,6 +116,7 @@ impl Facet {
     /// Whether `p` lies in the facet grown by `m`.
     pub fn contains_point(&self, p: Vec3, m: f64) -> bool {
         let dirs = self.dirs();
+        let m = m + dirs.slack;
         dirs.d[..dirs.n].iter().all(|&d| {
             let x = p.dot(d);
             x <= self.support(d, m) && -x <= self.support(-d, m)
@@ -110,6 +126,7 @@ impl Facet {
     /// The parameter interval of `a → b` in the facet grown by `m`.
     pub fn clip(&self, a: Vec3, b: Vec3, m: f64) -> Option<(f64, f64)> {
         let dirs = self.dirs();
+        let m = m + dirs.slack;
         // every direction and its opposite, as half-spaces `x · d <= support(d)`
         let planes = dirs.d[..dirs.n].iter().flat_map(|&d0| [d0, -d0]).map(|d| (d, self.support(d, m)));
         clip_planes(planes, a, b)

@@ -288,3 +288,111 @@ fn overlapping_shells_are_their_union_and_cavities_are_holes() {
     let src = ExactSource::new(vec![TriMesh::new(v, &f, "two boxes").unwrap()], box_mesh([-0.1; 3], [0.1; 3]), 0.0, None);
     assert!(src.contains_point(Vec3::new(1.5, 0.5, 0.5)));
 }
+
+/// A closed, outward torus around the z axis (`n` major by `m` minor segments); its quads
+/// are planar, so their diagonals are flat edges.
+fn torus_mesh(big: f64, small: f64, n: usize, m: usize) -> TriMesh {
+    let mut v = Vec::new();
+    for i in 0..n {
+        let phi = std::f64::consts::TAU * i as f64 / n as f64;
+        for j in 0..m {
+            let th = std::f64::consts::TAU * j as f64 / m as f64;
+            let r = big + small * th.cos();
+            v.push(Vec3::new(r * phi.cos(), r * phi.sin(), small * th.sin()));
+        }
+    }
+    let id = |i: usize, j: usize| ((i % n) * m + j % m) as u32;
+    let mut f = Vec::new();
+    for i in 0..n {
+        for j in 0..m {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            f.push([a, b, c]);
+            f.push([a, c, d]);
+        }
+    }
+    TriMesh::new(v, &f, "torus").unwrap()
+}
+
+/// A closed, outward UV sphere of radius `r` (`n` segments around, `m` rings).
+fn sphere_mesh(r: f64, n: usize, m: usize) -> TriMesh {
+    let mut v = vec![Vec3::new(0.0, 0.0, -r), Vec3::new(0.0, 0.0, r)];
+    for j in 1..m {
+        let th = -std::f64::consts::FRAC_PI_2 + std::f64::consts::PI * j as f64 / m as f64;
+        for i in 0..n {
+            let phi = std::f64::consts::TAU * i as f64 / n as f64;
+            v.push(Vec3::new(r * th.cos() * phi.cos(), r * th.cos() * phi.sin(), r * th.sin()));
+        }
+    }
+    let id = |i: usize, j: usize| (2 + (j - 1) * n + i % n) as u32;
+    let mut f = Vec::new();
+    for i in 0..n {
+        f.push([0, id(i + 1, 1), id(i, 1)]);
+        f.push([1, id(i, m - 1), id(i + 1, m - 1)]);
+        for j in 1..m - 1 {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            f.push([a, b, c]);
+            f.push([a, c, d]);
+        }
+    }
+    TriMesh::new(v, &f, "sphere").unwrap()
+}
+
+#[test]
+fn flat_facet_clip_survives_rounding() {
+    // a face-vertex facet of a torus ⊕ ball, crossed by a segment: its normal slab has zero
+    // width and an edge × axis direction is parallel to the normal up to rounding, so
+    // without slack the two slabs' crossings disagree and the clip came out empty (a leak)
+    let f = Facet {
+        p: [
+            Vec3::new(-10.23657900045361, 0.14621386330480907, -3.855950864665638),
+            Vec3::new(-10.0, 1.2246467991473533e-15, -3.9),
+            Vec3::new(-10.23657900045361, -0.14621386330480662, -3.855950864665638),
+            Vec3::ZERO,
+        ],
+        n: 3,
+        k: 0,
+    };
+    let a = Vec3::new(-10.286550793244162, -0.10653932625778495, -3.988373144875571);
+    let b = Vec3::new(-10.055186896267198, 0.12482457071917707, -3.757009247898608);
+    let t = f.clip(a, b, 0.0).expect("the segment crosses the facet");
+    assert!((t.0 - 0.5164).abs() < 1e-3 && t.1 - t.0 < 1e-9, "{t:?}");
+}
+
+#[test]
+fn segments_no_candidate_meets_keep_their_sign() {
+    // the surface and the octree carry a point's membership along segments that no
+    // boundary candidate (facet) meets; check that on a torus ⊕ sphere, where many facets
+    // are flat and meet at seams, and on the U block ⊕ box (axis-aligned, coplanar facets)
+    let cases = [
+        ExactSource::new(vec![torus_mesh(10.0, 3.0, 24, 12)], sphere_mesh(0.9, 12, 7), 0.0, None),
+        ExactSource::new(vec![u_block().0], box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]), 0.0, None),
+    ];
+    for src in &cases {
+        let all = src.root_records();
+        let mut rng = Lcg(5);
+        let region = src.aabb.inflated(0.2);
+        let (mut carried, mut crossings) = (0usize, 0usize);
+        let mut iv = Vec::new();
+        for _ in 0..4000 {
+            let a = rng.point(&region);
+            let len = 0.02 + 0.3 * rng.next() * region.extent().max_element();
+            let d = Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5).normalize();
+            let b = a + d * len;
+            src.boundary_intervals(&all, a, b, &mut iv);
+            let (sa, sb) = (src.exact_point(a), src.exact_point(b));
+            // what a cell around the segment would keep: the facets whose boxes meet it
+            let seg = Aabb::new(a.min(b), a.max(b));
+            let near: Vec<u32> = all.iter().copied().filter(|&r| src.facets[r as usize].aabb(0.0).overlaps(&seg)).collect();
+            if near.len() <= CARRY_MAX {
+                assert_eq!(src.carry(&near, a, sa, b), iv.is_empty().then_some(sa));
+            }
+            if iv.is_empty() {
+                carried += 1;
+                assert_eq!(sa, sb, "no facet meets {a:?} -> {b:?}, yet the ends differ");
+            } else if sa != sb {
+                crossings += 1;
+            }
+        }
+        assert!(carried > 500 && crossings > 100, "carried {carried}, crossings {crossings}");
+    }
+}

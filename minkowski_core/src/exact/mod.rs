@@ -31,7 +31,7 @@ mod exact_tests;
 
 pub use convolution::{convolution, Facet};
 pub use mesh::{MeshNode, Tri, TriMesh};
-pub use piece::Piece;
+pub use piece::{pair_contains_point, Piece};
 
 use crate::bvh::Bvh;
 use crate::math::{Aabb, Vec3};
@@ -40,6 +40,9 @@ use crate::octree::{merge_sorted, CellSource, Label};
 /// Records at or above this are walls (`WALL + side`, side = 2 · axis + upper); below,
 /// facet indices.
 const WALL: u32 = u32::MAX - 7;
+
+/// Longest record list [`ExactSource::carry`] scans; beyond it a point query is cheaper.
+const CARRY_MAX: usize = 256;
 
 /// The union of `A_k ⊕ B` over the obstacles `A_k`, grown by `margin`, plus optional walls.
 #[derive(Clone, Debug)]
@@ -106,8 +109,13 @@ impl ExactSource {
 
     /// Whether `p` lies in the exact (ungrown) solid, walls excluded.
     fn exact_point(&self, p: Vec3) -> bool {
-        (0..self.obstacles.len()).any(|k| self.any_piece(k, 0.0, false, |bx| bx.contains_point(p), |piece, _, _| piece.contains_point(p)))
-            || self.nested(p).is_some()
+        (0..self.obstacles.len()).any(|k| self.touches(k, 0.0, p)) || self.nested(p).is_some()
+    }
+
+    /// Whether some triangle pair of obstacle `k` (grown by `m`) contains `p`.
+    fn touches(&self, k: usize, m: f64, p: Vec3) -> bool {
+        let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+        self.any_pair(k, m, |bx| bx.contains_point(p), |i, j| pair_contains_point(&ta[i], &tb[j], m, p))
     }
 
     /// Whether a single triangle-pair piece (grown by the margin) contains `cell`.
@@ -137,18 +145,6 @@ impl ExactSource {
     fn sum_box(&self, k: usize, a: u32, b: u32, m: f64) -> Aabb {
         let (na, nb) = (&self.obstacles[k].nodes[a as usize], &self.b.nodes[b as usize]);
         Aabb::new(na.aabb.min + nb.aabb.min, na.aabb.max + nb.aabb.max).inflated(m)
-    }
-
-    /// The piece of a leaf pair grown by `m` (`None` unless both nodes are leaves).
-    #[inline]
-    fn leaf_piece(&self, k: usize, a: u32, b: u32, m: f64, with_axes: bool) -> Option<(Piece<'_>, usize, usize)> {
-        let (na, nb) = (&self.obstacles[k].nodes[a as usize], &self.b.nodes[b as usize]);
-        if na.is_leaf() && nb.is_leaf() {
-            let (i, j) = (na.tri as usize, nb.tri as usize);
-            Some((Piece::new(&self.obstacles[k].tris[i], &self.b.tris[j], m, with_axes), i, j))
-        } else {
-            None
-        }
     }
 
     /// Children of a node pair: split the larger inner node.
@@ -205,21 +201,48 @@ impl ExactSource {
     /// Visit the leaf pieces of obstacle `k` whose summed boxes pass `test`, until `f`
     /// returns true; whether it did.
     fn any_piece(&self, k: usize, m: f64, with_axes: bool, test: impl Fn(&Aabb) -> bool, mut f: impl FnMut(&Piece<'_>, usize, usize) -> bool) -> bool {
-        let mut stack = vec![[k as u32, 0u32, 0u32]];
-        while let Some([_, a, b]) = stack.pop() {
+        let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+        self.any_pair(k, m, test, |i, j| f(&Piece::new(&ta[i], &tb[j], m, with_axes), i, j))
+    }
+
+    /// Visit the triangle pairs `(i, j)` of obstacle `k` whose summed boxes (grown by `m`)
+    /// pass `test`, by a traversal of pairs of BVH nodes, until `f` returns true; whether it
+    /// did.
+    fn any_pair(&self, k: usize, m: f64, test: impl Fn(&Aabb) -> bool, mut f: impl FnMut(usize, usize) -> bool) -> bool {
+        // median-split BVHs are at most ~log2(n) deep, so the pair stack stays short; a
+        // deeper one spills to the heap
+        let mut fixed = [[0u32; 2]; 64];
+        let mut len = 1usize;
+        let mut spill: Vec<[u32; 2]> = Vec::new();
+        let (ma, mb) = (&self.obstacles[k].nodes, &self.b.nodes);
+        loop {
+            let [a, b] = if let Some(x) = spill.pop() {
+                x
+            } else if len > 0 {
+                len -= 1;
+                fixed[len]
+            } else {
+                return false;
+            };
             if !test(&self.sum_box(k, a, b, m)) {
                 continue;
             }
-            match self.leaf_piece(k, a, b, m, with_axes) {
-                Some((piece, i, j)) => {
-                    if f(&piece, i, j) {
-                        return true;
-                    }
+            let (na, nb) = (&ma[a as usize], &mb[b as usize]);
+            if na.is_leaf() && nb.is_leaf() {
+                if f(na.tri as usize, nb.tri as usize) {
+                    return true;
                 }
-                None => stack.extend(self.split(k, a, b)),
+                continue;
+            }
+            for [_, ca, cb] in self.split(k, a, b) {
+                if len < fixed.len() {
+                    fixed[len] = [ca, cb];
+                    len += 1;
+                } else {
+                    spill.push([ca, cb]);
+                }
             }
         }
-        false
     }
 
     /// Why `p` is in the (grown) solid, or `None` when it is not.
@@ -231,8 +254,9 @@ impl ExactSource {
         }
         for k in 0..self.obstacles.len() {
             let mut hit = None;
-            self.any_piece(k, self.margin, false, |bx| bx.contains_point(p), |piece, i, j| {
-                let inside = piece.contains_point(p);
+            let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+            self.any_pair(k, self.margin, |bx| bx.contains_point(p), |i, j| {
+                let inside = pair_contains_point(&ta[i], &tb[j], self.margin, p);
                 if inside {
                     hit = Some(Witness::Piece { k, i, j });
                 }
@@ -266,7 +290,7 @@ impl ExactSource {
     /// The obstacles whose (grown) sum contains `p`.
     pub fn containing(&self, p: Vec3) -> Vec<usize> {
         let mut out: Vec<usize> = (0..self.obstacles.len())
-            .filter(|&k| self.any_piece(k, self.margin, false, |bx| bx.contains_point(p), |piece, _, _| piece.contains_point(p)) || self.nested_k(k, p))
+            .filter(|&k| self.touches(k, self.margin, p) || self.nested_k(k, p))
             .collect();
         if self.margin > 0.0 {
             self.fbvh.for_each_at_point(p, |i| {
@@ -335,6 +359,30 @@ impl ExactSource {
         self.point_witness(cell.center())
     }
 
+    /// The membership of `p`, carried from `q` (membership `sq`) when no boundary candidate
+    /// of `cand` (the records of a cell holding both) meets the segment between them;
+    /// `None` when one does, or when `cand` is too long to be worth scanning.
+    fn carry(&self, cand: &[u32], q: Vec3, sq: bool, p: Vec3) -> Option<bool> {
+        if cand.len() > CARRY_MAX {
+            return None;
+        }
+        let seg = Aabb::new(q.min(p), q.max(p));
+        for &r in cand {
+            if r >= WALL {
+                let side = (r - WALL) as usize;
+                if self.wall_gap(side, q) <= 0.0 || self.wall_gap(side, p) <= 0.0 {
+                    return None;
+                }
+            } else {
+                let f = &self.facets[r as usize];
+                if f.aabb(self.margin).overlaps(&seg) && f.clip(q, p, self.margin).is_some() {
+                    return None;
+                }
+            }
+        }
+        Some(sq)
+    }
+
     /// Whether the closed segment `a → b` stays out of the solid grown by a further cube of
     /// half-width `extra` (walls pulled in by `extra`).
     pub fn segment_is_free(&self, a: Vec3, b: Vec3, extra: f64) -> bool {
@@ -362,7 +410,16 @@ impl CellSource for ExactSource {
         r
     }
 
-    fn classify(&self, cell: &Aabb, cand: &[u32], _finest: bool, out: &mut Vec<u32>) -> Label {
+    fn classify(&self, cell: &Aabb, cand: &[u32], finest: bool, out: &mut Vec<u32>) -> Label {
+        self.classify_near(cell, cand, finest, None, out)
+    }
+
+    fn center_sign(&self, cell: &Aabb, cand: &[u32], own: &[u32], known: Option<(Vec3, bool)>) -> Option<bool> {
+        let c = cell.center();
+        Some(known.and_then(|(q, s)| self.carry(cand, q, s, c)).unwrap_or_else(|| self.cell_contains(own, c)))
+    }
+
+    fn classify_near(&self, cell: &Aabb, cand: &[u32], _finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
         for &r in cand {
             if r >= WALL {
                 let (inside, meets) = self.wall_box((r - WALL) as usize, cell);
@@ -381,8 +438,11 @@ impl CellSource for ExactSource {
             }
         }
         if out.is_empty() {
-            // no boundary in the cell: its centre decides (not in any grown facet)
-            return if self.exact_point(cell.center()) { Label::Full } else { Label::Empty };
+            // no boundary in the cell: its centre decides (not in any grown facet), carried
+            // from the parent's known point when no boundary lies between them
+            let c = cell.center();
+            let inside = known.and_then(|(q, s)| self.carry(cand, q, s, c)).unwrap_or_else(|| self.exact_point(c));
+            return if inside { Label::Full } else { Label::Empty };
         }
         if self.full_witness && cell.extent().max_element() <= self.max_piece && self.piece_contains_box(cell).is_some() {
             out.clear();
@@ -404,7 +464,7 @@ impl CellSource for ExactSource {
         self.exact_point(p)
     }
 
-    fn solid_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, sa: bool, sb: bool, out: &mut Vec<(f64, f64)>) {
+    fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>) {
         out.clear();
         for &r in cand {
             if r >= WALL {
@@ -423,7 +483,13 @@ impl CellSource for ExactSource {
             }
         }
         merge_sorted(out);
-        // between the facets the segment meets no boundary: each gap is all in or all out
+    }
+
+    fn solid_intervals(&self, a: Vec3, b: Vec3, sa: bool, sb: bool, bnd: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
+        // the facets and slabs are solid; between them the segment meets no boundary, so
+        // each gap is all in or all out: the ends decide the outer ones, a point the others
+        out.clear();
+        out.extend_from_slice(bnd);
         let tiny = 1e-12;
         if out.is_empty() {
             if sa {

@@ -21,6 +21,50 @@ pub struct Piece<'a> {
     n: usize,
 }
 
+/// Whether `p` lies in the closed `t ⊕ s` grown by the cube of half-width `m`: the same
+/// directions as [`Piece`], computed one at a time and unnormalised (every test is
+/// homogeneous in the direction), so a far point costs a few dot products and no piece is
+/// built.
+#[inline]
+pub fn pair_contains_point(t: &Tri, s: &Tri, m: f64, p: Vec3) -> bool {
+    let outside = |d: Vec3| {
+        let g = m * (d.x.abs() + d.y.abs() + d.z.abs());
+        let x = p.dot(d);
+        x > t.support(d) + s.support(d) + g || -x > t.support(-d) + s.support(-d) + g
+    };
+    if outside(t.n) || outside(s.n) {
+        return false;
+    }
+    for k in 0..3 {
+        if outside(t.m[k]) || outside(s.m[k]) {
+            return false;
+        }
+    }
+    for et in &t.e {
+        for es in &s.e {
+            let d = et.cross(*es);
+            // the same cut-off as `unit(…, 1e3 |et| |es|)`
+            if d.length_squared() > 1e-18 * et.length_squared() * es.length_squared() && outside(d) {
+                return false;
+            }
+        }
+    }
+    if m > 0.0 {
+        for a in [Vec3::X, Vec3::Y, Vec3::Z] {
+            if outside(a) {
+                return false;
+            }
+            for e in t.e.iter().chain(&s.e) {
+                let d = e.cross(a);
+                if d.length_squared() > 1e-18 * e.length_squared() && outside(d) {
+                    return false;
+                }
+            }
+        }
+    }
+    true
+}
+
 impl<'a> Piece<'a> {
     /// The piece of `t` and `s`. `with_axes`: also the directions a box or the margin
     /// cube needs (box tests, or any test with a margin).

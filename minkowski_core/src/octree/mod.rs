@@ -41,12 +41,30 @@ pub trait CellSource: Sync {
     /// caller) and label the cell. `finest`: the cell will not be split, so its records
     /// must be resolved to what the surface and point queries use.
     fn classify(&self, cell: &Aabb, cand: &[u32], finest: bool, out: &mut Vec<u32>) -> Label;
+    /// [`CellSource::classify`] with a point `known = (q, inside)` of the parent cell
+    /// (whose records are `cand`) of known membership, which a source with costly point
+    /// queries may carry to this cell. Default: ignore it.
+    fn classify_near(&self, cell: &Aabb, cand: &[u32], finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
+        let _ = known;
+        self.classify(cell, cand, finest, out)
+    }
+    /// For a MIXED cell that will be split: the membership of its centre, for its children's
+    /// [`CellSource::classify_near`] (`cand`: the parent's records, `own`: the cell's,
+    /// `known`: the parent's known point). Default: `None` (not worth computing).
+    fn center_sign(&self, cell: &Aabb, cand: &[u32], own: &[u32], known: Option<(Vec3, bool)>) -> Option<bool> {
+        let _ = (cell, cand, own, known);
+        None
+    }
     /// Whether `p`, a point of a cell with records `cand`, lies in the (closed) solid.
     fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool;
-    /// The parts of the segment `a → b` (inside a finest cell with records `cand`) that lie
-    /// in the solid, as sorted, merged parameter intervals of `[0, 1]`; `sa`, `sb` are the
-    /// known memberships of the ends.
-    fn solid_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, sa: bool, sb: bool, out: &mut Vec<(f64, f64)>);
+    /// Where on the segment `a → b` (inside a finest cell with records `cand`) the boundary
+    /// may lie: sorted, merged parameter intervals of `[0, 1]`. Each stretch between them
+    /// lies wholly inside or wholly outside the solid, so with none the ends agree.
+    fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>);
+    /// The parts of the segment `a → b` that lie in the solid, as sorted, merged parameter
+    /// intervals of `[0, 1]`, given its [`CellSource::boundary_intervals`] `bnd` and the
+    /// known memberships `sa`, `sb` of its ends.
+    fn solid_intervals(&self, a: Vec3, b: Vec3, sa: bool, sb: bool, bnd: &[(f64, f64)], out: &mut Vec<(f64, f64)>);
 }
 
 impl CellSource for crate::minkowski::PolytopeSet {
@@ -68,7 +86,8 @@ impl CellSource for crate::minkowski::PolytopeSet {
         cell_contains(&self.polys, CandIter { data: cand }, p)
     }
 
-    fn solid_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, _sa: bool, _sb: bool, out: &mut Vec<(f64, f64)>) {
+    fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>) {
+        // the union's boundary lies in its pieces, which are solid: the clips are both
         out.clear();
         for (prim, planes) in (CandIter { data: cand }) {
             let poly = &self.polys[prim];
@@ -78,6 +97,11 @@ impl CellSource for crate::minkowski::PolytopeSet {
             }
         }
         merge_sorted(out);
+    }
+
+    fn solid_intervals(&self, _a: Vec3, _b: Vec3, _sa: bool, _sb: bool, bnd: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
+        out.clear();
+        out.extend_from_slice(bnd);
     }
 }
 
@@ -184,7 +208,7 @@ impl Octree {
             abort: AtomicBool::new(false),
         };
         let root = source.root_records();
-        let (leaves, cands) = ctx.node([0, 0, 0], depth as u8, &root);
+        let (leaves, cands) = ctx.node([0, 0, 0], depth as u8, &root, None);
         if ctx.abort.load(Ordering::Relaxed) {
             return Err(CoreError::ResourceLimit {
                 budget: max_cells,
@@ -337,9 +361,9 @@ impl Ctx<'_> {
     }
 
     /// Filter `cand` against `cell` into `out`; the cell's label.
-    fn classify(&self, cell: &Aabb, cand: &[u32], finest: bool, out: &mut Vec<u32>) -> Label {
+    fn classify(&self, cell: &Aabb, cand: &[u32], finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
         out.clear();
-        self.src.classify(cell, cand, finest, out)
+        self.src.classify_near(cell, cand, finest, known, out)
     }
 
     fn leaf(&self, ijk: [u32; 3], level: u8, label: Label, cand_len: usize) -> Leaf {
@@ -349,22 +373,24 @@ impl Ctx<'_> {
         Leaf { ijk, level, label, cand_start: 0, cand_len: cand_len as u32 }
     }
 
-    fn node(&self, ijk: [u32; 3], level: u8, cand: &[u32]) -> Out {
+    fn node(&self, ijk: [u32; 3], level: u8, cand: &[u32], known: Option<(Vec3, bool)>) -> Out {
         let mut out = (Vec::new(), Vec::new());
         if level >= 4 {
             let mut own = Vec::with_capacity(cand.len());
-            let label = self.classify(&self.cell(ijk, level), cand, level == 0, &mut own);
+            let cell = self.cell(ijk, level);
+            let label = self.classify(&cell, cand, level == 0, known, &mut own);
             if label != Label::Mixed || level == 0 {
                 self.push_leaf(&mut out, ijk, level, label, &own);
                 return out;
             }
+            let mine = self.src.center_sign(&cell, cand, &own, known).map(|s| (cell.center(), s));
             let parts: Vec<Out> = (0..8u32)
                 .into_par_iter()
                 .map(|c| {
                     if self.abort.load(Ordering::Relaxed) {
                         return (Vec::new(), Vec::new());
                     }
-                    self.node(child(ijk, level, c), level - 1, &own)
+                    self.node(child(ijk, level, c), level - 1, &own, mine)
                 })
                 .collect();
             for (leaves, cands) in parts {
@@ -376,23 +402,25 @@ impl Ctx<'_> {
                 out.1.extend(cands);
             }
         } else {
-            self.node_seq(ijk, level, cand, &mut out);
+            self.node_seq(ijk, level, cand, known, &mut out);
         }
         out
     }
 
-    fn node_seq(&self, ijk: [u32; 3], level: u8, cand: &[u32], out: &mut Out) {
+    fn node_seq(&self, ijk: [u32; 3], level: u8, cand: &[u32], known: Option<(Vec3, bool)>, out: &mut Out) {
         if self.abort.load(Ordering::Relaxed) {
             return;
         }
         let mut own = Vec::with_capacity(cand.len());
-        let label = self.classify(&self.cell(ijk, level), cand, level == 0, &mut own);
+        let cell = self.cell(ijk, level);
+        let label = self.classify(&cell, cand, level == 0, known, &mut own);
         if label != Label::Mixed || level == 0 {
             self.push_leaf(out, ijk, level, label, &own);
             return;
         }
+        let mine = self.src.center_sign(&cell, cand, &own, known).map(|s| (cell.center(), s));
         for c in 0..8u32 {
-            self.node_seq(child(ijk, level, c), level - 1, &own, out);
+            self.node_seq(child(ijk, level, c), level - 1, &own, mine, out);
         }
     }
 

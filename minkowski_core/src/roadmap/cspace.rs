@@ -72,16 +72,34 @@ impl CellSource for Obstacles {
             Obstacles::Exact(e) => e.classify(cell, cand, finest, out),
         }
     }
+    fn classify_near(&self, cell: &Aabb, cand: &[u32], finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
+        match self {
+            Obstacles::Union(s) => s.classify(cell, cand, finest, out),
+            Obstacles::Exact(e) => e.classify_near(cell, cand, finest, known, out),
+        }
+    }
+    fn center_sign(&self, cell: &Aabb, cand: &[u32], own: &[u32], known: Option<(Vec3, bool)>) -> Option<bool> {
+        match self {
+            Obstacles::Union(_) => None,
+            Obstacles::Exact(e) => e.center_sign(cell, cand, own, known),
+        }
+    }
     fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {
         match self {
             Obstacles::Union(s) => s.cell_contains(cand, p),
             Obstacles::Exact(e) => e.cell_contains(cand, p),
         }
     }
-    fn solid_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, sa: bool, sb: bool, out: &mut Vec<(f64, f64)>) {
+    fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>) {
         match self {
-            Obstacles::Union(s) => s.solid_intervals(cand, a, b, sa, sb, out),
-            Obstacles::Exact(e) => e.solid_intervals(cand, a, b, sa, sb, out),
+            Obstacles::Union(s) => s.boundary_intervals(cand, a, b, out),
+            Obstacles::Exact(e) => e.boundary_intervals(cand, a, b, out),
+        }
+    }
+    fn solid_intervals(&self, a: Vec3, b: Vec3, sa: bool, sb: bool, bnd: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
+        match self {
+            Obstacles::Union(s) => s.solid_intervals(a, b, sa, sb, bnd, out),
+            Obstacles::Exact(e) => e.solid_intervals(a, b, sa, sb, bnd, out),
         }
     }
 }

@@ -2,7 +2,8 @@
 //!
 //! Marching tetrahedra over the finest MIXED cells, each split into the six Kuhn tetrahedra
 //! around its main diagonal (consistent across neighbouring cells, so no cracks). Signs at
-//! lattice points are exact point-in-union tests with the cell's culled planes; the vertex
+//! lattice points are exact point-in-union tests with the cell's culled planes, one per set
+//! of points joined by edges the boundary cannot cross (the rest take its sign); the vertex
 //! on a sign-changing edge is the exact crossing, found by clipping the edge against the
 //! cell's primitives (not interpolated). The same clipping finds *complex edges* — ones the
 //! boundary crosses more than once, or crosses twice with no sign change (thin slots,
@@ -46,6 +47,9 @@ pub struct Surface {
     pub band_cells: usize,
     /// Distinct lattice points evaluated.
     pub lattice_points: usize,
+    /// Point queries made: one per set of lattice points joined by edges the boundary
+    /// cannot cross (the others take that point's sign).
+    pub point_queries: usize,
     /// Distinct tetrahedron edges clipped.
     pub edges: usize,
     /// Edges the boundary crosses more than once or without a sign change.
@@ -191,10 +195,6 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
         let (i, j, k) = unkey(q);
         oct.lattice_point(i, j, k)
     };
-    let inside: Vec<bool> = pts
-        .par_iter()
-        .map(|&(q, li)| src.cell_contains(oct.records(&oct.leaves[li as usize]), point_of(q)))
-        .collect();
     s.lattice_points = pts.len();
 
     // 2. edges: every Kuhn edge runs from a lower corner `lo` to `lo | m` for an axis mask
@@ -241,17 +241,60 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
         .collect();
     s.edges = edges.len();
 
+    // where the boundary may cross each edge; an edge it cannot cross joins its ends' signs
+    let bnd: Vec<Vec<(f64, f64)>> = edges
+        .par_iter()
+        .map_init(Vec::new, |iv: &mut Vec<(f64, f64)>, &(ka, kb, li, _, _)| {
+            src.boundary_intervals(oct.records(&oct.leaves[li as usize]), point_of(ka), point_of(kb), iv);
+            iv.clone()
+        })
+        .collect();
+
+    // signs: one point query per set of lattice points joined by such edges
+    let mut parent: Vec<u32> = (0..pts.len() as u32).collect();
+    fn find(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            parent[x as usize] = parent[parent[x as usize] as usize];
+            x = parent[x as usize];
+        }
+        x
+    }
+    for (e, iv) in edges.iter().zip(&bnd) {
+        if iv.is_empty() {
+            let (ra, rb) = (find(&mut parent, (e.3 / 7) as u32), find(&mut parent, e.4));
+            if ra != rb {
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+    }
+    let roots: Vec<u32> = (0..pts.len() as u32).map(|i| find(&mut parent, i)).collect();
+    let queried: Vec<(u32, bool)> = roots
+        .par_iter()
+        .enumerate()
+        .filter(|(i, &r)| *i as u32 == r)
+        .map(|(i, _)| {
+            let (q, li) = pts[i];
+            (i as u32, src.cell_contains(oct.records(&oct.leaves[li as usize]), point_of(q)))
+        })
+        .collect();
+    s.point_queries = queried.len();
+    let mut root_sign = vec![false; pts.len()];
+    for (i, v) in queried {
+        root_sign[i as usize] = v;
+    }
+    let inside: Vec<bool> = roots.iter().map(|&r| root_sign[r as usize]).collect();
+    drop(root_sign);
     // per edge: the crossing (parameter from the lower key's end) when the signs differ, and
     // what else the clipped intervals show: a gap (free space strictly between two solid
     // intervals: a passage the samples may miss) or a sliver (solid strictly between the
     // ends: a thin feature or a clipped convex edge)
     let results: Vec<EdgeInfo> = edges
         .par_iter()
-        .map_init(Vec::new, |merged: &mut Vec<(f64, f64)>, &(ka, kb, li, slot, ib)| {
+        .zip(&bnd)
+        .map_init(Vec::new, |merged: &mut Vec<(f64, f64)>, (&(ka, kb, _, slot, ib), iv)| {
             let (pa, pb) = (point_of(ka), point_of(kb));
             let (sa, sb) = (inside[slot / 7], inside[ib as usize]);
-            let leaf = &oct.leaves[li as usize];
-            src.solid_intervals(oct.records(leaf), pa, pb, sa, sb, merged);
+            src.solid_intervals(pa, pb, sa, sb, iv, merged);
             let tiny = 1e-12;
             let gap = merged.len() >= 2;
             let sliver = merged.iter().any(|&(a, b)| a > tiny && b < 1.0 - tiny);
@@ -269,6 +312,7 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
             EdgeInfo { t: Some(t), gap, sliver, inconsistent }
         })
         .collect();
+    drop(bnd);
 
     // vertex ids for sign-changing edges, and edge info by slot
     let mut vid = vec![u32::MAX; owner.len()];
