@@ -7,6 +7,16 @@
 //!
 //! The compatibility tests are conservative (a tolerance admits borderline pairs), so the
 //! facet set can only grow: extra facets cost time, never correctness.
+//!
+//! Features inside a planar region are left out: a flat edge (its two triangles coplanar,
+//! up to the rounding of their normals) and a vertex whose triangles all face the contact
+//! direction. A contact there is a contact of the planar region `P` (of one mesh) with a
+//! feature or planar region `Q` of the other; the contact set `P ∩ (p − Q)` is a polygon
+//! or segment whose corners are corners of `P`, corners of `Q` or crossings of their
+//! border edges, so `p` also lies on a facet of border features. (Border features in a
+//! boundary contact are never reflex, so their facets are in the set.) On CAD parts,
+//! whose flat faces are triangulated into many coplanar triangles, this removes most
+//! facets (two 60-triangle plates: from 4950 to a few hundred).
 
 use super::mesh::TriMesh;
 use crate::math::{Aabb, Vec3};
@@ -16,6 +26,11 @@ use std::collections::HashMap;
 
 /// Angular tolerance of the compatibility tests.
 const TOL: f64 = 1e-9;
+
+/// Normals this close (`|n1 × n2|`, same side) make a flat edge or a flat vertex: inside a
+/// planar region, up to the rounding of the normals themselves. Facets of such features
+/// are covered by the region's border facets, so they are left out (see [`convolution`]).
+const FLAT: f64 = 1e-13;
 
 /// A flat convex polygon (3 or 4 corners) of the convolution, grown by a cube of half-width
 /// `margin` in the tests.
@@ -90,15 +105,75 @@ impl Facet {
         out
     }
 
-    /// Whether the facet grown by `m` meets the closed box `b`.
+    /// Whether the facet grown by `m` meets the closed box `b`: separating axes of the
+    /// flat polygon and the box grown by `m` (and a rounding slack) — the box's axes, the
+    /// polygon's normal and its edges × the axes, unnormalised (the tests are homogeneous).
     pub fn overlaps_box(&self, b: &Aabb, m: f64) -> bool {
-        let (c, h) = (b.center(), b.half());
-        let dirs = self.dirs();
-        let m = m + dirs.slack;
-        dirs.d[..dirs.n].iter().all(|&d| {
-            let (x, r) = (c.dot(d), h.dot(d.abs()));
-            self.support(d, m) >= x - r && -self.support(-d, m) <= x + r
-        })
+        let k = self.n as usize;
+        let c = b.center();
+        let mut q = [Vec3::ZERO; 4];
+        let mut big = 0.0f64;
+        for i in 0..k {
+            q[i] = self.p[i] - c;
+            big = big.max(self.p[i].abs().max_element());
+        }
+        let q = &q[..k];
+        let h = b.half() + Vec3::splat(m + 1e-12 * big);
+        for a in 0..3 {
+            let (lo, hi) = q.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x[a]), hi.max(x[a])));
+            if lo > h[a] || hi < -h[a] {
+                return false;
+            }
+        }
+        let separates = |d: Vec3| {
+            let (lo, hi) = q.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x.dot(d)), hi.max(x.dot(d))));
+            let r = h.dot(d.abs());
+            lo > r || hi < -r
+        };
+        let (e0, e1) = (q[1] - q[0], q[2] - q[1]);
+        if separates(e0.cross(e1)) {
+            return false;
+        }
+        let edges = if k == 4 { [e0, e1, Vec3::ZERO] } else { [e0, e1, q[0] - q[2]] };
+        for e in edges {
+            for d in [Vec3::new(0.0, e.z, -e.y), Vec3::new(-e.z, 0.0, e.x), Vec3::new(e.y, -e.x, 0.0)] {
+                if separates(d) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// The half-spaces of the flat facet (no margin) thickened by the rounding slack: its
+    /// plane from both sides and its edges; `None` for a degenerate facet.
+    #[inline]
+    fn flat_planes(&self) -> Option<([(Vec3, f64); 6], usize)> {
+        let k = self.n as usize;
+        let (e0, e1) = (self.p[1] - self.p[0], self.p[2] - self.p[1]);
+        let n = e0.cross(e1);
+        let nl = n.length();
+        if !(nl > 1e-12 * e0.length() * e1.length()) {
+            return None;
+        }
+        let nu = n / nl;
+        let big = self.p[..k].iter().fold(0.0f64, |acc, q| acc.max(q.abs().max_element()));
+        let slack = 1e-12 * big;
+        let w = nu.dot(self.p[0]);
+        let mut out = [(Vec3::ZERO, 0.0); 6];
+        out[0] = (nu, w + slack);
+        out[1] = (-nu, -w + slack);
+        for i in 0..k {
+            let e = self.p[(i + 1) % k] - self.p[i];
+            let o = e.cross(nu); // outward in the plane: the corners run counter-clockwise about n
+            let l = o.length();
+            if l == 0.0 {
+                continue; // a zero-length edge bounds nothing
+            }
+            let o = o / l;
+            out[2 + i] = (o, o.dot(self.p[i]) + slack);
+        }
+        Some((out, 2 + k))
     }
 
     /// `max_d (d · p − h(d))` over the facet's directions: a lower bound on the distance
@@ -115,6 +190,11 @@ impl Facet {
 
     /// Whether `p` lies in the facet grown by `m`.
     pub fn contains_point(&self, p: Vec3, m: f64) -> bool {
+        if m == 0.0 {
+            if let Some((pl, n)) = self.flat_planes() {
+                return pl[..n].iter().all(|&(d, w)| d.dot(p) <= w);
+            }
+        }
         let dirs = self.dirs();
         let m = m + dirs.slack;
         dirs.d[..dirs.n].iter().all(|&d| {
@@ -125,6 +205,11 @@ impl Facet {
 
     /// The parameter interval of `a → b` in the facet grown by `m`.
     pub fn clip(&self, a: Vec3, b: Vec3, m: f64) -> Option<(f64, f64)> {
+        if m == 0.0 {
+            if let Some((pl, n)) = self.flat_planes() {
+                return clip_planes(pl[..n].iter().copied(), a, b);
+            }
+        }
         let dirs = self.dirs();
         let m = m + dirs.slack;
         // every direction and its opposite, as half-spaces `x · d <= support(d)`
@@ -141,8 +226,15 @@ struct Topo {
     ring: Vec<Vec<u32>>,
     /// Per triangle: vertex indices.
     faces: Vec<[u32; 3]>,
-    /// Edges that can be locally extreme: (a, b, n1, n2), `n1 == n2` when flat.
+    /// Edges that can be locally extreme and are not flat: (a, b, n1, n2).
     edges: Vec<(u32, u32, Vec3, Vec3)>,
+    /// Normals of the triangles around each vertex.
+    fan: Vec<Vec<Vec3>>,
+}
+
+#[inline]
+fn same_normal(n1: Vec3, n2: Vec3) -> bool {
+    n1 != Vec3::ZERO && n1.dot(n2) > 0.0 && n1.cross(n2).length() <= FLAT
 }
 
 fn topo(m: &TriMesh) -> Topo {
@@ -162,6 +254,12 @@ fn topo(m: &TriMesh) -> Topo {
         faces.push(f);
     }
     let mut ring: Vec<Vec<u32>> = vec![Vec::new(); verts.len()];
+    let mut fan: Vec<Vec<Vec3>> = vec![Vec::new(); verts.len()];
+    for (fi, f) in faces.iter().enumerate() {
+        for &v in f {
+            fan[v as usize].push(m.tris[fi].n);
+        }
+    }
     let mut half: HashMap<(u32, u32), usize> = HashMap::new();
     for (fi, f) in faces.iter().enumerate() {
         for c in 0..3 {
@@ -192,15 +290,22 @@ fn topo(m: &TriMesh) -> Topo {
         if n1.dot(verts[far as usize] - verts[a as usize]) > TOL * len {
             continue; // reflex: never locally extreme
         }
+        if same_normal(n1, n2) {
+            continue; // flat: inside a planar region
+        }
         edges.push((a, b, n1, n2));
     }
     edges.sort_unstable_by_key(|e| (e.0, e.1));
-    Topo { verts, ring, faces, edges }
+    Topo { verts, ring, faces, edges, fan }
 }
 
-/// Whether vertex `v` of `t` can be locally extreme in direction `d`.
+/// Whether vertex `v` of `t` can be locally extreme in direction `d` (unit), and is not
+/// inside a planar region facing `d`.
 #[inline]
 fn extreme(t: &Topo, v: u32, d: Vec3) -> bool {
+    if t.fan[v as usize].iter().all(|&n| same_normal(n, d)) {
+        return false;
+    }
     let p = t.verts[v as usize];
     t.ring[v as usize].iter().all(|&w| {
         let e = t.verts[w as usize] - p;

@@ -433,7 +433,7 @@ impl CellSource for ExactSource {
                 continue;
             }
             let f = &self.facets[r as usize];
-            if f.aabb(self.margin).overlaps(cell) && f.overlaps_box(cell, self.margin) {
+            if f.overlaps_box(cell, self.margin) {
                 out.push(r);
             }
         }
