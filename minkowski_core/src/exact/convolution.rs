@@ -56,6 +56,13 @@ struct Dirs {
 }
 
 impl Facet {
+    /// Rounding slack of the facet's tests: `1e-12` of its largest coordinate (a flat
+    /// facet has zero thickness, so every test is thickened by it).
+    #[inline]
+    fn slack(&self) -> f64 {
+        1e-12 * self.p[..self.n as usize].iter().fold(1e-300f64, |acc, q| acc.max(q.abs().max_element()))
+    }
+
     /// Box of the facet grown by `m`.
     pub fn aabb(&self, m: f64) -> Aabb {
         Aabb::from_points(&self.p[..self.n as usize]).inflated(m)
@@ -74,8 +81,7 @@ impl Facet {
     /// as rounding noise).
     fn dirs(&self) -> Dirs {
         let k = self.n as usize;
-        let big = self.p[..k].iter().fold(0.0f64, |acc, q| acc.max(q.abs().max_element()));
-        let mut out = Dirs { d: [Vec3::ZERO; 20], n: 0, slack: 1e-12 * big.max(1e-300) };
+        let mut out = Dirs { d: [Vec3::ZERO; 20], n: 0, slack: self.slack() };
         let mut push = |d: Vec3, scale2: f64| {
             if d.length_squared() > 1e-24 * scale2 && d.length_squared() > 0.0 {
                 out.d[out.n] = d.normalize();
@@ -112,13 +118,11 @@ impl Facet {
         let k = self.n as usize;
         let c = b.center();
         let mut q = [Vec3::ZERO; 4];
-        let mut big = 0.0f64;
         for i in 0..k {
             q[i] = self.p[i] - c;
-            big = big.max(self.p[i].abs().max_element());
         }
         let q = &q[..k];
-        let h = b.half() + Vec3::splat(m + 1e-12 * big);
+        let h = b.half() + Vec3::splat(m + self.slack());
         for a in 0..3 {
             let (lo, hi) = q.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x[a]), hi.max(x[a])));
             if lo > h[a] || hi < -h[a] {
@@ -157,8 +161,7 @@ impl Facet {
             return None;
         }
         let nu = n / nl;
-        let big = self.p[..k].iter().fold(0.0f64, |acc, q| acc.max(q.abs().max_element()));
-        let slack = 1e-12 * big;
+        let slack = self.slack();
         let w = nu.dot(self.p[0]);
         let mut out = [(Vec3::ZERO, 0.0); 6];
         out[0] = (nu, w + slack);
