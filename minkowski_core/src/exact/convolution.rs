@@ -14,10 +14,18 @@
 //! feature or planar region `Q` of the other; the contact set `P ∩ (p − Q)` is a polygon
 //! or segment whose corners are corners of `P`, corners of `Q` or crossings of their
 //! border edges, so `p` also lies on a facet of border features. (Border features in a
-//! boundary contact are never reflex, so their facets are in the set.) On CAD parts,
-//! whose flat faces are triangulated into many coplanar triangles, this removes most
-//! facets (two 60-triangle plates: from 4950 to a few hundred).
+//! boundary contact are never reflex, so their facets are in the set.)
+//!
+//! Face–face contacts are collapsed further: a facet whose two features lie in planar
+//! regions `P` (of `A`) and `Q` (of `B`) of one normal, both convex polygons, is a subset
+//! of `P ⊕ Q`, itself a convex polygon in `A ⊕ B`; such facets give way to that polygon,
+//! once per region pair. Only containment is used, so no contact is lost, and the
+//! polygon lies in the sum (facets grown by a margin serve as membership witnesses).
+//! On CAD parts, whose flat faces are triangulated into several coplanar triangles, this
+//! removes most facets: the two 60-triangle plates of the pegs-and-holes assembly (five
+//! boxes each) have 3600 facets without it and 309 with it.
 
+use super::gauss::{arc_distance, DirGrid};
 use super::mesh::TriMesh;
 use crate::math::{Aabb, Vec3};
 use crate::polytope::clip_planes;
@@ -229,10 +237,35 @@ struct Topo {
     ring: Vec<Vec<u32>>,
     /// Per triangle: vertex indices.
     faces: Vec<[u32; 3]>,
-    /// Edges that can be locally extreme and are not flat: (a, b, n1, n2).
-    edges: Vec<(u32, u32, Vec3, Vec3)>,
+    /// Edges that can be locally extreme and are not flat: (a, b, n1, n2) and the
+    /// triangles (f1, f2) with those normals.
+    edges: Vec<(u32, u32, Vec3, Vec3, u32, u32)>,
     /// Normals of the triangles around each vertex.
     fan: Vec<Vec<Vec3>>,
+    /// The triangles around each vertex (parallel to `fan`).
+    fan_faces: Vec<Vec<u32>>,
+    /// Planar region of each triangle.
+    region: Vec<u32>,
+    /// Border corners of each planar region that is a convex polygon (`None` otherwise).
+    convex: Vec<Option<Vec<Vec3>>>,
+    /// Unit normal of each planar region (its first triangle's).
+    normal: Vec<Vec3>,
+}
+
+impl Topo {
+    /// The convex planar region of triangle `f`, if its region is one.
+    #[inline]
+    fn convex_region(&self, f: u32) -> Option<u32> {
+        let r = self.region[f as usize];
+        self.convex[r as usize].is_some().then_some(r)
+    }
+
+    /// A convex planar region with unit normal `d` among the triangles at vertex `v`.
+    #[inline]
+    fn convex_region_at(&self, v: u32, d: Vec3) -> Option<u32> {
+        let (fan, faces) = (&self.fan[v as usize], &self.fan_faces[v as usize]);
+        fan.iter().zip(faces).filter(|(&n, _)| same_normal(n, d)).find_map(|(_, &f)| self.convex_region(f))
+    }
 }
 
 #[inline]
@@ -258,9 +291,11 @@ fn topo(m: &TriMesh) -> Topo {
     }
     let mut ring: Vec<Vec<u32>> = vec![Vec::new(); verts.len()];
     let mut fan: Vec<Vec<Vec3>> = vec![Vec::new(); verts.len()];
+    let mut fan_faces: Vec<Vec<u32>> = vec![Vec::new(); verts.len()];
     for (fi, f) in faces.iter().enumerate() {
         for &v in f {
             fan[v as usize].push(m.tris[fi].n);
+            fan_faces[v as usize].push(fi as u32);
         }
     }
     let mut half: HashMap<(u32, u32), usize> = HashMap::new();
@@ -277,6 +312,7 @@ fn topo(m: &TriMesh) -> Topo {
         }
     }
     let mut edges = Vec::new();
+    let mut parent: Vec<u32> = (0..faces.len() as u32).collect();
     for (&(a, b), &f1) in &half {
         if a > b {
             continue;
@@ -284,8 +320,12 @@ fn topo(m: &TriMesh) -> Topo {
         let Some(&f2) = half.get(&(b, a)) else { continue };
         let (n1, n2) = (m.tris[f1].n, m.tris[f2].n);
         if n1 == Vec3::ZERO || n2 == Vec3::ZERO {
-            edges.push((a, b, Vec3::ZERO, Vec3::ZERO)); // degenerate neighbour: keep, unknown arc
+            // degenerate neighbour: keep, unknown arc
+            edges.push((a, b, Vec3::ZERO, Vec3::ZERO, f1 as u32, f2 as u32));
             continue;
+        }
+        if same_normal(n1, n2) {
+            union(&mut parent, f1 as u32, f2 as u32); // one planar region
         }
         // reflex when the far corner of f2 lies above f1's plane
         let far = faces[f2].iter().copied().find(|&v| v != a && v != b).unwrap_or(a);
@@ -296,10 +336,151 @@ fn topo(m: &TriMesh) -> Topo {
         if same_normal(n1, n2) {
             continue; // flat: inside a planar region
         }
-        edges.push((a, b, n1, n2));
+        edges.push((a, b, n1, n2, f1 as u32, f2 as u32));
     }
     edges.sort_unstable_by_key(|e| (e.0, e.1));
-    Topo { verts, ring, faces, edges, fan }
+    // planar regions, numbered in the order of their first triangle (deterministic)
+    let mut id_of_root = vec![u32::MAX; faces.len()];
+    let mut region = Vec::with_capacity(faces.len());
+    let mut members: Vec<Vec<u32>> = Vec::new();
+    for f in 0..faces.len() as u32 {
+        let r = find(&mut parent, f) as usize;
+        if id_of_root[r] == u32::MAX {
+            id_of_root[r] = members.len() as u32;
+            members.push(Vec::new());
+        }
+        members[id_of_root[r] as usize].push(f);
+        region.push(id_of_root[r]);
+    }
+    let convex = members.iter().map(|ms| convex_border(&verts, &faces, m, ms)).collect();
+    let normal = members.iter().map(|ms| m.tris[ms[0] as usize].n).collect();
+    Topo { verts, ring, faces, edges, fan, fan_faces, region, convex, normal }
+}
+
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        parent[x as usize] = parent[parent[x as usize] as usize];
+        x = parent[x as usize];
+    }
+    x
+}
+
+fn union(parent: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (find(parent, a), find(parent, b));
+    if ra != rb {
+        parent[ra.max(rb) as usize] = ra.min(rb);
+    }
+}
+
+/// An orthonormal basis `(u, w)` of the plane normal to the unit `n`.
+fn plane_basis(n: Vec3) -> (Vec3, Vec3) {
+    let a = if n.x.abs() < 0.6 { Vec3::X } else { Vec3::Y };
+    let u = n.cross(a).normalize();
+    (u, n.cross(u))
+}
+
+/// The border corners (counter-clockwise about the normal) of a planar region, when the
+/// region is a convex polygon: its triangles (welded corners `faces`, all of one normal)
+/// use each directed edge once, the edges used in one direction only form one closed
+/// loop, the loop turns left at every corner (or runs straight on) once around, and the
+/// triangles' areas add up to the loop's. Then the triangles tile the polygon (their
+/// winding number about any point inside is the loop's, 1), so the polygon is exactly
+/// the region. `None` otherwise.
+fn convex_border(verts: &[Vec3], faces: &[[u32; 3]], m: &TriMesh, members: &[u32]) -> Option<Vec<Vec3>> {
+    let n = m.tris[members[0] as usize].n;
+    if n == Vec3::ZERO {
+        return None;
+    }
+    let mut directed: HashMap<(u32, u32), ()> = HashMap::with_capacity(3 * members.len());
+    let mut area = 0.0;
+    for &f in members {
+        let t = &m.tris[f as usize];
+        area += 0.5 * t.e[0].cross(t.e[1]).length();
+        let c = faces[f as usize];
+        for i in 0..3 {
+            let e = (c[i], c[(i + 1) % 3]);
+            if e.0 == e.1 || directed.insert(e, ()).is_some() {
+                return None;
+            }
+        }
+    }
+    let mut next: HashMap<u32, u32> = HashMap::new();
+    for &(a, b) in directed.keys() {
+        if !directed.contains_key(&(b, a)) && next.insert(a, b).is_some() {
+            return None; // two border edges leave one corner
+        }
+    }
+    let start = *next.keys().min()?;
+    let mut ring = vec![start];
+    let mut v = start;
+    loop {
+        v = *next.get(&v)?;
+        if v == start {
+            break;
+        }
+        if ring.len() >= next.len() {
+            return None;
+        }
+        ring.push(v);
+    }
+    if ring.len() != next.len() || ring.len() < 3 {
+        return None; // several loops (holes, or pieces)
+    }
+    let (u, w) = plane_basis(n);
+    let q: Vec<(f64, f64)> = ring.iter().map(|&i| (verts[i as usize].dot(u), verts[i as usize].dot(w))).collect();
+    let k = q.len();
+    let mut turning = 0.0;
+    let mut twice_area = 0.0;
+    for i in 0..k {
+        let (p0, p1, p2) = (q[i], q[(i + 1) % k], q[(i + 2) % k]);
+        let (e1, e2) = ((p1.0 - p0.0, p1.1 - p0.1), (p2.0 - p1.0, p2.1 - p1.1));
+        let cross = e1.0 * e2.1 - e1.1 * e2.0;
+        let dot = e1.0 * e2.0 + e1.1 * e2.1;
+        let l = (e1.0.hypot(e1.1)) * (e2.0.hypot(e2.1));
+        if !(l > 0.0) || cross < -1e-12 * l {
+            return None; // a repeated corner, or a right turn: not convex
+        }
+        turning += cross.atan2(dot);
+        twice_area += p0.0 * p1.1 - p1.0 * p0.1;
+    }
+    let tau = 2.0 * std::f64::consts::PI;
+    if (turning - tau).abs() > 1e-6 || (0.5 * twice_area - area).abs() > 1e-9 * area {
+        return None;
+    }
+    Some(ring.iter().map(|&i| verts[i as usize]).collect())
+}
+
+/// The facets of `P ⊕ Q` for two convex planar polygons of one normal `n` (corners of
+/// each given): the convex hull of the corner sums, in the plane, as a fan of triangles.
+fn polygon_sum(p: &[Vec3], q: &[Vec3], n: Vec3, k: u32, out: &mut Vec<Facet>) {
+    let (u, w) = plane_basis(n);
+    // `+ 0.0` turns -0 into +0: the sort must be numeric for the chain to be a hull
+    let mut pts: Vec<(f64, f64, Vec3)> =
+        p.iter().flat_map(|&a| q.iter().map(move |&b| a + b)).map(|x| (x.dot(u) + 0.0, x.dot(w) + 0.0, x)).collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    pts.dedup_by(|a, b| a.0 == b.0 && a.1 == b.1);
+    if pts.len() < 3 {
+        return;
+    }
+    // Andrew's monotone chain, collinear points dropped
+    let turn = |o: &(f64, f64, Vec3), a: &(f64, f64, Vec3), b: &(f64, f64, Vec3)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut hull: Vec<(f64, f64, Vec3)> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let base = hull.len();
+        for j in 0..pts.len() {
+            let x = pts[if pass == 0 { j } else { pts.len() - 1 - j }];
+            while hull.len() >= base + 2 && turn(&hull[hull.len() - 2], &hull[hull.len() - 1], &x) <= 0.0 {
+                hull.pop();
+            }
+            hull.push(x);
+        }
+        hull.pop(); // the chain's last point starts the other chain
+    }
+    for i in 1..hull.len().saturating_sub(1) {
+        out.push(Facet { p: [hull[0].2, hull[i].2, hull[i + 1].2, Vec3::ZERO], n: 3, k });
+    }
 }
 
 /// Whether vertex `v` of `t` can be locally extreme in direction `d` (unit), and is not
@@ -337,49 +518,166 @@ fn arcs_meet(n1: Vec3, n2: Vec3, m1: Vec3, m2: Vec3) -> bool {
     }
     let c = pa.cross(pb);
     if c.length() <= 1e-9 * pa.length() * pb.length() {
-        return true; // the same great circle: conservatively yes
+        // the same great circle: the arcs meet when they overlap, so an end of one lies
+        // on the other
+        return on_arc(m1, n1, n2) || on_arc(m2, n1, n2) || on_arc(n1, m1, m2) || on_arc(n2, m1, m2);
     }
     let c = c.normalize();
     [c, -c].iter().any(|&x| on_arc(x, n1, n2) && on_arc(x, m1, m2))
 }
 
+/// The vertices of `t` bucketed by the directions they can be extreme in: a cell lists
+/// a vertex unless some ring edge `e` is too close to the cell for any direction `d` of
+/// it to pass [`extreme`]'s `d · ê <= TOL` (a necessary condition, edge by edge).
+fn vertex_grid(t: &Topo) -> DirGrid {
+    let lim_angle = TOL.acos();
+    DirGrid::build(t.verts.len(), |g, v| {
+        let p = t.verts[v as usize];
+        let e: Vec<Vec3> = t.ring[v as usize].iter().map(|&w| t.verts[w as usize] - p).filter(|e| e.length() > 0.0).map(Vec3::normalize).collect();
+        if e.is_empty() {
+            return None;
+        }
+        Some(g.cells(|cap| {
+            let lim = (lim_angle - cap.rho).max(0.0).cos();
+            e.iter().all(|&e| cap.c.dot(e) <= lim)
+        }))
+    })
+}
+
+/// How far beyond its Gauss arc [`arcs_meet`] can find a meeting point of an edge: its
+/// circle tolerance, and its end tolerance (`TOL` against an unnormalised pole).
+fn arc_slack(n1: Vec3, n2: Vec3) -> f64 {
+    let pl = n1.cross(n2).length();
+    1e-5 + if pl > TOL { 2.0 * TOL / pl } else { 0.0 }
+}
+
+/// The non-flat edges of `t` bucketed by their Gauss arcs (grown by [`arc_slack`]).
+fn edge_grid(t: &Topo) -> DirGrid {
+    DirGrid::build(t.edges.len(), |g, i| {
+        let (_, _, n1, n2, _, _) = t.edges[i as usize];
+        if n1 == Vec3::ZERO || n2 == Vec3::ZERO {
+            return None;
+        }
+        let slack = arc_slack(n1, n2);
+        Some(g.cells(|cap| arc_distance(cap.c, n1, n2) <= cap.rho + slack))
+    })
+}
+
+/// A facet of the reduced convolution, or the pair of convex planar regions (of `a`, of
+/// `b`, one normal) whose sum contains it.
+enum Part {
+    Facet(Facet),
+    Regions(u32, u32),
+}
+
 /// The reduced convolution facets of `a` (obstacle `k`) and `b`.
+///
+/// A facet whose features lie in convex planar regions `P` of `a` and `Q` of `b` of one
+/// normal (a face–face contact) is contained in `P ⊕ Q`, a convex polygon in `A ⊕ B`: such
+/// facets are replaced by the polygon (a fan of triangles), once per region pair. On
+/// parts made of boxes this replaces every facet: a box pair then has its six faces.
 pub fn convolution(a: &TriMesh, b: &TriMesh, k: u32) -> Vec<Facet> {
+    convolution_by(a, b, k, true)
+}
+
+/// [`convolution`] with the candidates looked up on direction grids (`grid`), or every
+/// feature against every other (a reference for the tests).
+fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
     let (ta, tb) = (topo(a), topo(b));
+    let (va, vb, eb) = (vertex_grid(&ta), vertex_grid(&tb), edge_grid(&tb));
     let tri = |t: &TriMesh, i: usize| t.tris[i];
-    let mut out: Vec<Facet> = (0..ta.faces.len())
+    let candidates = |g: &DirGrid, n: Vec3, all: usize| match (n == Vec3::ZERO, grid) {
+        (true, _) => Vec::new(),
+        (false, true) => g.at(n),
+        (false, false) => (0..all as u32).collect(),
+    };
+    let mut parts: Vec<Part> = (0..ta.faces.len())
         .into_par_iter()
         .flat_map_iter(|i| {
             let t = tri(a, i);
             let tb = &tb;
-            (0..tb.verts.len() as u32)
-                .filter(move |&v| t.n != Vec3::ZERO && extreme(tb, v, t.n))
-                .map(move |v| {
-                    let q = tb.verts[v as usize];
-                    Facet { p: [t.p[0] + q, t.p[1] + q, t.p[2] + q, Vec3::ZERO], n: 3, k }
-                })
+            let ra = ta.convex_region(i as u32);
+            candidates(&vb, t.n, tb.verts.len()).into_iter().filter(move |&v| extreme(tb, v, t.n)).map(move |v| {
+                match ra.zip(tb.convex_region_at(v, t.n)) {
+                    Some((ra, rb)) => Part::Regions(ra, rb),
+                    None => {
+                        let q = tb.verts[v as usize];
+                        Part::Facet(Facet { p: [t.p[0] + q, t.p[1] + q, t.p[2] + q, Vec3::ZERO], n: 3, k })
+                    }
+                }
+            })
         })
         .collect();
-    out.par_extend((0..tb.faces.len()).into_par_iter().flat_map_iter(|j| {
+    parts.par_extend((0..tb.faces.len()).into_par_iter().flat_map_iter(|j| {
         let s = tri(b, j);
         let ta = &ta;
-        (0..ta.verts.len() as u32).filter(move |&u| s.n != Vec3::ZERO && extreme(ta, u, s.n)).map(move |u| {
-            let q = ta.verts[u as usize];
-            Facet { p: [s.p[0] + q, s.p[1] + q, s.p[2] + q, Vec3::ZERO], n: 3, k }
+        let rb = tb.convex_region(j as u32);
+        candidates(&va, s.n, ta.verts.len()).into_iter().filter(move |&u| extreme(ta, u, s.n)).map(move |u| {
+            match ta.convex_region_at(u, s.n).zip(rb) {
+                Some((ra, rb)) => Part::Regions(ra, rb),
+                None => {
+                    let q = ta.verts[u as usize];
+                    Part::Facet(Facet { p: [s.p[0] + q, s.p[1] + q, s.p[2] + q, Vec3::ZERO], n: 3, k })
+                }
+            }
         })
     }));
-    out.par_extend(ta.edges.par_iter().flat_map_iter(|&(a0, a1, n1, n2)| {
-        let tb = &tb;
+    parts.par_extend(ta.edges.par_iter().flat_map_iter(|&(a0, a1, n1, n2, f1, f2)| {
+        let (tb, ta) = (&tb, &ta);
         let (p0, p1) = (ta.verts[a0 as usize], ta.verts[a1 as usize]);
         let e = p1 - p0;
-        tb.edges.iter().filter_map(move |&(b0, b1, m1, m2)| {
+        let near: Vec<u32> = if !grid || n1 == Vec3::ZERO || n2 == Vec3::ZERO {
+            (0..tb.edges.len() as u32).collect()
+        } else {
+            let slack = arc_slack(n1, n2);
+            eb.gather(&eb.cells(|cap| arc_distance(cap.c, n1, n2) <= cap.rho + slack))
+        };
+        near.into_iter().filter_map(move |j| {
+            let (b0, b1, m1, m2, g1, g2) = tb.edges[j as usize];
             let (q0, q1) = (tb.verts[b0 as usize], tb.verts[b1 as usize]);
             let g = q1 - q0;
             if e.cross(g).length() <= 1e-9 * e.length() * g.length() {
                 return None; // parallel edges sum to a segment on other facets' borders
             }
-            arcs_meet(n1, n2, m1, m2).then(|| Facet { p: [p0 + q0, p1 + q0, p1 + q1, p0 + q1], n: 4, k })
+            // both edges on the border of convex regions of one normal: in their sum
+            for (n, f) in [(n1, f1), (n2, f2)] {
+                for (m, g) in [(m1, g1), (m2, g2)] {
+                    if same_normal(n, m) {
+                        if let Some(r) = ta.convex_region(f).zip(tb.convex_region(g)) {
+                            return Some(Part::Regions(r.0, r.1));
+                        }
+                    }
+                }
+            }
+            arcs_meet(n1, n2, m1, m2).then(|| Part::Facet(Facet { p: [p0 + q0, p1 + q0, p1 + q1, p0 + q1], n: 4, k }))
         })
     }));
+    let mut out = Vec::with_capacity(parts.len());
+    let mut pairs = Vec::new();
+    for part in parts {
+        match part {
+            Part::Facet(f) => out.push(f),
+            Part::Regions(ra, rb) => pairs.push((ra, rb)),
+        }
+    }
+    pairs.sort_unstable();
+    pairs.dedup();
+    for (ra, rb) in pairs {
+        if let (Some(p), Some(q)) = (&ta.convex[ra as usize], &tb.convex[rb as usize]) {
+            polygon_sum(p, q, ta.normal[ra as usize], k, &mut out);
+        }
+    }
     out
+}
+
+/// The reduced convolution found by testing every feature pair (no direction grids).
+#[cfg(test)]
+pub(crate) fn convolution_scan(a: &TriMesh, b: &TriMesh) -> Vec<Facet> {
+    convolution_by(a, b, 0, false)
+}
+
+/// Per planar region of `m`: its number of border corners when it is a convex polygon.
+#[cfg(test)]
+pub(crate) fn planar_regions(m: &TriMesh) -> Vec<Option<usize>> {
+    topo(m).convex.iter().map(|c| c.as_ref().map(Vec::len)).collect()
 }

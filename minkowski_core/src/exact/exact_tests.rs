@@ -22,13 +22,9 @@ fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
     TriMesh::new(v, &f, "box").unwrap()
 }
 
-/// A U-shaped block (a 3×1×2 bar with a 1×1×1 notch cut from the top middle), as one
-/// closed mesh, and its three convex boxes.
-fn u_block() -> (TriMesh, Vec<Aabb>) {
-    // vertices on the lattice x in {0,1,2,3}, y in {0,1}, z in {0,1,2}; build the surface
-    // of the union of three unit-height columns by keeping the faces between inside and
-    // outside voxels of a 3×1×2 grid with the notch (1, 0, 1) empty
-    let full = |x: i32, y: i32, z: i32| (0..3).contains(&x) && y == 0 && (0..2).contains(&z) && !(x == 1 && z == 1);
+/// The closed surface of a union of unit voxels `(x, y, z)` in `[-1, 4)³` (those `full`
+/// says), two outward triangles per exposed voxel face, corners shared on the lattice.
+fn voxel_mesh(full: impl Fn(i32, i32, i32) -> bool, what: &str) -> TriMesh {
     let (mut v, mut f) = (Vec::new(), Vec::new());
     let mut index = std::collections::HashMap::new();
     let mut vid = |p: [i32; 3], v: &mut Vec<Vec3>| -> u32 {
@@ -38,8 +34,8 @@ fn u_block() -> (TriMesh, Vec<Aabb>) {
         })
     };
     for x in -1..4 {
-        for y in -1..2 {
-            for z in -1..3 {
+        for y in -1..4 {
+            for z in -1..4 {
                 if !full(x, y, z) {
                     continue;
                 }
@@ -74,12 +70,33 @@ fn u_block() -> (TriMesh, Vec<Aabb>) {
             }
         }
     }
+    TriMesh::new(v, &f, what).unwrap()
+}
+
+/// A U-shaped block (a 3×1×2 bar with a 1×1×1 notch cut from the top middle), as one
+/// closed mesh, and its three convex boxes.
+fn u_block() -> (TriMesh, Vec<Aabb>) {
+    let full = |x: i32, y: i32, z: i32| (0..3).contains(&x) && y == 0 && (0..2).contains(&z) && !(x == 1 && z == 1);
     let boxes = vec![
         Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0)),
         Aabb::new(Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 1.0, 2.0)),
         Aabb::new(Vec3::new(2.0, 0.0, 1.0), Vec3::new(3.0, 1.0, 2.0)),
     ];
-    (TriMesh::new(v, &f, "u block").unwrap(), boxes)
+    (voxel_mesh(full, "u block"), boxes)
+}
+
+/// A square frame: a 3×3×1 slab with the middle voxel removed (a through hole).
+fn frame() -> TriMesh {
+    voxel_mesh(|x, y, z| (0..3).contains(&x) && (0..3).contains(&y) && z == 0 && !(x == 1 && y == 1), "frame")
+}
+
+/// The box `[lo, hi]` turned about the z axis by `angle` (radians) around the origin.
+fn turned_box(lo: [f64; 3], hi: [f64; 3], angle: f64) -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::from_array(lo), Vec3::from_array(hi), &mut v, &mut f);
+    let (s, c) = angle.sin_cos();
+    let v = v.into_iter().map(|p| Vec3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z)).collect();
+    TriMesh::new(v, &f, "turned box").unwrap()
 }
 
 fn sum_box(a: &Aabb, b: &Aabb) -> Aabb {
@@ -366,6 +383,10 @@ fn segments_no_candidate_meets_keep_their_sign() {
     let cases = [
         ExactSource::new(vec![torus_mesh(10.0, 3.0, 24, 12)], sphere_mesh(0.9, 12, 7), 0.0, None),
         ExactSource::new(vec![u_block().0], box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]), 0.0, None),
+        // face–face contacts replaced by sums of convex planar regions: a frame (whose
+        // annular faces are not convex) and a turned box (octagonal sums)
+        ExactSource::new(vec![frame()], box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]), 0.0, None),
+        ExactSource::new(vec![turned_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.5)], box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]), 0.0, None),
     ];
     for src in &cases {
         let all = src.root_records();
@@ -394,5 +415,93 @@ fn segments_no_candidate_meets_keep_their_sign() {
             }
         }
         assert!(carried > 500 && crossings > 100, "carried {carried}, crossings {crossings}");
+    }
+}
+
+#[test]
+fn planar_regions_are_convex_only_as_one_convex_polygon() {
+    let convex = |m: &TriMesh| {
+        let r = planar_regions(m);
+        (r.len(), r.iter().filter(|c| c.is_some()).count())
+    };
+    assert_eq!(convex(&box_mesh([0.0, 0.0, 0.0], [1.0, 2.0, 3.0])), (6, 6));
+    assert!(planar_regions(&box_mesh([0.0, 0.0, 0.0], [1.0, 2.0, 3.0])).iter().all(|&c| c == Some(4)));
+    // the U's front and back are U-shaped; the rest (bottom, two column tops, the notch's
+    // floor and walls, the two ends) are rectangles
+    assert_eq!(convex(&u_block().0), (10, 8));
+    // the frame's top and bottom are annuli (two border loops); its eight walls are
+    // rectangles
+    assert_eq!(convex(&frame()), (10, 8));
+}
+
+#[test]
+fn box_pair_facets_are_the_faces_of_their_sum() {
+    // every facet of two boxes lies in a face–face contact of convex regions, so the
+    // facets are the six faces of the sum box, each tiled once
+    // (b reflected, as the robot is in a C-obstacle: its zero coordinates become -0, which
+    // once broke the sort of the polygon sums' hull)
+    let (a, b) = (box_mesh([-30.0, -20.0, -20.0], [30.0, 20.0, 0.0]), box_mesh([-5.0, -4.0, 0.0], [5.0, 4.0, 30.0]).negated());
+    assert!(b.vertices.iter().any(|v| v.z == 0.0 && v.z.is_sign_negative()));
+    let fs = convolution(&a, &b, 0);
+    let s = sum_box(&a.aabb, &b.aabb);
+    assert_eq!(fs.len(), 12);
+    let area = |f: &Facet| 0.5 * (f.p[1] - f.p[0]).cross(f.p[2] - f.p[0]).length();
+    for f in &fs {
+        let on_face = (0..3).any(|ax| [s.min[ax], s.max[ax]].iter().any(|&w| f.p[..3].iter().all(|q| q[ax] == w)));
+        assert!(on_face, "{f:?} is not on a face of {s:?}");
+    }
+    let e = s.extent();
+    let total: f64 = fs.iter().map(area).sum();
+    assert!((total - 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)).abs() < 1e-12, "{total}");
+}
+
+#[test]
+fn turned_box_top_sums_to_the_mixed_area() {
+    // a box turned by θ about z ⊕ an axis-aligned box: their tops sum to an octagon whose
+    // area is A(P) + A(Q) + Σ_edges |e| h_Q(n_e) (the mixed area of two rectangles)
+    let theta: f64 = 0.5;
+    let (la, lb) = (2.0, 1.0); // the turned box's top: sides la (along θ) and lb
+    let (qx, qy) = (0.225, 0.2); // the other box's top: half-extents about its centre
+    let a = turned_box([0.0, 0.0, 0.0], [la, lb, 1.0], theta);
+    let b = box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]);
+    let fs = convolution(&a, &b, 0);
+    let top = 1.3;
+    let area: f64 = fs
+        .iter()
+        .filter(|f| f.p[..f.n as usize].iter().all(|q| (q.z - top).abs() < 1e-12))
+        .map(|f| {
+            let tri = |p: Vec3, q: Vec3, r: Vec3| 0.5 * (q - p).cross(r - p).length();
+            if f.n == 3 { tri(f.p[0], f.p[1], f.p[2]) } else { tri(f.p[0], f.p[1], f.p[2]) + tri(f.p[0], f.p[2], f.p[3]) }
+        })
+        .sum();
+    let (s, c) = (theta.sin().abs(), theta.cos().abs());
+    let mixed = 2.0 * la * (qx * s + qy * c) + 2.0 * lb * (qx * c + qy * s);
+    let want = la * lb + 4.0 * qx * qy + mixed;
+    assert!((area - want).abs() < 1e-9, "top facets' area {area}, want {want}");
+}
+
+#[test]
+fn direction_grids_find_every_facet_a_scan_finds() {
+    // the grids only choose which feature pairs get the exact tests: the facets must be
+    // the ones testing every pair gives, on curved, boxy, turned and reflected meshes
+    let key = |f: &Facet| {
+        let mut k: Vec<[u64; 3]> = f.p[..f.n as usize].iter().map(|q| [q.x.to_bits(), q.y.to_bits(), q.z.to_bits()]).collect();
+        k.sort_unstable();
+        k
+    };
+    let cases = [
+        (torus_mesh(10.0, 3.0, 24, 12), sphere_mesh(0.9, 12, 7)),
+        (sphere_mesh(2.0, 9, 5), torus_mesh(1.0, 0.4, 10, 6).negated()),
+        (u_block().0, box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]).negated()),
+        (frame(), turned_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.5)),
+        (turned_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.3).negated(), torus_mesh(1.0, 0.4, 10, 6)),
+    ];
+    for (a, b) in &cases {
+        let mut grid: Vec<_> = convolution(a, b, 0).iter().map(key).collect();
+        let mut scan: Vec<_> = convolution_scan(a, b).iter().map(key).collect();
+        grid.sort_unstable();
+        scan.sort_unstable();
+        assert!(!scan.is_empty());
+        assert_eq!(grid, scan);
     }
 }

@@ -24,12 +24,15 @@
 //! Entry points: [`ExactSource`], [`TriMesh`].
 
 mod convolution;
+mod gauss;
 mod mesh;
 mod piece;
 #[cfg(test)]
 mod exact_tests;
 
 pub use convolution::{convolution, Facet};
+#[cfg(test)]
+use convolution::{convolution_scan, planar_regions};
 pub use mesh::{MeshNode, Tri, TriMesh};
 pub use piece::{pair_contains_point, Piece};
 
