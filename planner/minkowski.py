@@ -86,6 +86,12 @@ def _as_mesh(obj, name: str) -> trimesh.Trimesh:
     return obj
 
 
+def _label(mesh: trimesh.Trimesh, role: str) -> str:
+    """How errors and logs name an operand: its role, and the file it came from if any."""
+    path = mesh.metadata.get("file_path") if isinstance(mesh.metadata, dict) else None
+    return f"{role} {Path(path).name}" if path else role
+
+
 def _check_eps(eps) -> float:
     try:
         value = float(eps)
@@ -162,6 +168,7 @@ def _sum(
     _check_threshold(threshold)
     a = _as_mesh(a, names[0])
     b = _as_mesh(b, names[1])
+    names = (_label(a, names[0]), _label(b, names[1]))
     max_cells = tol.max_cells if max_cells is None else int(max_cells)
     if max_refinements < 0:
         raise InvalidParameterError(f"max_refinements = {max_refinements}: must be >= 0")
@@ -364,6 +371,7 @@ def _exact_sum(a, b, *, mirror_b, eps, max_cells, max_refinements, simplify, nam
         "exact_chosen": chosen,
         "triangles_a": int(source.triangles[0]),
         "triangles_b": int(source.triangles[1]),
+        "facets": int(source.facets),
         "cells": cells,
         "cells_per_level": [list(map(int, c)) for c in per_level],
         "band_cells": int(surf["band_cells"]),

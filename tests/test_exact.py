@@ -807,6 +807,17 @@ def test_cli_minkowski_open_mesh_exact_true(tmp_path, capsys):
     lines = captured.err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("minkplan: error: "), captured.err
     assert "Traceback" not in captured.err and "watertight" in lines[0]
-    # names the operand: its file, or at least the argument ('a')
-    assert "lid.stl" in lines[0] or "'a'" in lines[0]
+    # names the operand: its role and its file
+    assert "'a lid.stl'" in lines[0], lines[0]
     assert not out.exists()
+
+
+def test_exact_sum_of_boxes_has_six_facets_and_is_their_box():
+    # face–face contacts of two boxes collapse to one polygon per pair of faces: the
+    # boundary candidates are exactly the sum box's six faces (two triangles each)
+    a, b = shapes.box((1.0, 2.0, 3.0)), shapes.box((0.5, 0.25, 0.75))
+    result = planner.minkowski_sum(a, b, exact=True, progress=False)
+    assert result.stats["source"] == "exact" and result.stats["facets"] == 12
+    np.testing.assert_allclose(result.mesh.bounds, a.bounds + b.bounds,
+                               atol=result.error_bound)
+    assert result.mesh.is_watertight

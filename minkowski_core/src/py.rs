@@ -266,6 +266,12 @@ impl ExactSum {
         (self.inner.obstacles[0].tris.len(), self.inner.b.tris.len())
     }
 
+    /// Number of boundary candidates: the reduced convolution's flat facets.
+    #[getter]
+    fn facets(&self) -> usize {
+        self.inner.facets.len()
+    }
+
     /// Whether each of `points` (n, 3) lies in the closed sum, (n,) bool. Parallel.
     fn contains<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let pts = points_of(&points, "points")?;
