@@ -484,17 +484,24 @@ fn polygon_sum(p: &[Vec3], q: &[Vec3], n: Vec3, k: u32, out: &mut Vec<Facet>) {
 }
 
 /// Whether vertex `v` of `t` can be locally extreme in direction `d` (unit), and is not
-/// inside a planar region facing `d`.
+/// inside a planar region facing `d`. (A vertex whose ring edges all lie across `d`, with
+/// every triangle facing away from `d`, sits in a flat patch with the solid on the `d`
+/// side: never extreme in `d`, though its edges alone cannot tell.)
 #[inline]
 fn extreme(t: &Topo, v: u32, d: Vec3) -> bool {
-    if t.fan[v as usize].iter().all(|&n| same_normal(n, d)) {
+    let fan = &t.fan[v as usize];
+    if fan.iter().all(|&n| same_normal(n, d)) {
         return false;
     }
     let p = t.verts[v as usize];
-    t.ring[v as usize].iter().all(|&w| {
+    let mut across = true;
+    let below = t.ring[v as usize].iter().all(|&w| {
         let e = t.verts[w as usize] - p;
-        d.dot(e) <= TOL * e.length()
-    })
+        let (x, tol) = (d.dot(e), TOL * e.length());
+        across &= x.abs() <= tol;
+        x <= tol
+    });
+    below && !(across && fan.iter().all(|&n| n.dot(d) < 0.0))
 }
 
 /// Whether the Gauss arcs `[n1, n2]` and `[m1, m2]` can share a direction.

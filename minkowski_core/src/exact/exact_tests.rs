@@ -90,6 +90,20 @@ fn frame() -> TriMesh {
     voxel_mesh(|x, y, z| (0..3).contains(&x) && (0..3).contains(&y) && z == 0 && !(x == 1 && y == 1), "frame")
 }
 
+/// The box `[lo, hi]` with its top triangulated as a fan about a vertex at its centre (a
+/// flat vertex inside a planar region).
+fn fan_top_box(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::from_array(lo), Vec3::from_array(hi), &mut v, &mut f);
+    // push_box's top quad is [4, 5, 7, 6] (z = hi), its triangles the 3rd and 4th
+    f.retain(|t| !(t.iter().all(|&i| i >= 4)));
+    v.push(Vec3::new(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), hi[2]));
+    for (a, b) in [(4, 5), (5, 7), (7, 6), (6, 4)] {
+        f.push([a, b, 8]);
+    }
+    TriMesh::new(v, &f, "fan-top box").unwrap()
+}
+
 /// The box `[lo, hi]` turned about the z axis by `angle` (radians) around the origin.
 fn turned_box(lo: [f64; 3], hi: [f64; 3], angle: f64) -> TriMesh {
     let (mut v, mut f) = (Vec::new(), Vec::new());
@@ -387,6 +401,7 @@ fn segments_no_candidate_meets_keep_their_sign() {
         // annular faces are not convex) and a turned box (octagonal sums)
         ExactSource::new(vec![frame()], box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]), 0.0, None),
         ExactSource::new(vec![turned_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.5)], box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]), 0.0, None),
+        ExactSource::new(vec![turned_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.5)], fan_top_box([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]).negated(), 0.0, None),
     ];
     for src in &cases {
         let all = src.root_records();
@@ -503,5 +518,17 @@ fn direction_grids_find_every_facet_a_scan_finds() {
         scan.sort_unstable();
         assert!(!scan.is_empty());
         assert_eq!(grid, scan);
+    }
+}
+
+#[test]
+fn a_flat_vertex_gives_no_facets() {
+    // the centre vertex of a fan-triangulated box top lies in a planar region: facing the
+    // region's normal it is covered by the region (one convex polygon), facing away it is
+    // not extreme at all (the solid is on that side); either way, no facet of its own
+    let top = fan_top_box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]);
+    assert_eq!(top.tris.len(), 14);
+    for (a, b) in [(box_mesh([0.0, 0.0, 0.0], [2.0, 1.0, 3.0]), top.negated()), (top.negated(), box_mesh([0.0, 0.0, 0.0], [2.0, 1.0, 3.0]))] {
+        assert_eq!(convolution(&a, &b, 0).len(), 12);
     }
 }
