@@ -504,17 +504,30 @@ fn extreme(t: &Topo, v: u32, d: Vec3) -> bool {
     below && !(across && fan.iter().all(|&n| n.dot(d) < 0.0))
 }
 
+/// Whether the Gauss arc `[n1, n2]` of an edge is unknown: a degenerate neighbour, or a
+/// knife edge (normals nearly opposite, so the half circle between them has no reliable
+/// pole). Such an edge can meet any arc.
+#[inline]
+fn unknown_arc(n1: Vec3, n2: Vec3) -> bool {
+    n1 == Vec3::ZERO || n2 == Vec3::ZERO || (n1.dot(n2) < 0.0 && n1.cross(n2).length() <= TOL)
+}
+
 /// Whether the Gauss arcs `[n1, n2]` and `[m1, m2]` can share a direction.
 fn arcs_meet(n1: Vec3, n2: Vec3, m1: Vec3, m2: Vec3) -> bool {
-    if n1 == Vec3::ZERO || m1 == Vec3::ZERO {
+    if unknown_arc(n1, n2) || unknown_arc(m1, m2) {
         return true;
     }
     let on_arc = |x: Vec3, a: Vec3, b: Vec3| -> bool {
         let p = a.cross(b);
         if p.length() <= TOL {
-            return (x - a).length() <= 1e-6; // a point arc
+            return (x - a).length() <= 1e-6; // a point arc (not a knife: see above)
         }
-        x.dot(p).abs() <= 1e-6 * p.length() && a.cross(x).dot(p) >= -TOL && x.cross(b).dot(p) >= -TOL
+        // on the circle, between the ends (loosely for short arcs), and on the arc's side
+        // of the sphere (the end tests alone also pass the points opposite a short arc)
+        x.dot(p).abs() <= 1e-6 * p.length()
+            && a.cross(x).dot(p) >= -TOL
+            && x.cross(b).dot(p) >= -TOL
+            && x.dot(a + b) >= -TOL
     };
     let (pa, pb) = (n1.cross(n2), m1.cross(m2));
     if pa.length() <= TOL {
@@ -562,7 +575,7 @@ fn arc_slack(n1: Vec3, n2: Vec3) -> f64 {
 fn edge_grid(t: &Topo) -> DirGrid {
     DirGrid::build(t.edges.len(), |g, i| {
         let (_, _, n1, n2, _, _) = t.edges[i as usize];
-        if n1 == Vec3::ZERO || n2 == Vec3::ZERO {
+        if unknown_arc(n1, n2) {
             return None;
         }
         let slack = arc_slack(n1, n2);
@@ -633,7 +646,7 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
         let (tb, ta) = (&tb, &ta);
         let (p0, p1) = (ta.verts[a0 as usize], ta.verts[a1 as usize]);
         let e = p1 - p0;
-        let near: Vec<u32> = if !grid || n1 == Vec3::ZERO || n2 == Vec3::ZERO {
+        let near: Vec<u32> = if !grid || unknown_arc(n1, n2) {
             (0..tb.edges.len() as u32).collect()
         } else {
             let slack = arc_slack(n1, n2);

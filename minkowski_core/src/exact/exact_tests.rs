@@ -104,6 +104,14 @@ fn fan_top_box(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
     TriMesh::new(v, &f, "fan-top box").unwrap()
 }
 
+/// A square pyramid over `[-1, 1]²` whose apex is only `h` above its base: its base edges
+/// are knife edges (their two normals nearly opposite) when `h` is tiny.
+fn flat_pyramid(h: f64) -> TriMesh {
+    let v = [(-1.0, -1.0, 0.0), (1.0, -1.0, 0.0), (1.0, 1.0, 0.0), (-1.0, 1.0, 0.0), (0.1, 0.2, h)];
+    let v = v.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
+    TriMesh::new(v, &[[0, 2, 1], [0, 3, 2], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]], "flat pyramid").unwrap()
+}
+
 /// The box `[lo, hi]` turned about the z axis by `angle` (radians) around the origin.
 fn turned_box(lo: [f64; 3], hi: [f64; 3], angle: f64) -> TriMesh {
     let (mut v, mut f) = (Vec::new(), Vec::new());
@@ -402,6 +410,9 @@ fn segments_no_candidate_meets_keep_their_sign() {
         ExactSource::new(vec![frame()], box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]), 0.0, None),
         ExactSource::new(vec![turned_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.5)], box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]), 0.0, None),
         ExactSource::new(vec![turned_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.5)], fan_top_box([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]).negated(), 0.0, None),
+        // knife edges: a base edge's Gauss arc is a half circle between nearly opposite
+        // normals (found by review: once taken for a point, its facets went missing)
+        ExactSource::new(vec![flat_pyramid(1e-9)], turned_box([-0.2, -0.2, -0.1], [0.2, 0.2, 0.2], 0.6435), 0.0, None),
     ];
     for src in &cases {
         let all = src.root_records();
@@ -510,6 +521,11 @@ fn direction_grids_find_every_facet_a_scan_finds() {
         (u_block().0, box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]).negated()),
         (frame(), turned_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.5)),
         (turned_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.3).negated(), torus_mesh(1.0, 0.4, 10, 6)),
+        // shallow ridges (short Gauss arcs, whose end tests once also passed the points
+        // opposite them) and knife edges (arcs of unknown pole)
+        (flat_pyramid(1e-5), torus_mesh(1.0, 0.4, 10, 6)),
+        (flat_pyramid(1e-9), torus_mesh(1.0, 0.4, 10, 6).negated()),
+        (turned_box([-0.2, -0.2, -0.1], [0.2, 0.2, 0.2], 0.6435), flat_pyramid(1e-7)),
     ];
     for (a, b) in &cases {
         let mut grid: Vec<_> = convolution(a, b, 0).iter().map(key).collect();
@@ -517,7 +533,9 @@ fn direction_grids_find_every_facet_a_scan_finds() {
         grid.sort_unstable();
         scan.sort_unstable();
         assert!(!scan.is_empty());
-        assert_eq!(grid, scan);
+        let only_scan = scan.iter().filter(|k| grid.binary_search(k).is_err()).count();
+        let only_grid = grid.iter().filter(|k| scan.binary_search(k).is_err()).count();
+        assert!(grid == scan, "{} facets by grid, {} by scan: {only_scan} only in the scan, {only_grid} only in the grid", grid.len(), scan.len());
     }
 }
 
