@@ -24,6 +24,12 @@
 //! On CAD parts, whose flat faces are triangulated into several coplanar triangles, this
 //! removes most facets: the two 60-triangle plates of the pegs-and-holes assembly (five
 //! boxes each) have 3600 facets without it and 309 with it.
+//!
+//! Where a mesh holds several shells (overlapping or touching bodies exported as one
+//! mesh), each convex shell `K` is a part of the solid: a face, vertex or edge inside `K`
+//! that `K` reaches beyond in the contact direction is not locally extreme for the solid,
+//! so its facet is left out ([`Parts`]): the faces of one bar inside another give none.
+//! The pegs-and-holes plates then have 218 facets.
 
 use super::gauss::{arc_distance, DirGrid};
 use super::mesh::TriMesh;
@@ -250,6 +256,10 @@ struct Topo {
     convex: Vec<Option<Vec<Vec3>>>,
     /// Unit normal of each planar region (its first triangle's).
     normal: Vec<Vec3>,
+    /// Convex parts of the solid (see [`Parts`]).
+    parts: Parts,
+    /// Triangles whose normal direction a convex part extends beyond: no face contact.
+    shadowed: Vec<bool>,
 }
 
 impl Topo {
@@ -260,11 +270,19 @@ impl Topo {
         self.convex[r as usize].is_some().then_some(r)
     }
 
-    /// A convex planar region with unit normal `d` among the triangles at vertex `v`.
+    /// A convex planar region with unit normal `d` among the (unshadowed) triangles at
+    /// vertex `v`.
     #[inline]
     fn convex_region_at(&self, v: u32, d: Vec3) -> Option<u32> {
         let (fan, faces) = (&self.fan[v as usize], &self.fan_faces[v as usize]);
-        fan.iter().zip(faces).filter(|(&n, _)| same_normal(n, d)).find_map(|(_, &f)| self.convex_region(f))
+        fan.iter().zip(faces).filter(|(&n, &f)| same_normal(n, d) && !self.shadowed[f as usize]).find_map(|(_, &f)| self.convex_region(f))
+    }
+
+    /// Whether vertex `v` can make a contact in direction `d`: locally extreme, and no
+    /// convex part of the solid reaching beyond it.
+    #[inline]
+    fn contact(&self, v: u32, d: Vec3) -> bool {
+        extreme(self, v, d) && !self.parts.shadowed(&[v], &self.verts, d)
     }
 }
 
@@ -354,7 +372,91 @@ fn topo(m: &TriMesh) -> Topo {
     }
     let convex = members.iter().map(|ms| convex_border(&verts, &faces, m, ms)).collect();
     let normal = members.iter().map(|ms| m.tris[ms[0] as usize].n).collect();
-    Topo { verts, ring, faces, edges, fan, fan_faces, region, convex, normal }
+    let parts = Parts::new(&verts, &faces, m);
+    let shadowed = faces.iter().enumerate().map(|(i, f)| m.tris[i].n != Vec3::ZERO && parts.shadowed(f, &verts, m.tris[i].n)).collect();
+    Topo { verts, ring, faces, edges, fan, fan_faces, region, convex, normal, parts, shadowed }
+}
+
+/// Shells of at most this many triangles are tried as convex parts of the solid.
+const MAX_PART: usize = 512;
+
+/// The convex shells of a mesh (overlapping or touching bodies exported as one mesh),
+/// which show where the solid extends beyond a feature: a feature inside a convex part
+/// `K ⊂ A` that `K` extends beyond in direction `d` (`h_K(d) > d · x` at its points) is
+/// not locally extreme in `d` for the solid (the segment to `K`'s farther point stays in
+/// `K`), so it makes no contact in that direction.
+struct Parts {
+    /// Distinct corners of each convex part.
+    corners: Vec<Vec<Vec3>>,
+    /// The parts holding each (welded) vertex.
+    at: Vec<Vec<u32>>,
+    /// Rounding margin for "extends beyond".
+    inner: f64,
+}
+
+impl Parts {
+    fn new(verts: &[Vec3], faces: &[[u32; 3]], m: &TriMesh) -> Parts {
+        let scale = verts.iter().fold(0.0f64, |acc, v| acc.max(v.abs().max_element())).max(1e-300);
+        let mut parts = Parts { corners: Vec::new(), at: vec![Vec::new(); verts.len()], inner: 1e-12 * scale };
+        // shells: triangles joined by shared (welded) corners
+        let mut parent: Vec<u32> = (0..verts.len() as u32).collect();
+        for f in faces {
+            union(&mut parent, f[0], f[1]);
+            union(&mut parent, f[0], f[2]);
+        }
+        let mut shell_of_root: HashMap<u32, usize> = HashMap::new();
+        let mut shells: Vec<Vec<usize>> = Vec::new();
+        for (i, f) in faces.iter().enumerate() {
+            let r = find(&mut parent, f[0]);
+            let k = *shell_of_root.entry(r).or_insert_with(|| {
+                shells.push(Vec::new());
+                shells.len() - 1
+            });
+            shells[k].push(i);
+        }
+        if shells.len() < 2 {
+            return parts; // one shell: it is the solid, whose features the tests already see
+        }
+        for tris in shells.iter().filter(|t| (4..=MAX_PART).contains(&t.len())) {
+            let mut planes: Vec<(Vec3, f64)> = Vec::new();
+            for &t in tris {
+                let tri = &m.tris[t];
+                let w = tri.n.dot(tri.p[0]);
+                if tri.n != Vec3::ZERO && !planes.iter().any(|&(q, v)| same_normal(q, tri.n) && (v - w).abs() <= 1e-12 * scale) {
+                    planes.push((tri.n, w));
+                }
+            }
+            let mut corners: Vec<u32> = tris.iter().flat_map(|&t| faces[t]).collect();
+            corners.sort_unstable();
+            corners.dedup();
+            let corners: Vec<Vec3> = corners.into_iter().map(|v| verts[v as usize]).collect();
+            let convex = planes.len() >= 4 && planes.iter().all(|&(q, w)| corners.iter().all(|c| q.dot(*c) <= w + 1e-9 * scale));
+            if !convex {
+                continue;
+            }
+            let id = parts.corners.len() as u32;
+            let bx = Aabb::from_points(&corners);
+            for (v, p) in verts.iter().enumerate() {
+                // in the closed part (exactly, in floating point: no tolerance outward)
+                if bx.contains_point(*p) && planes.iter().all(|&(q, w)| q.dot(*p) <= w) {
+                    parts.at[v].push(id);
+                }
+            }
+            parts.corners.push(corners);
+        }
+        parts
+    }
+
+    /// Whether a part holding all of `vs` extends beyond them in direction `d` (they all
+    /// lie at one height along `d`: a face and its normal, or a single vertex).
+    fn shadowed(&self, vs: &[u32], verts: &[Vec3], d: Vec3) -> bool {
+        let Some((&first, rest)) = vs.split_first() else { return false };
+        let h = d.dot(verts[first as usize]) + self.inner;
+        self.at[first as usize]
+            .iter()
+            .filter(|k| rest.iter().all(|&v| self.at[v as usize].contains(k)))
+            .any(|&k| self.corners[k as usize].iter().any(|c| d.dot(*c) > h))
+    }
 }
 
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
@@ -512,10 +614,21 @@ fn unknown_arc(n1: Vec3, n2: Vec3) -> bool {
     n1 == Vec3::ZERO || n2 == Vec3::ZERO || (n1.dot(n2) < 0.0 && n1.cross(n2).length() <= TOL)
 }
 
-/// Whether the Gauss arcs `[n1, n2]` and `[m1, m2]` can share a direction.
-fn arcs_meet(n1: Vec3, n2: Vec3, m1: Vec3, m2: Vec3) -> bool {
+/// Where two Gauss arcs meet.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Meet {
+    No,
+    /// In this one direction (unit).
+    At(Vec3),
+    /// Somewhere (an unknown arc, a point arc, or overlapping arcs of one circle).
+    Somewhere,
+}
+
+/// Whether (and where) the Gauss arcs `[n1, n2]` and `[m1, m2]` can share a direction.
+fn arcs_meet(n1: Vec3, n2: Vec3, m1: Vec3, m2: Vec3) -> Meet {
+    let yes = |b: bool| if b { Meet::Somewhere } else { Meet::No };
     if unknown_arc(n1, n2) || unknown_arc(m1, m2) {
-        return true;
+        return Meet::Somewhere;
     }
     let on_arc = |x: Vec3, a: Vec3, b: Vec3| -> bool {
         let p = a.cross(b);
@@ -531,19 +644,24 @@ fn arcs_meet(n1: Vec3, n2: Vec3, m1: Vec3, m2: Vec3) -> bool {
     };
     let (pa, pb) = (n1.cross(n2), m1.cross(m2));
     if pa.length() <= TOL {
-        return on_arc(n1, m1, m2);
+        return yes(on_arc(n1, m1, m2));
     }
     if pb.length() <= TOL {
-        return on_arc(m1, n1, n2);
+        return yes(on_arc(m1, n1, n2));
     }
     let c = pa.cross(pb);
     if c.length() <= 1e-9 * pa.length() * pb.length() {
         // the same great circle: the arcs meet when they overlap, so an end of one lies
         // on the other
-        return on_arc(m1, n1, n2) || on_arc(m2, n1, n2) || on_arc(n1, m1, m2) || on_arc(n2, m1, m2);
+        return yes(on_arc(m1, n1, n2) || on_arc(m2, n1, n2) || on_arc(n1, m1, m2) || on_arc(n2, m1, m2));
     }
     let c = c.normalize();
-    [c, -c].iter().any(|&x| on_arc(x, n1, n2) && on_arc(x, m1, m2))
+    let hits: Vec<Vec3> = [c, -c].into_iter().filter(|&x| on_arc(x, n1, n2) && on_arc(x, m1, m2)).collect();
+    match hits[..] {
+        [] => Meet::No,
+        [x] => Meet::At(x),
+        _ => Meet::Somewhere,
+    }
 }
 
 /// The vertices of `t` bucketed by the directions they can be extreme in: a cell lists
@@ -617,7 +735,8 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
             let t = tri(a, i);
             let tb = &tb;
             let ra = ta.convex_region(i as u32);
-            candidates(&vb, t.n, tb.verts.len()).into_iter().filter(move |&v| extreme(tb, v, t.n)).map(move |v| {
+            let n = if ta.shadowed[i] { Vec3::ZERO } else { t.n }; // no face contact
+            candidates(&vb, n, tb.verts.len()).into_iter().filter(move |&v| tb.contact(v, t.n)).map(move |v| {
                 match ra.zip(tb.convex_region_at(v, t.n)) {
                     Some((ra, rb)) => Part::Regions(ra, rb),
                     None => {
@@ -632,7 +751,8 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
         let s = tri(b, j);
         let ta = &ta;
         let rb = tb.convex_region(j as u32);
-        candidates(&va, s.n, ta.verts.len()).into_iter().filter(move |&u| extreme(ta, u, s.n)).map(move |u| {
+        let n = if tb.shadowed[j] { Vec3::ZERO } else { s.n };
+        candidates(&va, n, ta.verts.len()).into_iter().filter(move |&u| ta.contact(u, s.n)).map(move |u| {
             match ta.convex_region_at(u, s.n).zip(rb) {
                 Some((ra, rb)) => Part::Regions(ra, rb),
                 None => {
@@ -662,14 +782,20 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
             // both edges on the border of convex regions of one normal: in their sum
             for (n, f) in [(n1, f1), (n2, f2)] {
                 for (m, g) in [(m1, g1), (m2, g2)] {
-                    if same_normal(n, m) {
+                    if same_normal(n, m) && !ta.shadowed[f as usize] && !tb.shadowed[g as usize] {
                         if let Some(r) = ta.convex_region(f).zip(tb.convex_region(g)) {
                             return Some(Part::Regions(r.0, r.1));
                         }
                     }
                 }
             }
-            arcs_meet(n1, n2, m1, m2).then(|| Part::Facet(Facet { p: [p0 + q0, p1 + q0, p1 + q1, p0 + q1], n: 4, k }))
+            let facet = Part::Facet(Facet { p: [p0 + q0, p1 + q0, p1 + q1, p0 + q1], n: 4, k });
+            match arcs_meet(n1, n2, m1, m2) {
+                Meet::No => None,
+                // one contact direction: none when a convex part reaches beyond either edge
+                Meet::At(x) if ta.parts.shadowed(&[a0, a1], &ta.verts, x) || tb.parts.shadowed(&[b0, b1], &tb.verts, x) => None,
+                _ => Some(facet),
+            }
         })
     }));
     let mut out = Vec::with_capacity(parts.len());

@@ -104,6 +104,27 @@ fn fan_top_box(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
     TriMesh::new(v, &f, "fan-top box").unwrap()
 }
 
+/// One mesh of overlapping boxes (a shell each), as CAD exports of several bodies come.
+fn boxes_mesh(boxes: &[([f64; 3], [f64; 3])]) -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    for &(lo, hi) in boxes {
+        push_box(Vec3::from_array(lo), Vec3::from_array(hi), &mut v, &mut f);
+    }
+    TriMesh::new(v, &f, "boxes").unwrap()
+}
+
+/// Five overlapping bars, like a plate of the pegs-and-holes assembly: a frame around a
+/// hole, and a post standing in the plate.
+fn bars() -> TriMesh {
+    boxes_mesh(&[
+        ([-1.0, -0.5, 0.0], [0.25, 0.5, 0.3]),
+        ([0.75, -0.5, 0.0], [1.0, 0.5, 0.3]),
+        ([0.2, -0.5, 0.0], [0.8, -0.25, 0.3]),
+        ([0.2, 0.25, 0.0], [0.8, 0.5, 0.3]),
+        ([-0.7, -0.2, 0.2], [-0.3, 0.2, 0.9]),
+    ])
+}
+
 /// A square pyramid over `[-1, 1]²` whose apex is only `h` above its base: its base edges
 /// are knife edges (their two normals nearly opposite) when `h` is tiny.
 fn flat_pyramid(h: f64) -> TriMesh {
@@ -413,6 +434,9 @@ fn segments_no_candidate_meets_keep_their_sign() {
         // knife edges: a base edge's Gauss arc is a half circle between nearly opposite
         // normals (found by review: once taken for a point, its facets went missing)
         ExactSource::new(vec![flat_pyramid(1e-9)], turned_box([-0.2, -0.2, -0.1], [0.2, 0.2, 0.2], 0.6435), 0.0, None),
+        // overlapping shells: faces buried in another shell give no face facets
+        ExactSource::new(vec![bars()], bars().negated(), 0.0, None),
+        ExactSource::new(vec![bars()], turned_box([-0.2, -0.1, -0.1], [0.15, 0.1, 0.2], 0.4), 0.0, None),
     ];
     for src in &cases {
         let all = src.root_records();
@@ -549,4 +573,18 @@ fn a_flat_vertex_gives_no_facets() {
     for (a, b) in [(box_mesh([0.0, 0.0, 0.0], [2.0, 1.0, 3.0]), top.negated()), (top.negated(), box_mesh([0.0, 0.0, 0.0], [2.0, 1.0, 3.0]))] {
         assert_eq!(convolution(&a, &b, 0).len(), 12);
     }
+}
+
+#[test]
+fn faces_buried_in_another_shell_give_no_facets() {
+    // two overlapping boxes in one mesh: the face of each inside the other is buried (its
+    // relative interior is inside the solid), so the sum with a box has the facets of the
+    // ten outer faces only: one rectangle (two triangles) per pair of faces of one normal
+    let a = boxes_mesh(&[([0.0, 0.0, 0.0], [2.0, 1.0, 1.0]), ([1.0, 0.0, 0.0], [3.0, 1.0, 1.0])]);
+    let b = box_mesh([-0.1, -0.2, -0.3], [0.1, 0.2, 0.3]).negated();
+    assert_eq!(convolution(&a, &b, 0).len(), 20);
+    // a face touching the other shell only along its border is buried too; one sticking
+    // out of it is not (the boxes' coplanar sides)
+    let c = boxes_mesh(&[([0.0, 0.0, 0.0], [2.0, 1.0, 1.0]), ([1.0, 0.0, 0.0], [3.0, 1.0, 1.5])]);
+    assert_eq!(convolution(&c, &b, 0).len(), 2 * (1 + 1 + 2 + 2 + 2 + 2 + 1));
 }
