@@ -25,11 +25,13 @@
 //! removes most facets: the two 60-triangle plates of the pegs-and-holes assembly (five
 //! boxes each) have 3600 facets without it and 309 with it.
 //!
-//! Where a mesh holds several shells (overlapping or touching bodies exported as one
-//! mesh), each convex shell `K` is a part of the solid: a face, vertex or edge inside `K`
-//! that `K` reaches beyond in the contact direction is not locally extreme for the solid,
-//! so its facet is left out ([`Parts`]): the faces of one bar inside another give none.
-//! The pegs-and-holes plates then have 218 facets.
+//! Where a mesh holds several outward shells (overlapping or touching bodies exported as
+//! one mesh; no cavities), each convex shell `K` is a part of the solid: a face, vertex or
+//! edge of another shell inside `K` that `K` reaches beyond in the contact direction is
+//! not locally extreme for the solid, so its facet is left out ([`Parts`]): the faces of
+//! one bar inside another give none. (Every point in the relative interior of such a
+//! facet is an interior point of `A ⊕ B`; the sum is a regular closed set, so its boundary
+//! stays covered by the rest.) The pegs-and-holes plates then have 218 facets.
 
 use super::gauss::{arc_distance, DirGrid};
 use super::mesh::TriMesh;
@@ -417,6 +419,14 @@ impl Parts {
         if shells.len() < 2 {
             return parts; // one shell: it is the solid, whose features the tests already see
         }
+        // a part must lie in the solid: with every shell outward (positive volume, and not
+        // self-intersecting, as the meshes' checks assume) each adds 0 or 1 to the winding
+        // number, so the solid is their union; an inward shell (a cavity) can cut a hole
+        // into a part, and then no part is used at all
+        let volume = |tris: &Vec<usize>| tris.iter().map(|&t| m.tris[t].p[0].dot(m.tris[t].p[1].cross(m.tris[t].p[2]))).sum::<f64>();
+        if shells.iter().any(|t| volume(t) <= 0.0) {
+            return parts;
+        }
         for tris in shells.iter().filter(|t| (4..=MAX_PART).contains(&t.len())) {
             let mut planes: Vec<(Vec3, f64)> = Vec::new();
             for &t in tris {
@@ -426,10 +436,10 @@ impl Parts {
                     planes.push((tri.n, w));
                 }
             }
-            let mut corners: Vec<u32> = tris.iter().flat_map(|&t| faces[t]).collect();
-            corners.sort_unstable();
-            corners.dedup();
-            let corners: Vec<Vec3> = corners.into_iter().map(|v| verts[v as usize]).collect();
+            let mut own: Vec<u32> = tris.iter().flat_map(|&t| faces[t]).collect();
+            own.sort_unstable();
+            own.dedup();
+            let corners: Vec<Vec3> = own.iter().map(|&v| verts[v as usize]).collect();
             let convex = planes.len() >= 4 && planes.iter().all(|&(q, w)| corners.iter().all(|c| q.dot(*c) <= w + 1e-9 * scale));
             if !convex {
                 continue;
@@ -437,8 +447,11 @@ impl Parts {
             let id = parts.corners.len() as u32;
             let bx = Aabb::from_points(&corners);
             for (v, p) in verts.iter().enumerate() {
-                // in the closed part (exactly, in floating point: no tolerance outward)
-                if bx.contains_point(*p) && planes.iter().all(|&(q, w)| q.dot(*p) <= w) {
+                // in the closed part (exactly, in floating point: no tolerance outward); not
+                // the part's own corners, whose features the tolerant tests admitted on
+                // purpose (a convex shell reaches beyond its own features only by those
+                // tolerances)
+                if own.binary_search(&(v as u32)).is_err() && bx.contains_point(*p) && planes.iter().all(|&(q, w)| q.dot(*p) <= w) {
                     parts.at[v].push(id);
                 }
             }

@@ -113,6 +113,18 @@ fn boxes_mesh(boxes: &[([f64; 3], [f64; 3])]) -> TriMesh {
     TriMesh::new(v, &f, "boxes").unwrap()
 }
 
+/// A box of side 4 with a cubic cavity of side 2 (an inward shell) at its centre.
+fn hollow_box() -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::splat(-2.0), Vec3::splat(2.0), &mut v, &mut f);
+    let outer = f.len();
+    push_box(Vec3::splat(-1.0), Vec3::splat(1.0), &mut v, &mut f);
+    for t in &mut f[outer..] {
+        t.swap(1, 2);
+    }
+    TriMesh::new(v, &f, "hollow box").unwrap()
+}
+
 /// Five overlapping bars, like a plate of the pegs-and-holes assembly: a frame around a
 /// hole, and a post standing in the plate.
 fn bars() -> TriMesh {
@@ -437,6 +449,9 @@ fn segments_no_candidate_meets_keep_their_sign() {
         // overlapping shells: faces buried in another shell give no face facets
         ExactSource::new(vec![bars()], bars().negated(), 0.0, None),
         ExactSource::new(vec![bars()], turned_box([-0.2, -0.1, -0.1], [0.15, 0.1, 0.2], 0.4), 0.0, None),
+        // a cavity: the outer box is no part of the solid inside it (found by review: the
+        // cavity's faces were taken as shadowed by the outer box)
+        ExactSource::new(vec![hollow_box()], box_mesh([-0.2, -0.3, -0.1], [0.25, 0.1, 0.3]), 0.0, None),
     ];
     for src in &cases {
         let all = src.root_records();
