@@ -26,8 +26,17 @@ def _version() -> str:
         return "unknown"
 
 
+class _Parser(argparse.ArgumentParser):
+    """Argument errors as one line (``minkplan: error: …``), exit code 2, like every other
+    input error; ``--help`` shows the usage."""
+
+    def error(self, message: str):  # type: ignore[override]
+        sys.stderr.write(f"minkplan: error: {message} (see {self.prog} --help)\n")
+        raise SystemExit(2)
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="minkplan",
         description="Translational motion planning for rigid parts on Minkowski-sum "
         "C-obstacles: plan paths with proofs of no path, find assembly sequences, compute "
@@ -136,6 +145,21 @@ def _fail(message: str) -> int:
     return 2
 
 
+def _unwritable(path: Path) -> str | None:
+    """Why a file cannot be written at ``path`` (its missing folders would be created), or
+    ``None``: checked before the work, so a bad path costs nothing."""
+    if path.is_dir():
+        return "is a directory"
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                return f"{parent} is a file, not a folder"
+            if not os.access(parent, os.W_OK | os.X_OK):
+                return f"folder {parent} is not writable"
+            return None
+    return None
+
+
 def _atomic_write(path: Path, write) -> None:
     """Write via a temporary file in the same directory, then rename: never half a file."""
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -161,8 +185,15 @@ def _cmd_minkowski(args) -> int:
             f"use one of {sorted(_MESH_SUFFIXES)}"
         )
     for label, f in (("a", args.a), ("b", args.b)):
+        if Path(f).is_dir():
+            return _fail(f"{label}: {f!r} is a directory, not a mesh file")
         if not Path(f).is_file():
             return _fail(f"{label}: file {f!r} not found")
+    targets = [("--output", out)] + ([("--stats", Path(args.stats))] if args.stats else [])
+    for flag, target in targets:
+        problem = _unwritable(target)
+        if problem:
+            return _fail(f"{flag} {target}: {problem}")
 
     import planner
 
@@ -179,9 +210,12 @@ def _cmd_minkowski(args) -> int:
         exact={"auto": "auto", "true": True, "false": False}[args.exact],
         **kwargs,
     )
-    _atomic_write(
-        out, lambda tmp: result.mesh.export(tmp, file_type=out.suffix.lower().lstrip("."))
-    )
+    try:
+        _atomic_write(
+            out, lambda tmp: result.mesh.export(tmp, file_type=out.suffix.lower().lstrip("."))
+        )
+    except OSError as exc:
+        return _fail(f"--output {out}: cannot write it ({exc.strerror or exc})")
     summary = {
         "output": str(out),
         "error_bound": result.error_bound,
@@ -194,7 +228,11 @@ def _cmd_minkowski(args) -> int:
     }
     if args.stats:
         stats_path = Path(args.stats)
-        _atomic_write(stats_path, lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))
+        try:
+            _atomic_write(stats_path,
+                          lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))
+        except OSError as exc:
+            return _fail(f"--stats {stats_path}: cannot write it ({exc.strerror or exc})")
     sys.stdout.write(
         f"wrote {out}: {result.stats['triangles']} triangles ({result.stats['source']} source), "
         f"error bound {result.error_bound:.4g} "

@@ -50,6 +50,7 @@ import yaml
 from trimesh import transformations as tf
 
 from .errors import InvalidParameterError, ScenarioError
+from .meshes import MESH_SUFFIXES
 from .primitives import PRIMITIVE_KINDS, make_primitive
 from .tolerances import tol
 
@@ -669,7 +670,9 @@ def _resolve_mesh(value: Any, field: str, base_dir: Path) -> Path:
     folder = path.parent.resolve()
     hint = ""
     if folder.is_dir():
-        names = sorted(p.name for p in folder.iterdir() if p.is_file())
+        # only mesh files are worth suggesting for a mesh
+        names = sorted(p.name for p in folder.iterdir()
+                       if p.is_file() and p.suffix.lower() in MESH_SUFFIXES)
         close = difflib.get_close_matches(path.name, names, n=1, cutoff=0.6)
         if close:
             hint = f"; did you mean '{close[0]}'?"

@@ -821,3 +821,28 @@ def test_exact_sum_of_boxes_has_six_facets_and_is_their_box():
     np.testing.assert_allclose(result.mesh.bounds, a.bounds + b.bounds,
                                atol=result.error_bound)
     assert result.mesh.is_watertight
+
+
+def test_cli_minkowski_bad_paths_and_options_are_one_line_errors(tmp_path, capsys):
+    cube = tmp_path / "cube.stl"
+    shapes.box((1.0, 1.0, 1.0)).export(cube)
+    cases = [
+        (["-o", str(cube / "sum.stl")], "--output", "is a file, not a folder"),
+        (["-o", str(tmp_path / "sum.stl"), "--stats", str(tmp_path)], "--stats",
+         "is a directory"),
+        (["-o", str(tmp_path / "sum.stl"), "--exact", "maybe"], "--exact", "invalid choice"),
+    ]
+    for extra, field, problem in cases:
+        try:
+            code = main(["minkowski", str(cube), str(cube), "--no-progress", *extra])
+        except SystemExit as exc:  # argparse's own errors leave through SystemExit
+            code = exc.code
+        err = capsys.readouterr().err
+        lines = err.strip().splitlines()
+        assert code == 2 and len(lines) == 1, err
+        assert lines[0].startswith("minkplan: error: ") and field in lines[0], lines[0]
+        assert problem in lines[0] and "Traceback" not in err
+        assert not (tmp_path / "sum.stl").exists()
+    code = main(["minkowski", str(tmp_path), str(cube), "-o", str(tmp_path / "s.stl")])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "is a directory, not a mesh file" in lines[0]

@@ -603,3 +603,12 @@ def test_primitive_errors(spec, field):
         make_primitive(spec, field="o")
     assert info.value.field == field
     assert str(info.value).startswith(f"{field}: ")
+
+
+def test_missing_mesh_suggests_only_mesh_files(folder):
+    # the scenario file itself sits beside the meshes: a near miss of its name is no mesh
+    path = write(folder, scenario_text(robot="robot: {mesh: scenario.yml}"))
+    assert path.suffix == ".yaml" and (path.parent / "scenario.yml").exists() is False
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert "not found" in str(info.value) and "did you mean" not in str(info.value)
