@@ -427,6 +427,9 @@ impl Parts {
         if shells.iter().any(|t| volume(t) <= 0.0) {
             return parts;
         }
+        // vertices by x, so each part scans only those within its box's x range
+        let mut by_x: Vec<u32> = (0..verts.len() as u32).collect();
+        by_x.sort_unstable_by(|&a, &b| verts[a as usize].x.total_cmp(&verts[b as usize].x));
         for tris in shells.iter().filter(|t| (4..=MAX_PART).contains(&t.len())) {
             let mut planes: Vec<(Vec3, f64)> = Vec::new();
             for &t in tris {
@@ -446,13 +449,16 @@ impl Parts {
             }
             let id = parts.corners.len() as u32;
             let bx = Aabb::from_points(&corners);
-            for (v, p) in verts.iter().enumerate() {
+            let lo = by_x.partition_point(|&v| verts[v as usize].x < bx.min.x);
+            let hi = by_x.partition_point(|&v| verts[v as usize].x <= bx.max.x);
+            for &v in &by_x[lo..hi] {
+                let p = verts[v as usize];
                 // in the closed part (exactly, in floating point: no tolerance outward); not
                 // the part's own corners, whose features the tolerant tests admitted on
                 // purpose (a convex shell reaches beyond its own features only by those
                 // tolerances)
-                if own.binary_search(&(v as u32)).is_err() && bx.contains_point(*p) && planes.iter().all(|&(q, w)| q.dot(*p) <= w) {
-                    parts.at[v].push(id);
+                if own.binary_search(&v).is_err() && bx.contains_point(p) && planes.iter().all(|&(q, w)| q.dot(p) <= w) {
+                    parts.at[v as usize].push(id);
                 }
             }
             parts.corners.push(corners);
