@@ -24,7 +24,7 @@ exact outside distance), :func:`in_minkowski_sum`, :class:`CollisionOracle`,
 from __future__ import annotations
 
 import hashlib
-from collections import OrderedDict
+from collections import OrderedDict, defaultdict
 
 import fcl
 import numpy as np
@@ -36,6 +36,7 @@ __all__ = [
     "CollisionOracle",
     "MinkowskiOracle",
     "approx_to_true_distances",
+    "assert_component_closed",
     "boundary_points_by_bisection",
     "clear_caches",
     "exact_convex_sum",
@@ -43,6 +44,7 @@ __all__ = [
     "in_c_obstacle",
     "in_minkowski_sum",
     "interior_points",
+    "lattice_boxes",
     "mirrored",
     "points_in_mesh",
     "sampled_hausdorff",
@@ -656,3 +658,42 @@ def exact_convex_sum(a: trimesh.Trimesh, b: trimesh.Trimesh) -> trimesh.Trimesh:
     hull = trimesh.convex.convex_hull(sums)
     hull.fix_normals()
     return hull
+
+
+# ---- no-path certificates ---------------------------------------------------------------
+
+def lattice_boxes(boxes, origin, floor) -> np.ndarray:
+    """Octree cell boxes ``(n, 2, 3)`` as integers on the lattice of spacing ``floor`` from
+    ``origin`` (asserting they lie on it), for exact arithmetic on cell faces."""
+    b = (np.asarray(boxes, dtype=np.float64) - origin) / floor
+    r = np.rint(b)
+    assert np.allclose(b, r, atol=1e-6), "cells lie on the lattice"
+    return r.astype(np.int64)
+
+
+def assert_component_closed(cert, origin) -> None:
+    """The walled-off component of a no-path certificate is closed: every face of every
+    component cell is covered, in exact integer lattice arithmetic, by component cells
+    and wall cells."""
+    floor = cert["floor"]
+    comp = lattice_boxes(cert["component"]["boxes"], origin, floor)
+    walls = lattice_boxes([w["box"] for w in cert["walls"]], origin, floor)
+    allb = np.vstack([comp, walls])
+    by_plane = defaultdict(list)  # (axis, side, plane coordinate) -> boxes
+    for k, b in enumerate(allb):
+        for axis in range(3):
+            by_plane[(axis, 0, b[0, axis])].append(k)
+            by_plane[(axis, 1, b[1, axis])].append(k)
+    by_plane = {key: allb[np.array(v)] for key, v in by_plane.items()}
+    for c in comp:
+        for axis in range(3):
+            u, v = [a for a in range(3) if a != axis]
+            area = (c[1, u] - c[0, u]) * (c[1, v] - c[0, v])
+            # the cells across the upper face start at c[1, axis]; across the lower face
+            # they end at c[0, axis]
+            for other in (by_plane.get((axis, 0, c[1, axis])),
+                          by_plane.get((axis, 1, c[0, axis]))):
+                assert other is not None, "a component face at the root boundary"
+                du = np.minimum(other[:, 1, u], c[1, u]) - np.maximum(other[:, 0, u], c[0, u])
+                dv = np.minimum(other[:, 1, v], c[1, v]) - np.maximum(other[:, 0, v], c[0, v])
+                assert (np.clip(du, 0, None) * np.clip(dv, 0, None)).sum() == area

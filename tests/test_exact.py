@@ -25,7 +25,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import textwrap
-from collections import defaultdict
 from pathlib import Path
 
 import fcl
@@ -118,43 +117,10 @@ def densify(waypoints: np.ndarray, step: float) -> np.ndarray:
     return np.vstack(pts)
 
 
-def _lattice(boxes, origin, floor):
-    b = (np.asarray(boxes, dtype=np.float64) - origin) / floor
-    r = np.rint(b)
-    assert np.allclose(b, r, atol=1e-6), "cells lie on the lattice"
-    return r.astype(np.int64)
-
-
-def assert_component_closed(cert, origin):
-    """Every face of every cell of the walled-off component is covered, in exact integer
-    lattice arithmetic, by component cells and wall cells (as tests/test_plan.py checks
-    for the decomposition source)."""
-    floor = cert["floor"]
-    comp = _lattice(cert["component"]["boxes"], origin, floor)
-    walls = _lattice([w["box"] for w in cert["walls"]], origin, floor)
-    allb = np.vstack([comp, walls])
-    by_plane = defaultdict(list)  # (axis, side, plane coordinate) -> boxes
-    for k, b in enumerate(allb):
-        for axis in range(3):
-            by_plane[(axis, 0, b[0, axis])].append(k)
-            by_plane[(axis, 1, b[1, axis])].append(k)
-    by_plane = {key: allb[np.array(v)] for key, v in by_plane.items()}
-    for c in comp:
-        for axis in range(3):
-            u, v = [a for a in range(3) if a != axis]
-            area = (c[1, u] - c[0, u]) * (c[1, v] - c[0, v])
-            for other in (by_plane.get((axis, 0, c[1, axis])),
-                          by_plane.get((axis, 1, c[0, axis]))):
-                assert other is not None, "a component face at the root boundary"
-                du = np.minimum(other[:, 1, u], c[1, u]) - np.maximum(other[:, 0, u], c[0, u])
-                dv = np.minimum(other[:, 1, v], c[1, v]) - np.maximum(other[:, 0, v], c[0, v])
-                assert (np.clip(du, 0, None) * np.clip(dv, 0, None)).sum() == area
-
-
 def point_in_boxes(points, boxes, origin, floor):
     """``(n,)`` bool: is each point (off the cell faces) in one of the octree ``boxes``,
     found by their aligned keys level by level (vectorised)."""
-    lat = _lattice(boxes, origin, floor)
+    lat = oracle.lattice_boxes(boxes, origin, floor)
     size = lat[:, 1, 0] - lat[:, 0, 0]
     assert np.all(lat[:, 1] - lat[:, 0] == size[:, None]) and np.all(size > 0)
     level = np.log2(size).round().astype(np.int64)
@@ -499,7 +465,7 @@ def test_sealed_chamber_exact_certificate_rechecked(cache_dir):
     # the walled-off component is closed (exact lattice arithmetic)
     comp = np.asarray(cert["component"]["boxes"])
     origin = comp[:, 0].min(axis=0) - 1000 * cert["floor"]
-    assert_component_closed(cert, origin)
+    oracle.assert_component_closed(cert, origin)
     walled = np.asarray(cert["walled_point"])
     other = scenario.goal if cert["walled"] == "start" else scenario.start
     inside = lambda p: np.any(np.all((comp[:, 0] <= p) & (p <= comp[:, 1]), axis=1))  # noqa: E731

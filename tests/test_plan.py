@@ -5,7 +5,6 @@ named, determinism, clearance, OMPL baselines."""
 from __future__ import annotations
 
 import dataclasses
-from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +16,11 @@ from planner.decompose import decompose
 from planner.planning import FOUND, NO_PATH, NOT_FOUND, OctreeParams, plan
 from planner.scenario import load_scenario
 from planner.validation import FclChecker
+
+try:  # tests/ as a package or as a plain directory on sys.path
+    from . import oracle
+except ImportError:
+    import oracle
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
@@ -104,13 +108,6 @@ def test_tight_peg_needs_refinement_and_stays_local(outcomes):
     assert outcome.clearance < 0.01 + 1e-9
 
 
-def _integer_boxes(boxes, origin, floor):
-    b = (np.asarray(boxes) - origin) / floor
-    r = np.rint(b)
-    assert np.allclose(b, r, atol=1e-6), "cells lie on the lattice"
-    return r.astype(np.int64)
-
-
 def test_no_path_certificate_really_separates_start_and_goal(outcomes, cache_dir):
     scenario = load_scenario(SCENARIOS / "sealed_chamber.yaml")
     outcome = outcomes("sealed_chamber")
@@ -143,28 +140,7 @@ def test_no_path_certificate_really_separates_start_and_goal(outcomes, cache_dir
     #    component cells and wall cells (exact integer lattice arithmetic)
     floor = cert["floor"]
     comp = np.asarray(cert["component"]["boxes"])
-    walls = np.array([w["box"] for w in cert["walls"]])
-    origin = comp[:, 0].min(axis=0) - 1000 * floor
-    ci = _integer_boxes(comp, origin, floor)
-    allb = np.vstack([ci, _integer_boxes(walls, origin, floor)])
-    by_plane = defaultdict(list)  # (axis, side, plane coordinate) -> boxes
-    for k, b in enumerate(allb):
-        for axis in range(3):
-            by_plane[(axis, 0, b[0, axis])].append(k)
-            by_plane[(axis, 1, b[1, axis])].append(k)
-    by_plane = {key: allb[np.array(v)] for key, v in by_plane.items()}
-    for c in ci:
-        for axis in range(3):
-            u, v = [a for a in range(3) if a != axis]
-            area = (c[1, u] - c[0, u]) * (c[1, v] - c[0, v])
-            # the cells across the upper face start at c[1, axis]; across the lower face
-            # they end at c[0, axis]
-            across = (by_plane.get((axis, 0, c[1, axis])), by_plane.get((axis, 1, c[0, axis])))
-            for other in across:
-                assert other is not None, "a component face at the root boundary"
-                du = np.minimum(other[:, 1, u], c[1, u]) - np.maximum(other[:, 0, u], c[0, u])
-                dv = np.minimum(other[:, 1, v], c[1, v]) - np.maximum(other[:, 0, v], c[0, v])
-                assert (np.clip(du, 0, None) * np.clip(dv, 0, None)).sum() == area
+    oracle.assert_component_closed(cert, comp[:, 0].min(axis=0) - 1000 * floor)
 
     # 3. the walled point is in the component, the other point is not
     walled = np.asarray(cert["walled_point"])
