@@ -215,26 +215,7 @@ def _sum(
         if bar is not None:
             bar.close()
 
-    mesh = trimesh.Trimesh(vertices=surf["vertices"], faces=surf["faces"], process=False)
-    # closed, manifold and outward by construction (integer-determinant orientation over
-    # a crack-free tetrahedral split); the tests check it, so it is not re-checked here
-    if len(mesh.faces) == 0:
-        raise GeometryError(
-            f"{names[0]} ⊕ {names[1]}: the extracted surface is empty; please report this input"
-        )
-    complex_cells = int(surf["complex_cells"])
-    if complex_cells:
-        log.warning(
-            "%s ⊕ %s: %d complex cells remain after %d refinements: the bound is not guaranteed "
-            "there (features thinner than %.3g); use a smaller eps",
-            names[0],
-            names[1],
-            complex_cells,
-            surf["refinements"],
-            surf["h"],
-        )
-    per_level = surf["cells_per_level"]
-    cells = _cell_totals(per_level)
+    mesh, surface_stats, surface_seconds = _surface_mesh(surf, names)
     excess_a = max(dec_a.excess, dec_a.deficit)
     excess_b = max(dec_b.excess, dec_b.deficit)
     error_bound = float(surf["error_bound"]) + excess_a + excess_b
@@ -257,30 +238,16 @@ def _sum(
         "pieces_a": len(dec_a.pieces),
         "pieces_b": len(dec_b.pieces),
         "primitives": len(prims),
-        "cells": cells,
-        "cells_per_level": [list(map(int, c)) for c in per_level],
-        "band_cells": int(surf["band_cells"]),
-        "triangles": int(len(mesh.faces)),
-        "triangles_extracted": int(surf["triangles_extracted"]),
-        "vertices": int(len(mesh.vertices)),
+        **surface_stats,
         "eps": eps_value,
-        "h": float(surf["h"]),
-        "grid_error_bound": float(surf["error_bound"]),
         "decomposition_excess": excess_a + excess_b,
-        "complex_cells": complex_cells,
-        "unresolved_cells": int(surf["unresolved_cells"]),
-        "complex_edges": int(surf["complex_edges"]),
-        "refinements": int(surf["refinements"]),
         "exact": bool(dec_a.exact and dec_b.exact),
         "decomposition": {"a": dec_stats(dec_a), "b": dec_stats(dec_b)},
-        "threads": core.num_threads(),
         "seconds": {
             "decompose_a": dec_a.seconds,
             "decompose_b": dec_b.seconds,
             "pairwise": t_pairs,
-            "octree": float(surf["seconds_octree"]),
-            "surface": float(surf["seconds_surface"]),
-            "simplify": float(surf["seconds_simplify"]),
+            **surface_seconds,
             "total": time.perf_counter() - t_start,
         },
     }
@@ -300,7 +267,7 @@ def _sum(
         error_bound=error_bound,
         eps=eps_value,
         bound_kind="two-sided" if stats["exact"] else "outer",
-        bound_guaranteed=complex_cells == 0 and stats["exact"],
+        bound_guaranteed=surface_stats["complex_cells"] == 0 and stats["exact"],
         exact=stats["exact"],
         stats=stats,
         primitives=prims,
@@ -339,6 +306,43 @@ def mesh_arrays(mesh: trimesh.Trimesh, name: str) -> tuple[np.ndarray, np.ndarra
             np.ascontiguousarray(solid.faces, dtype=np.int64))
 
 
+def _surface_mesh(surf: dict, names: tuple[str, str]) -> tuple[trimesh.Trimesh, dict, dict]:
+    """The core's surface as a mesh, with the stats and stage seconds both sources report;
+    an empty surface is an error, complex cells left a warning."""
+    mesh = trimesh.Trimesh(vertices=surf["vertices"], faces=surf["faces"], process=False)
+    # closed, manifold and outward by construction (integer-determinant orientation over
+    # a crack-free tetrahedral split); the tests check it, so it is not re-checked here
+    if len(mesh.faces) == 0:
+        raise GeometryError(
+            f"{names[0]} ⊕ {names[1]}: the extracted surface is empty; please report this input"
+        )
+    complex_cells = int(surf["complex_cells"])
+    if complex_cells:
+        log.warning(
+            "%s ⊕ %s: %d complex cells remain after %d refinements: the bound is not guaranteed "
+            "there (features thinner than %.3g); use a smaller eps",
+            names[0], names[1], complex_cells, surf["refinements"], surf["h"],
+        )
+    per_level = surf["cells_per_level"]
+    stats = {
+        "cells": _cell_totals(per_level),
+        "cells_per_level": [list(map(int, c)) for c in per_level],
+        "band_cells": int(surf["band_cells"]),
+        "triangles": int(len(mesh.faces)),
+        "triangles_extracted": int(surf["triangles_extracted"]),
+        "vertices": int(len(mesh.vertices)),
+        "h": float(surf["h"]),
+        "grid_error_bound": float(surf["error_bound"]),
+        "complex_cells": complex_cells,
+        "unresolved_cells": int(surf["unresolved_cells"]),
+        "complex_edges": int(surf["complex_edges"]),
+        "refinements": int(surf["refinements"]),
+        "threads": core.num_threads(),
+    }
+    seconds = {key: float(surf[f"seconds_{key}"]) for key in ("octree", "surface", "simplify")}
+    return mesh, stats, seconds
+
+
 def _exact_sum(a, b, *, mirror_b, eps, max_cells, max_refinements, simplify, names, t_start,
                chosen) -> MinkowskiResult:
     from .meshes import mirror
@@ -354,47 +358,19 @@ def _exact_sum(a, b, *, mirror_b, eps, max_cells, max_refinements, simplify, nam
     eps_value = _grid_eps(box, diag, eps, max_cells)
     surf = source.surface(eps_value, max_cells=max_cells, max_refinements=max_refinements,
                           simplify=simplify)
-    mesh = trimesh.Trimesh(vertices=surf["vertices"], faces=surf["faces"], process=False)
-    if len(mesh.faces) == 0:
-        raise GeometryError(
-            f"{names[0]} ⊕ {names[1]}: the extracted surface is empty; please report this input"
-        )
-    complex_cells = int(surf["complex_cells"])
-    if complex_cells:
-        log.warning("%s ⊕ %s: %d complex cells remain after %d refinements: the bound is not "
-                    "guaranteed there; use a smaller eps", names[0], names[1], complex_cells,
-                    surf["refinements"])
-    per_level = surf["cells_per_level"]
-    cells = _cell_totals(per_level)
+    mesh, surface_stats, surface_seconds = _surface_mesh(surf, names)
     stats = {
         "source": "exact",
         "exact_chosen": chosen,
         "triangles_a": int(source.triangles[0]),
         "triangles_b": int(source.triangles[1]),
         "facets": int(source.facets),
-        "cells": cells,
-        "cells_per_level": [list(map(int, c)) for c in per_level],
-        "band_cells": int(surf["band_cells"]),
-        "triangles": int(len(mesh.faces)),
-        "triangles_extracted": int(surf["triangles_extracted"]),
-        "vertices": int(len(mesh.vertices)),
+        **surface_stats,
         "eps": eps_value,
-        "h": float(surf["h"]),
-        "grid_error_bound": float(surf["error_bound"]),
         "decomposition_excess": 0.0,
-        "complex_cells": complex_cells,
-        "unresolved_cells": int(surf["unresolved_cells"]),
-        "complex_edges": int(surf["complex_edges"]),
-        "refinements": int(surf["refinements"]),
         "exact": True,
-        "threads": core.num_threads(),
-        "seconds": {
-            "source": t_source,
-            "octree": float(surf["seconds_octree"]),
-            "surface": float(surf["seconds_surface"]),
-            "simplify": float(surf["seconds_simplify"]),
-            "total": time.perf_counter() - t_start,
-        },
+        "seconds": {"source": t_source, **surface_seconds,
+                    "total": time.perf_counter() - t_start},
     }
     log.info("%s ⊕ %s (exact source): %d triangles, bound %.4g, %.3fs", names[0], names[1],
              len(mesh.faces), surf["error_bound"], stats["seconds"]["total"])
@@ -403,7 +379,7 @@ def _exact_sum(a, b, *, mirror_b, eps, max_cells, max_refinements, simplify, nam
         error_bound=float(surf["error_bound"]),
         eps=eps_value,
         bound_kind="two-sided",
-        bound_guaranteed=complex_cells == 0,
+        bound_guaranteed=surface_stats["complex_cells"] == 0,
         exact=True,
         stats=stats,
         primitives=source,
