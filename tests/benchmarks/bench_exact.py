@@ -71,6 +71,8 @@ ROOT = HERE.parent.parent
 sys.path.insert(0, str(HERE.parent))     # tests/: shapes, oracle
 sys.path.insert(0, str(ROOT))            # repository root: planner
 
+from benchlib import jsonable  # noqa: E402
+
 import planner  # noqa: E402
 from planner.assembly import (  # noqa: E402
     load_assembly,
@@ -101,20 +103,6 @@ def fresh_dir(tag: str) -> str:
 
 def dir_entries(path: str) -> int:
     return sum(len(files) for _, _, files in os.walk(path))
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, Path):
-        return str(x)
-    return x
 
 
 # --------------------------------------------------------------------------------------
@@ -331,7 +319,7 @@ def _coacd_ran(run: dict) -> bool | None:
     dec = run.get("decomposition")
     if not dec:
         return None
-    text = json.dumps(_jsonable(dec)).lower()
+    text = json.dumps(jsonable(dec)).lower()
     return "coacd" in text
 
 
@@ -609,7 +597,7 @@ def _run(args) -> int:
     def save():
         meta["elapsed_seconds"] = time.perf_counter() - t_start
         meta["load_average_end"] = os.getloadavg()
-        json_path.write_text(json.dumps(_jsonable({"meta": meta, "rows": rows}), indent=1,
+        json_path.write_text(json.dumps(jsonable({"meta": meta, "rows": rows}), indent=1,
                                         allow_nan=True))
         md_path.write_text(markdown(meta, rows, args.date))
 

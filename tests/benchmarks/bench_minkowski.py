@@ -46,6 +46,7 @@ sys.path.insert(0, str(HERE.parent.parent))          # repository root: planner
 
 import oracle  # noqa: E402
 import shapes  # noqa: E402
+from benchlib import jsonable  # noqa: E402
 
 
 def log(msg: str) -> None:
@@ -195,7 +196,7 @@ def measure_case(name, a, b, rel_eps, *, samples, seed, with_ours, cold=True,
         log(f"  accuracy not measured: {acc['oracle_skipped']}")
     row["ours"] = {"seconds_cached": t_cached, "triangles": len(r.mesh.faces),
                    "error_bound": r.error_bound, "eps_used": r.eps,
-                   "stats": _jsonable(r.stats), **acc}
+                   "stats": jsonable(r.stats), **acc}
     row["ratio_cached"] = t_cached / t_m if t_m > 0 else math.inf
     if "ours_cold_seconds" in row:
         row["ratio_cold"] = row["ours_cold_seconds"] / t_m if t_m > 0 else math.inf
@@ -203,18 +204,6 @@ def measure_case(name, a, b, rel_eps, *, samples, seed, with_ours, cold=True,
         d1, d2 = oracle.sampled_hausdorff(r.mesh, mesh_m, n=20 * samples, seed=seed)
         row["ours"]["hausdorff_to_manifold"] = max(d1, d2)
     return row, manifold, cache_dir
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return x
 
 
 def loglog_slope(xs, ys):
@@ -322,7 +311,7 @@ def _run(args) -> int:
     def save():
         if args.json:
             payload = {
-                "rows": _jsonable(rows), "series": _jsonable(series),
+                "rows": jsonable(rows), "series": jsonable(series),
                 "machine": {"python": platform.python_version(),
                             "platform": platform.platform(), "cpu_count": os.cpu_count(),
                             "rayon_num_threads": os.environ.get("RAYON_NUM_THREADS")},
