@@ -88,7 +88,7 @@ def _as_mesh(obj, name: str) -> trimesh.Trimesh:
 
 def _label(mesh: trimesh.Trimesh, role: str) -> str:
     """How errors and logs name an operand: its role, and the file it came from if any."""
-    path = mesh.metadata.get("file_path") if isinstance(mesh.metadata, dict) else None
+    path = mesh.metadata.get("file_path")
     return f"{role} {Path(path).name}" if path else role
 
 

@@ -37,8 +37,9 @@ use super::gauss::{arc_distance, DirGrid};
 use super::mesh::TriMesh;
 use crate::math::{Aabb, Vec3};
 use crate::polytope::clip_planes;
+use crate::roadmap::UnionFind;
 use rayon::prelude::*;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Angular tolerance of the compatibility tests.
 const TOL: f64 = 1e-9;
@@ -332,7 +333,7 @@ fn topo(m: &TriMesh) -> Topo {
         }
     }
     let mut edges = Vec::new();
-    let mut parent: Vec<u32> = (0..faces.len() as u32).collect();
+    let mut regions = UnionFind::new(faces.len());
     for (&(a, b), &f1) in &half {
         if a > b {
             continue;
@@ -345,7 +346,7 @@ fn topo(m: &TriMesh) -> Topo {
             continue;
         }
         if same_normal(n1, n2) {
-            union(&mut parent, f1 as u32, f2 as u32); // one planar region
+            regions.union(f1, f2); // one planar region
         }
         // reflex when the far corner of f2 lies above f1's plane
         let far = faces[f2].iter().copied().find(|&v| v != a && v != b).unwrap_or(a);
@@ -364,7 +365,7 @@ fn topo(m: &TriMesh) -> Topo {
     let mut region = Vec::with_capacity(faces.len());
     let mut members: Vec<Vec<u32>> = Vec::new();
     for f in 0..faces.len() as u32 {
-        let r = find(&mut parent, f) as usize;
+        let r = regions.find(f as usize);
         if id_of_root[r] == u32::MAX {
             id_of_root[r] = members.len() as u32;
             members.push(Vec::new());
@@ -401,15 +402,15 @@ impl Parts {
         let scale = verts.iter().fold(0.0f64, |acc, v| acc.max(v.abs().max_element())).max(1e-300);
         let mut parts = Parts { corners: Vec::new(), at: vec![Vec::new(); verts.len()], inner: 1e-12 * scale };
         // shells: triangles joined by shared (welded) corners
-        let mut parent: Vec<u32> = (0..verts.len() as u32).collect();
+        let mut joined = UnionFind::new(verts.len());
         for f in faces {
-            union(&mut parent, f[0], f[1]);
-            union(&mut parent, f[0], f[2]);
+            joined.union(f[0] as usize, f[1] as usize);
+            joined.union(f[0] as usize, f[2] as usize);
         }
-        let mut shell_of_root: HashMap<u32, usize> = HashMap::new();
+        let mut shell_of_root: HashMap<usize, usize> = HashMap::new();
         let mut shells: Vec<Vec<usize>> = Vec::new();
         for (i, f) in faces.iter().enumerate() {
-            let r = find(&mut parent, f[0]);
+            let r = joined.find(f[0] as usize);
             let k = *shell_of_root.entry(r).or_insert_with(|| {
                 shells.push(Vec::new());
                 shells.len() - 1
@@ -478,21 +479,6 @@ impl Parts {
     }
 }
 
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        parent[x as usize] = parent[parent[x as usize] as usize];
-        x = parent[x as usize];
-    }
-    x
-}
-
-fn union(parent: &mut [u32], a: u32, b: u32) {
-    let (ra, rb) = (find(parent, a), find(parent, b));
-    if ra != rb {
-        parent[ra.max(rb) as usize] = ra.min(rb);
-    }
-}
-
 /// An orthonormal basis `(u, w)` of the plane normal to the unit `n`.
 fn plane_basis(n: Vec3) -> (Vec3, Vec3) {
     let a = if n.x.abs() < 0.6 { Vec3::X } else { Vec3::Y };
@@ -512,7 +498,7 @@ fn convex_border(verts: &[Vec3], faces: &[[u32; 3]], m: &TriMesh, members: &[u32
     if n == Vec3::ZERO {
         return None;
     }
-    let mut directed: HashMap<(u32, u32), ()> = HashMap::with_capacity(3 * members.len());
+    let mut directed: HashSet<(u32, u32)> = HashSet::with_capacity(3 * members.len());
     let mut area = 0.0;
     for &f in members {
         let t = &m.tris[f as usize];
@@ -520,14 +506,14 @@ fn convex_border(verts: &[Vec3], faces: &[[u32; 3]], m: &TriMesh, members: &[u32
         let c = faces[f as usize];
         for i in 0..3 {
             let e = (c[i], c[(i + 1) % 3]);
-            if e.0 == e.1 || directed.insert(e, ()).is_some() {
+            if e.0 == e.1 || !directed.insert(e) {
                 return None;
             }
         }
     }
     let mut next: HashMap<u32, u32> = HashMap::new();
-    for &(a, b) in directed.keys() {
-        if !directed.contains_key(&(b, a)) && next.insert(a, b).is_some() {
+    for &(a, b) in &directed {
+        if !directed.contains(&(b, a)) && next.insert(a, b).is_some() {
             return None; // two border edges leave one corner
         }
     }

@@ -4,6 +4,7 @@
 
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
+use crate::roadmap::UnionFind;
 use std::collections::HashMap;
 
 /// A BVH node: leaf when `tri != u32::MAX`, else children `left` and `left + 1`.
@@ -135,26 +136,15 @@ impl TriMesh {
         let aabb = Aabb::from_points(&vertices);
         let nodes = build_nodes(&tris);
         // one vertex per connected shell (union-find over the triangles' corners)
-        let mut parent: Vec<u32> = (0..nv).collect();
-        fn find(parent: &mut [u32], mut x: u32) -> u32 {
-            while parent[x as usize] != x {
-                parent[x as usize] = parent[parent[x as usize] as usize];
-                x = parent[x as usize];
-            }
-            x
-        }
+        let mut shells = UnionFind::new(nv as usize);
         for f in faces {
-            for k in 1..3 {
-                let (a, b) = (find(&mut parent, f[0]), find(&mut parent, f[k]));
-                if a != b {
-                    parent[a as usize] = b;
-                }
-            }
+            shells.union(f[0] as usize, f[1] as usize);
+            shells.union(f[0] as usize, f[2] as usize);
         }
         let mut seen = std::collections::HashSet::new();
         let mut anchors = Vec::new();
         for f in faces {
-            if seen.insert(find(&mut parent, f[0])) {
+            if seen.insert(shells.find(f[0] as usize)) {
                 anchors.push(vertices[f[0] as usize]);
             }
         }

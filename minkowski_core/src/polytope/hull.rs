@@ -2,6 +2,7 @@
 
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
+use crate::roadmap::UnionFind;
 use std::collections::HashMap;
 
 /// A closed convex polytope `{x : n_k · x <= d_k for all k}`.
@@ -95,14 +96,7 @@ impl ConvexPolytope {
         let plane_tol = 1e-9 * scale;
         let unit: Vec<Vec3> = tri_n.iter().map(|n| n.normalize_or_zero()).collect();
         let off: Vec<f64> = tris.iter().zip(&unit).map(|(t, n)| n.dot(vertices[t[0] as usize])).collect();
-        let mut parent: Vec<usize> = (0..tris.len()).collect();
-        fn find(p: &mut Vec<usize>, mut i: usize) -> usize {
-            while p[i] != i {
-                p[i] = p[p[i]];
-                i = p[i];
-            }
-            i
-        }
+        let mut facets = UnionFind::new(tris.len());
         let mut edge_owner: HashMap<(u32, u32), usize> = HashMap::with_capacity(tris.len() * 2);
         let mut adjacent: Vec<(usize, usize)> = Vec::with_capacity(tris.len() * 3 / 2);
         for (ti, t) in tris.iter().enumerate() {
@@ -127,10 +121,7 @@ impl ConvexPolytope {
         };
         for &(i, j) in &adjacent {
             if coplanar(i, j) {
-                let (ri, rj) = (find(&mut parent, i), find(&mut parent, j));
-                if ri != rj {
-                    parent[ri] = rj;
-                }
+                facets.union(i, j);
             }
         }
         // One plane per facet: area-weighted normal, offset as the max over the facet's vertices
@@ -142,7 +133,7 @@ impl ConvexPolytope {
             if deg[ti] {
                 continue;
             }
-            let r = find(&mut parent, ti);
+            let r = facets.find(ti);
             let f = *facet_of_root.entry(r).or_insert_with(|| {
                 normals.push(Vec3::ZERO);
                 (normals.len() - 1) as u32

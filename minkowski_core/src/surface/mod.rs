@@ -21,6 +21,7 @@ pub use simplify::merge_coplanar;
 
 use crate::math::Vec3;
 use crate::octree::{CellSource, Label, Octree};
+use crate::roadmap::UnionFind;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -251,23 +252,13 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
         .collect();
 
     // signs: one point query per set of lattice points joined by such edges
-    let mut parent: Vec<u32> = (0..pts.len() as u32).collect();
-    fn find(parent: &mut [u32], mut x: u32) -> u32 {
-        while parent[x as usize] != x {
-            parent[x as usize] = parent[parent[x as usize] as usize];
-            x = parent[x as usize];
-        }
-        x
-    }
+    let mut joined = UnionFind::new(pts.len());
     for (e, iv) in edges.iter().zip(&bnd) {
         if iv.is_empty() {
-            let (ra, rb) = (find(&mut parent, (e.3 / 7) as u32), find(&mut parent, e.4));
-            if ra != rb {
-                parent[ra.max(rb) as usize] = ra.min(rb);
-            }
+            joined.union((e.3 / 7) as usize, e.4 as usize);
         }
     }
-    let roots: Vec<u32> = (0..pts.len() as u32).map(|i| find(&mut parent, i)).collect();
+    let roots: Vec<u32> = (0..pts.len()).map(|i| joined.find(i) as u32).collect();
     let queried: Vec<(u32, bool)> = roots
         .par_iter()
         .enumerate()
