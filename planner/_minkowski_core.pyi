@@ -13,8 +13,10 @@ __all__ = [
     "Primitives",
     "__version__",
     "build_octree",
+    "front_windings",
     "num_threads",
     "union_surface",
+    "winding_numbers",
 ]
 __version__: str
 
@@ -56,6 +58,16 @@ def build_octree(
     max_cells: int = 40000000,
 ) -> dict[str, Any]: ...
 def num_threads() -> int: ...
+def front_windings(
+    vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
+) -> npt.NDArray[np.int64]:
+    """Winding number just in front of each face of a closed mesh (int64 min: unknown)."""
+def winding_numbers(
+    vertices: npt.NDArray[np.float64],
+    faces: npt.NDArray[np.int64],
+    points: npt.NDArray[np.float64],
+) -> npt.NDArray[np.int64]:
+    """Exact winding numbers of points for a closed mesh (int64 min: on the surface)."""
 
 @final
 class ExactSum:
@@ -65,6 +77,8 @@ class ExactSum:
         cls,
         a: tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]],
         b: tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]],
+        a_solid: bool = True,
+        b_solid: bool = True,
     ) -> ExactSum: ...
     @property
     def bounds(self) -> npt.NDArray[np.float64]: ...
@@ -101,8 +115,11 @@ class CSpace:
         h_coarse: float,
         margin: float = 0.0,
         max_leaves: int = 20000000,
+        solid: Sequence[bool] | None = None,
+        robot_solid: bool = True,
     ) -> CSpace:
-        """C-space of the exact source: C-obstacles of closed meshes, no decomposition."""
+        """C-space of the exact source: C-obstacles of solids or surfaces, no
+        decomposition."""
     @property
     def is_exact(self) -> bool: ...
     def __len__(self) -> int: ...

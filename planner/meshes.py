@@ -6,8 +6,9 @@ Entry points:
   ``trimesh.Trimesh``; OBJ files go through :func:`load_obj`, which triangulates n-gon
   faces properly (ear clipping in each polygon's plane) instead of fanning them.
 - :func:`validate_solid` checks that a mesh bounds a solid (closed, manifold,
-  consistently wound, finite, positive volume) and returns a cleaned copy, or raises
-  :class:`~planner.errors.InvalidMeshError` with a one-line reason.
+  consistently wound, finite, positive volume, winding number never negative) and
+  returns a cleaned copy, or raises :class:`~planner.errors.InvalidMeshError` with a
+  one-line reason.
 - :func:`repair_mesh` is the explicit, best-effort repair for messy real-world meshes
   (merge vertices, drop degenerate/duplicate faces, fix winding, fill holes).
 - :func:`mirror` gives the point reflection ``-M`` used for C-obstacles ``O ⊕ (-R)``.
@@ -17,7 +18,11 @@ Entry points:
 Conventions: a valid solid's faces are wound counter-clockwise seen from outside (outward
 normals, positive volume). A closed shell nested inside another one with inward normals
 is a cavity; a shell with inward normals that is not inside another shell is a body that
-was exported inside-out, and is flipped. Self-intersections are not detected.
+was exported inside-out, and is flipped. The solid is where the winding number is at
+least 1, and it must never be negative (checked exactly by the native core: no face may
+have the inside in front of it); shells that overlap are their union. A closed surface
+that fails this (a shell glued to another with the wrong side out, as OMPL.app's Easy
+frame) is not a solid.
 """
 
 from __future__ import annotations
@@ -926,6 +931,7 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
             f"opposite ways overlap); typically polygons triangulated wrongly by the "
             f"exporter or loader (for OBJ n-gons use planner.meshes.load_obj)"
         )
+    _check_winding(vertices, faces, label)
     result = trimesh.Trimesh(vertices, faces, process=False)
     result.metadata.update(getattr(mesh, "metadata", {}) or {})
     result.metadata["name"] = name
@@ -935,6 +941,29 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
             label, report["merged_vertices"], report["removed_faces"],
         )
     return result
+
+
+def _check_winding(vertices: np.ndarray, faces: np.ndarray, label: str) -> None:
+    """Raise unless the closed, consistently wound surface bounds a solid: its exact
+    winding number (the core's) is never negative, so no face has the inside in front of
+    it (see :mod:`planner.meshes` conventions)."""
+    from ._minkowski_core import front_windings  # noqa: PLC0415 (the native module)
+
+    fronts = front_windings(vertices, faces)
+    inverted = int((fronts < 0).sum() - (fronts == np.iinfo(np.int64).min).sum())
+    unknown = int((fronts == np.iinfo(np.int64).min).sum())
+    if inverted or unknown:
+        detail = []
+        if inverted:
+            detail.append(f"{inverted} of {len(faces)} faces have the inside in front of them "
+                          f"(winding number {int(fronts[fronts > np.iinfo(np.int64).min].min())} "
+                          f"there: inverted faces, or shells glued inside out)")
+        if unknown:
+            detail.append(f"{unknown} faces lie on other faces")
+        raise InvalidMeshError(
+            f"{label}: closed but not a solid: {'; '.join(detail)}; it can only be used as a "
+            f"surface (triangles, as FCL sees them)"
+        )
 
 
 def _clean(vertices, faces, label):

@@ -29,11 +29,12 @@ is applied to the robot mesh once.
 Meshes: the SketchUp exports OMPL.app ships have every triangle twice, once per side,
 so none is a closed manifold as loaded. The importer keeps one triangle of each such
 pair, splits the world into connected pieces and checks each with
-:func:`planner.meshes.validate_solid`. Pieces that are not solids are handled as
-recorded in ``Scenario.notes``: a flat open patch (zero thickness, no interior) is
-dropped; a shell whose only defects are pairs of facing openings with the walls between
-them missing (a hole through a slab, modelled as a hole in its top and one in its
-bottom face) gets those walls added; anything else is an error.
+:func:`planner.meshes.validate_solid`. A shell whose only defects are pairs of facing
+openings with the walls between them missing (a hole through a slab, modelled as a hole
+in its top and one in its bottom face) gets those walls added and is a solid; any other
+piece that is not a solid (open, flat, or closed with inverted faces, as Easy's frame)
+is a *surface*: its triangles as imported, colliding where triangles meet, as OMPL.app
+and FCL see every mesh. ``Scenario.notes`` records each such decision.
 """
 
 from __future__ import annotations
@@ -268,39 +269,47 @@ def _bridge_openings(piece: trimesh.Trimesh) -> tuple[trimesh.Trimesh, int] | No
     return closed, len(bands)
 
 
-def _world_solids(raw: trimesh.Trimesh, label: str, notes: list[str]) -> list[trimesh.Trimesh]:
-    """The world mesh as validated solids, one per connected piece (see module doc)."""
+def _reason(error: InvalidMeshError) -> str:
+    """Why a mesh is no solid, without its label and the advice on fixing it."""
+    return str(error).split(": ", 1)[-1].split("; ", 1)[0]
+
+
+def _world_parts(raw: trimesh.Trimesh, label: str,
+                 notes: list[str]) -> list[tuple[trimesh.Trimesh, bool, str]]:
+    """The world mesh as ``(mesh, solid, why)``, one per connected piece (see module doc)."""
     single, dropped = _single_sided(raw)
     if dropped:
         notes.append(f"{label}: dropped {dropped} back-side duplicate triangles "
                      "(double-sided export)")
     size = scale_of(single)
-    solids = []
+    parts = []
     for index, piece in enumerate(_pieces(single)):
         where = f"{label} piece {index} ({len(piece.faces)} triangles, box "\
                 f"{np.round(piece.bounds, 2).tolist()})"
         try:
-            solids.append(validate_solid(piece, name=f"{label}[{index}]"))
+            parts.append((validate_solid(piece, name=f"{label}[{index}]"), True,
+                          "closed and its winding number never negative"))
             continue
         except InvalidMeshError as error:
-            problem = str(error)
-        if _thickness(np.asarray(piece.vertices)) <= _FLAT_REL * size:
-            notes.append(f"{where}: flat open patch with no interior; dropped")
-            continue
-        bridged = _bridge_openings(piece)
-        if bridged is not None:
-            closed, pairs = bridged
-            try:
-                solids.append(validate_solid(closed, name=f"{label}[{index}]"))
-            except InvalidMeshError:
-                pass
-            else:
-                notes.append(f"{where}: {pairs} pair(s) of facing openings had no walls "
-                             "between them; added the walls")
-                continue
-        raise InvalidMeshError(f"{where}: not a solid and not repairable by the OMPL.app "
-                               f"importer: {problem}")
-    return solids
+            problem = _reason(error)
+        if _thickness(np.asarray(piece.vertices)) > _FLAT_REL * size:
+            bridged = _bridge_openings(piece)
+            if bridged is not None:
+                closed, pairs = bridged
+                try:
+                    parts.append((validate_solid(closed, name=f"{label}[{index}]"), True,
+                                  f"closed once {pairs} pair(s) of facing openings got the "
+                                  "walls between them"))
+                except InvalidMeshError:
+                    pass
+                else:
+                    notes.append(f"{where}: {pairs} pair(s) of facing openings had no walls "
+                                 "between them; added the walls")
+                    continue
+        notes.append(f"{where}: a surface (triangles, as OMPL.app and FCL see them): "
+                     f"{problem}")
+        parts.append((piece, False, problem))
+    return parts
 
 
 # ------------------------------------------------------------------------------ config
@@ -434,22 +443,28 @@ def load_omplapp(cfg_path: str | os.PathLike[str]) -> Scenario:
         if dropped:
             notes.append(f"robot: dropped {dropped} back-side duplicate triangles "
                          "(double-sided export)")
-        robot_mesh = validate_solid(single, name=robot_file.stem)
     except InvalidMeshError as error:
         raise cfg.error("robot", str(error)) from None
+    robot_solid, robot_why = True, "closed and its winding number never negative"
+    try:
+        robot_mesh = validate_solid(single, name=robot_file.stem)
+    except InvalidMeshError as error:
+        robot_mesh, robot_solid = single, False
+        robot_why = _reason(error)
+        notes.append(f"robot: a surface (triangles, as OMPL.app and FCL see them): {robot_why}")
     robot_mesh.apply_translation(-centre)
     robot_mesh.apply_transform(_homogeneous(orientation))
     robot = Robot(robot_file.stem, robot_mesh,
                   f"{robot_file.resolve()} (OMPL.app frame, reference point "
-                  f"{np.round(centre, 6).tolist()})")
+                  f"{np.round(centre, 6).tolist()})", robot_solid, robot_why)
 
     try:
-        solids = _world_solids(read_app_mesh(world_file), world_file.stem, notes)
+        parts = _world_parts(read_app_mesh(world_file), world_file.stem, notes)
     except InvalidMeshError as error:
         raise cfg.error("world", str(error)) from None
-    obstacles = [Body(f"{world_file.stem}_{k}", solid,
-                      f"{world_file.resolve()} (OMPL.app frame, piece {k})")
-                 for k, solid in enumerate(solids)]
+    obstacles = [Body(f"{world_file.stem}_{k}", mesh,
+                      f"{world_file.resolve()} (OMPL.app frame, piece {k})", solid, why)
+                 for k, (mesh, solid, why) in enumerate(parts)]
 
     if all(cfg.has(f"volume.{end}.{axis}") for end in ("min", "max") for axis in "xyz"):
         bounds = (cfg.vector("volume.min"), cfg.vector("volume.max"))

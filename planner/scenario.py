@@ -136,13 +136,20 @@ class Body:
 
     Attributes:
         name: unique name within the scenario (used in reports).
-        mesh: closed triangle mesh, posed in the world frame.
+        mesh: triangle mesh, posed in the world frame: a solid (closed, winding number
+            never negative) unless ``solid`` is false.
         source: where it came from: a resolved file path, ``"box [1, 2, 3]"``, ...
+        solid: ``True``: a solid (a robot inside it collides); ``False``: a surface, any
+            set of triangles, which collides only where triangles meet (FCL's and
+            OMPL.app's meaning).
+        kind_reason: why it is a solid or a surface (for reports).
     """
 
     name: str
     mesh: trimesh.Trimesh
     source: str
+    solid: bool = True
+    kind_reason: str = "closed and its winding number never negative"
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,15 +158,19 @@ class Robot:
 
     Attributes:
         name: unique name within the scenario.
-        mesh: closed triangle mesh in the robot's own frame with the (fixed) orientation
+        mesh: triangle mesh in the robot's own frame with the (fixed) orientation
             and scale applied but not translated: at configuration ``t`` the robot
             occupies ``mesh + t``.
         source: where it came from (resolved file path or primitive description).
+        solid: a solid (``True``) or a surface, as for :class:`Body`.
+        kind_reason: why (for reports).
     """
 
     name: str
     mesh: trimesh.Trimesh
     source: str
+    solid: bool = True
+    kind_reason: str = "closed and its winding number never negative"
 
 
 def _check_optional(value: Any, low: float, *, strict: bool) -> float | None:
@@ -341,8 +352,8 @@ class Scenario:
             "name": self.name,
             "units": self.units,
             "path": None if self.path is None else str(self.path),
-            "robot": {"name": self.robot.name, "source": self.robot.source},
-            "obstacles": [{"name": b.name, "source": b.source} for b in self.obstacles],
+            "robot": _describe_part(self.robot),
+            "obstacles": [_describe_part(b) for b in self.obstacles],
             "start": self.start.tolist(),
             "goal": self.goal.tolist(),
             "orientation_wxyz": tf.quaternion_from_matrix(matrix).tolist(),
@@ -350,6 +361,11 @@ class Scenario:
             "settings": dataclasses.asdict(self.settings),
             "notes": list(self.notes),
         }
+
+
+def _describe_part(part: Body | Robot) -> dict[str, Any]:
+    return {"name": part.name, "source": part.source,
+            "kind": "solid" if part.solid else "surface", "kind_reason": part.kind_reason}
 
 
 # --------------------------------------------------------------------------------------

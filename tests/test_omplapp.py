@@ -96,16 +96,22 @@ def test_problem_loads_as_translational_scenario(scenarios, name):
     np.testing.assert_array_equal(scenario.bounds[1], hi)
     assert scenario.settings.time_limit == 20.0  # [benchmark] time_limit
     assert scenario.path == (ASSETS / f"{name}.cfg").resolve()
-    for mesh in [scenario.robot.mesh] + [b.mesh for b in scenario.obstacles]:
-        assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
+    for part in [scenario.robot, *scenario.obstacles]:
+        if part.solid:
+            mesh = part.mesh
+            assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
     assert load_scenario(ASSETS / f"{name}.cfg").start.tolist() == scenario.start.tolist()
 
 
 def test_what_the_import_changed_is_recorded(scenarios):
     easy, cubicles = scenarios["Easy"], scenarios["cubicles"]
-    # Easy: a floor-and-side-wall solid and a wall with a window; two flat quads dropped
-    assert [b.name for b in easy.obstacles] == ["Easy_env_0", "Easy_env_1"]
-    assert sum("flat open patch" in note for note in easy.notes) == 2
+    # Easy: a floor-and-side-wall frame that is closed but inside out in part (a surface),
+    # two flat quads (surfaces: OMPL.app collides with them too) and a wall with a window
+    assert [(b.name, b.solid) for b in easy.obstacles] == [
+        ("Easy_env_0", False), ("Easy_env_1", False), ("Easy_env_2", False),
+        ("Easy_env_3", True)]
+    assert "winding number -1" in easy.obstacles[0].kind_reason
+    assert sum("a surface" in note for note in easy.notes) == 3
     # cubicles: one connected solid once the walls of two floor openings are added
     assert [b.name for b in cubicles.obstacles] == ["cubicles_env_0"]
     assert any("2 pair(s) of facing openings" in note for note in cubicles.notes)
@@ -228,7 +234,7 @@ def line_of(path: Path, prefix: str) -> int:
 
 def test_copied_problem_loads(tmp_path):
     scenario = load_omplapp(copy_problem(tmp_path, "Easy"))
-    assert len(scenario.obstacles) == 2
+    assert len(scenario.obstacles) == 4
 
 
 @pytest.mark.parametrize(("edit", "field", "line_prefix", "expected"), [

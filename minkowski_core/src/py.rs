@@ -218,8 +218,9 @@ fn build_octree<'py>(py: Python<'py>, prims: &Primitives, h: f64, bounds: Option
     Ok(d)
 }
 
-/// A closed mesh from (vertices (n, 3) float64, faces (m, 3) int64).
-fn mesh_of(v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>, what: &str) -> PyResult<TriMesh> {
+/// A solid (`solid`: closed, winding number never negative; checked) or a surface (any
+/// triangles) from (vertices (n, 3) float64, faces (m, 3) int64).
+fn mesh_of(v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>, what: &str, solid: bool) -> PyResult<TriMesh> {
     let verts = points_of(v, &format!("{what} vertices"))?;
     let fa = f.as_array();
     if fa.ncols() != 3 {
@@ -232,7 +233,35 @@ fn mesh_of(v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>, what: &
         }
         faces.push([row[0] as u32, row[1] as u32, row[2] as u32]);
     }
-    Ok(TriMesh::new(verts, &faces, what)?)
+    Ok(if solid { TriMesh::new(verts, &faces, what)? } else { TriMesh::surface(verts, &faces, what)? })
+}
+
+/// The winding number just in front of every triangle of the closed mesh (vertices (n, 3),
+/// faces (m, 3)): (m,) int64, with the smallest int64 where it could not be told (the
+/// triangle lies on others). The mesh bounds a solid when none is negative. Parallel.
+#[pyfunction]
+fn front_windings<'py>(py: Python<'py>, vertices: PyReadonlyArray2<'py, f64>, faces: PyReadonlyArray2<'py, i64>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let mesh = closed_mesh(&vertices, &faces)?;
+    let out: Vec<i64> = py.detach(|| mesh.front_windings().into_iter().map(|w| w.unwrap_or(i64::MIN)).collect());
+    Ok(out.into_pyarray(py))
+}
+
+/// The winding numbers of `points` (k, 3) for the closed mesh (vertices (n, 3), faces
+/// (m, 3)): (k,) int64, the smallest int64 for points on the surface. Parallel.
+#[pyfunction]
+fn winding_numbers<'py>(py: Python<'py>, vertices: PyReadonlyArray2<'py, f64>, faces: PyReadonlyArray2<'py, i64>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let mesh = closed_mesh(&vertices, &faces)?;
+    let pts = points_of(&points, "points")?;
+    let out: Vec<i64> = py.detach(|| pts.par_iter().map(|p| mesh.winding(*p).unwrap_or(i64::MIN)).collect());
+    Ok(out.into_pyarray(py))
+}
+
+/// A mesh checked to be closed and consistently oriented (no winding check).
+fn closed_mesh(vertices: &PyReadonlyArray2<'_, f64>, faces: &PyReadonlyArray2<'_, i64>) -> PyResult<TriMesh> {
+    let surface = mesh_of(vertices, faces, "mesh", false)?;
+    let faces: Vec<[u32; 3]> = faces.as_array().rows().into_iter().map(|r| [r[0] as u32, r[1] as u32, r[2] as u32]).collect();
+    TriMesh::check_closed(&faces, "mesh")?;
+    Ok(TriMesh { closed: true, ..surface })
 }
 
 /// The exact Minkowski sum `A ⊕ B` of two closed triangle meshes (boundary convolution,
@@ -244,12 +273,14 @@ pub struct ExactSum {
 
 #[pymethods]
 impl ExactSum {
-    /// `A ⊕ B` for `a` and `b` given as (vertices (n, 3), faces (m, 3)); both closed and
-    /// outward oriented.
+    /// `A ⊕ B` for `a` and `b` given as (vertices (n, 3), faces (m, 3)): solids (closed,
+    /// outward, winding number never negative; checked) unless `a_solid` / `b_solid` is
+    /// false (a surface: any triangles, containment does not count).
     #[new]
-    fn new(a: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>), b: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>)) -> PyResult<Self> {
-        let ma = mesh_of(&a.0, &a.1, "a")?;
-        let mb = mesh_of(&b.0, &b.1, "b")?;
+    #[pyo3(signature = (a, b, a_solid=true, b_solid=true))]
+    fn new(a: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>), b: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>), a_solid: bool, b_solid: bool) -> PyResult<Self> {
+        let ma = mesh_of(&a.0, &a.1, "a", a_solid)?;
+        let mb = mesh_of(&b.0, &b.1, "b", b_solid)?;
         Ok(ExactSum { inner: Arc::new(ExactSource::new(vec![ma], mb, 0.0, None)) })
     }
 
@@ -309,6 +340,8 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(union_surface, m)?)?;
     m.add_function(wrap_pyfunction!(build_octree, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(front_windings, m)?)?;
+    m.add_function(wrap_pyfunction!(winding_numbers, m)?)?;
     m.add_class::<PyCSpace>()?;
     m.add_class::<ExactSum>()?;
     Ok(())
@@ -376,12 +409,14 @@ impl PyCSpace {
         Ok(PyCSpace { inner, max_leaves })
     }
 
-    /// The C-space of the exact source: C-obstacles `O_k ⊕ (−R)` of the closed meshes
-    /// `obstacles` (list of (vertices (n, 3), faces (m, 3))) for the closed mesh `robot`,
-    /// grown by `margin`, without decomposition. Obstacle `k` is primitive `k`; the six
-    /// walls follow.
+    /// The C-space of the exact source: C-obstacles `O_k ⊕ (−R)` of the meshes `obstacles`
+    /// (list of (vertices (n, 3), faces (m, 3))) for the mesh `robot`, grown by `margin`,
+    /// without decomposition. Meshes are solids (checked) unless `solid` (one flag per
+    /// obstacle) or `robot_solid` says they are surfaces. Obstacle `k` is primitive `k`;
+    /// the six walls follow.
     #[staticmethod]
-    #[pyo3(signature = (obstacles, robot, bounds, h_floor, h_coarse, margin=0.0, max_leaves=20_000_000))]
+    #[pyo3(signature = (obstacles, robot, bounds, h_floor, h_coarse, margin=0.0, max_leaves=20_000_000, solid=None, robot_solid=true))]
+    #[allow(clippy::too_many_arguments)]
     fn exact(
         py: Python<'_>,
         obstacles: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>)>,
@@ -391,17 +426,23 @@ impl PyCSpace {
         h_coarse: f64,
         margin: f64,
         max_leaves: usize,
+        solid: Option<Vec<bool>>,
+        robot_solid: bool,
     ) -> PyResult<Self> {
         let b = points_of(&bounds, "bounds")?;
         if b.len() != 2 {
             return Err(InvalidParameterError::new_err("bounds: expected [[min x, y, z], [max x, y, z]]"));
         }
         let region = Aabb::new(b[0], b[1]);
+        let solid = solid.unwrap_or_else(|| vec![true; obstacles.len()]);
+        if solid.len() != obstacles.len() {
+            return Err(InvalidParameterError::new_err(format!("solid: {} flags for {} obstacles", solid.len(), obstacles.len())));
+        }
         let mut meshes = Vec::with_capacity(obstacles.len());
         for (k, (v, f)) in obstacles.iter().enumerate() {
-            meshes.push(mesh_of(v, f, &format!("obstacle {k}"))?);
+            meshes.push(mesh_of(v, f, &format!("obstacle {k}"), solid[k])?);
         }
-        let r = mesh_of(&robot.0, &robot.1, "robot")?;
+        let r = mesh_of(&robot.0, &robot.1, "robot", robot_solid)?;
         let inner = py.detach(move || crate::roadmap::CSpace::build_exact(meshes, &r, region, h_floor, h_coarse, margin, max_leaves))?;
         Ok(PyCSpace { inner, max_leaves })
     }
@@ -624,7 +665,8 @@ impl PyCSpace {
     /// MIXED leaves, the certificate as a dict: `walls_around_start` (which component is
     /// walled off), `start_component_size`, `goal_component_size`, `n_components`,
     /// `component_leaves` (the walled component's leaves), `wall_leaves` (n,) int64 (FULL
-    /// leaves face-adjacent to it), `wall_prims` (n,) int64 (a primitive containing each,
+    /// leaves face-adjacent to it), `verified` (every wall leaf re-verified by an exact test
+    /// that does not trust the labels), `wall_prims` (n,) int64 (a primitive containing each,
     /// -1 if none was found), `wall_boxes` (n, 2, 3). None when they are connected.
     fn certificate<'py>(&self, py: Python<'py>, start: Vec<f64>, goal: Vec<f64>) -> PyResult<Option<Bound<'py, PyDict>>> {
         let (s, g) = (vec3_any(&start, "start")?, vec3_any(&goal, "goal")?);
@@ -632,6 +674,7 @@ impl PyCSpace {
         let Some(c) = py.detach(|| cs.certificate(s, g)) else { return Ok(None) };
         let d = PyDict::new(py);
         d.set_item("walls_around_start", c.walls_around_start)?;
+        d.set_item("verified", c.verified)?;
         d.set_item("start_component_size", c.start_component.len())?;
         d.set_item("goal_component_size", c.goal_component_size)?;
         d.set_item("n_components", c.n_components)?;

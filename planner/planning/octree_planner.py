@@ -47,7 +47,7 @@ import numpy as np
 
 from planner._minkowski_core import CSpace, Primitives
 from planner.decompose import decompose
-from planner.errors import ResourceLimitError
+from planner.errors import ResourceLimitError, ScenarioError
 from planner.minkowski import convex_bodies, mesh_arrays
 from planner.scenario import Scenario
 from planner.validation import FclChecker
@@ -152,11 +152,20 @@ def choose_source(scenario: Scenario) -> tuple[str, str]:
     the decomposition when every body of every part is convex (then it is exact, and the
     fastest), else the exact source (CoACD's hulls would over-approximate)."""
     setting = scenario.settings.exact
+    parts = [scenario.robot, *scenario.obstacles]
+    surfaces = [p.name for p in parts if not p.solid]
     if setting is True:
         return "exact", "planner.exact: true"
     if setting is False:
+        if surfaces:
+            raise ScenarioError(
+                f"planner.exact: false: {', '.join(surfaces)} "
+                f"{'is a surface' if len(surfaces) == 1 else 'are surfaces'} (not closed "
+                f"solids), which the convex decomposition cannot represent; use exact: auto",
+                field="planner.exact")
         return "decomposition", "planner.exact: false"
-    parts = [scenario.robot, *scenario.obstacles]
+    if surfaces:
+        return "exact", f"auto: {', '.join(surfaces)} not solid (surfaces)"
     nonconvex = [p.name for p in parts if not convex_bodies(p.mesh)]
     if nonconvex:
         return "exact", f"auto: {', '.join(nonconvex)} not convex"
@@ -190,8 +199,8 @@ class _Problem:
         self.source = "decomposition" if robot_dec is not None else "exact"
         with clock.stage("primitives"):
             if self.source == "exact":
-                self.meshes = [mesh_arrays(b.mesh, b.name) for b in scenario.obstacles]
-                self.robot_mesh = mesh_arrays(scenario.robot.mesh, scenario.robot.name)
+                self.meshes = [_part_arrays(b) for b in scenario.obstacles]
+                self.robot_mesh = _part_arrays(scenario.robot)
                 self.prims = None
                 self.owner = np.arange(len(names), dtype=np.int64)
                 robot_dec, obstacle_decs = _ExactDec(), [_ExactDec() for _ in names]
@@ -229,9 +238,19 @@ class _Problem:
             if self.source == "exact":
                 return CSpace.exact(self.meshes, self.robot_mesh, self.bounds, self.floor_asked,
                                     self.coarse, margin=margin,
-                                    max_leaves=self.params.max_leaves)
+                                    max_leaves=self.params.max_leaves,
+                                    solid=[b.solid for b in self.scenario.obstacles],
+                                    robot_solid=self.scenario.robot.solid)
             return CSpace(self.prims, self.bounds, self.floor_asked, self.coarse, margin=margin,
                           max_leaves=self.params.max_leaves)
+
+
+def _part_arrays(part) -> tuple[np.ndarray, np.ndarray]:
+    """A solid's checked arrays, or a surface's triangles as they are."""
+    if part.solid:
+        return mesh_arrays(part.mesh, part.name)
+    return (np.ascontiguousarray(part.mesh.vertices, dtype=np.float64),
+            np.ascontiguousarray(part.mesh.faces, dtype=np.int64))
 
 
 @dataclass
@@ -274,6 +293,17 @@ def _search(problem: _Problem, cs: CSpace, start: np.ndarray, goal: np.ndarray,
         if channel is None:
             with clock.stage("certificate"):
                 certificate = cs.certificate(s, g)
+            if certificate is not None and not certificate["verified"]:
+                unverified = int((np.asarray(certificate["wall_prims"]) < 0).sum())
+                log.warning("a no-path certificate did not pass re-verification: %d of %d "
+                            "wall cells could not be shown blocked", unverified,
+                            len(certificate["wall_prims"]))
+                return _SearchResult(
+                    NOT_FOUND, "certificate_unverified",
+                    f"start and goal lie in different components of the EMPTY and MIXED "
+                    f"cells, but {unverified} of the {len(certificate['wall_prims'])} FULL "
+                    f"cells walling them apart could not be re-verified as blocked; no proof "
+                    f"is claimed")
             if certificate is not None:
                 return _SearchResult(NO_PATH, "certificate",
                                      "start and goal lie in different components of the "
@@ -383,7 +413,9 @@ def plan_octree(scenario: Scenario, *, params: OctreeParams | None = None, cache
     goal = np.asarray(scenario.goal, dtype=np.float64)
     delta = default_contact_tolerance(scenario, params)
     checker = FclChecker(scenario.robot.mesh, [b.mesh for b in scenario.obstacles],
-                         contact_tolerance=delta, names=[b.name for b in scenario.obstacles])
+                         contact_tolerance=delta, names=[b.name for b in scenario.obstacles],
+                         solid=[b.solid for b in scenario.obstacles],
+                         robot_solid=scenario.robot.solid)
 
     source, why = choose_source(scenario)
     robot_dec, obstacle_decs = None, None

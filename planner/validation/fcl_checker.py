@@ -11,10 +11,11 @@ Entry points:
 - :class:`SegmentCheck`, :class:`PathCheck` -- results; :class:`CheckerTolerances`.
 
 The robot ``R`` is a closed triangle mesh in its own frame, with a fixed orientation; at
-translation ``t`` it occupies ``R + t``. Obstacles ``O_k`` are closed meshes already posed
-in the world. Parts are *solids*: touching counts as contact, and so does one part lying
-wholly inside the other (python-fcl's mesh-mesh query tests triangles only and misses
-that case; this module adds a winding-number containment test).
+translation ``t`` it occupies ``R + t``. Obstacles ``O_k`` are meshes already posed in the
+world. Parts are *solids* by default: touching counts as contact, and so does one part
+lying wholly inside the other (python-fcl's mesh-mesh query tests triangles only and
+misses that case; this module adds a winding-number containment test). A part marked as a
+*surface* collides only where triangles meet, as FCL sees every mesh.
 
 Contact tolerance ``delta >= 0`` (one definition, shared with the planner): let
 ``pd(t)`` be the translational penetration depth, the length of the shortest translation
@@ -186,9 +187,10 @@ def winding_numbers(points: ArrayLike, vertices: ArrayLike, faces: ArrayLike) ->
 
 
 class _Part:
-    """One mesh prepared for FCL and containment queries."""
+    """One mesh prepared for FCL and containment queries (containment only in a solid)."""
 
-    def __init__(self, mesh: trimesh.Trimesh, name: str) -> None:
+    def __init__(self, mesh: trimesh.Trimesh, name: str, solid: bool = True) -> None:
+        self.solid = bool(solid)
         vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
         faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
         if len(faces) == 0:
@@ -239,6 +241,10 @@ class FclChecker:
         names: one name per obstacle (default: ``mesh.metadata["name"]`` or
             ``"obstacle_<i>"``).
         tolerances: numerical settings, :class:`CheckerTolerances`.
+        solid: per obstacle, whether it is a solid (default: all); a surface collides
+            only where triangles meet (FCL's own meaning), containment in it does not
+            count.
+        robot_solid: whether the robot is a solid.
 
     Attributes:
         n_valid, n_invalid: :meth:`is_valid` answers so far.
@@ -258,6 +264,8 @@ class FclChecker:
         contact_tolerance: float = 0.0,
         names: Sequence[str] | None = None,
         tolerances: CheckerTolerances | None = None,
+        solid: Sequence[bool] | None = None,
+        robot_solid: bool = True,
     ) -> None:
         delta = float(contact_tolerance)
         if not (math.isfinite(delta) and delta >= 0.0):
@@ -277,8 +285,13 @@ class FclChecker:
             )
         self.contact_tolerance = delta
         self.tolerances = tolerances or CheckerTolerances()
-        self.robot = _Part(robot, "robot")
-        self.obstacles = [_Part(m, n) for m, n in zip(obstacles, names)]
+        solid = [True] * len(obstacles) if solid is None else [bool(x) for x in solid]
+        if len(solid) != len(obstacles):
+            raise InvalidParameterError(
+                f"solid: {len(solid)} flags for {len(obstacles)} obstacles"
+            )
+        self.robot = _Part(robot, "robot", robot_solid)
+        self.obstacles = [_Part(m, n, k) for m, n, k in zip(obstacles, names, solid)]
         self.names = tuple(names)
         corners = [self.robot.lo, self.robot.hi]
         for part in self.obstacles:
@@ -303,11 +316,11 @@ class FclChecker:
         """Containment either way, assuming no triangle of R + t touches ``part``."""
         r = self.robot
         lo, hi = r.lo + t, r.hi + t
-        if np.all(lo >= part.lo) and np.all(hi <= part.hi):
+        if part.solid and np.all(lo >= part.lo) and np.all(hi <= part.hi):
             reps = r.representatives + t
             if np.any(winding_numbers(reps, part.vertices, part.faces) > 0.5):
                 return True
-        if np.all(part.lo >= lo) and np.all(part.hi <= hi):
+        if r.solid and np.all(part.lo >= lo) and np.all(part.hi <= hi):
             reps = part.representatives - t
             if np.any(winding_numbers(reps, r.vertices, r.faces) > 0.5):
                 return True

@@ -4,7 +4,7 @@ use crate::polytope::ConvexPolytope;
 use crate::union::{approximate_solid, UnionParams};
 
 /// Outward triangles of the box `[lo, hi]` (12 triangles), appended to `v`, `f`.
-fn push_box(lo: Vec3, hi: Vec3, v: &mut Vec<Vec3>, f: &mut Vec<[u32; 3]>) {
+pub(super) fn push_box(lo: Vec3, hi: Vec3, v: &mut Vec<Vec3>, f: &mut Vec<[u32; 3]>) {
     let o = v.len() as u32;
     for k in 0..8 {
         v.push(Vec3::new([lo.x, hi.x][k & 1], [lo.y, hi.y][(k >> 1) & 1], [lo.z, hi.z][(k >> 2) & 1]));
@@ -16,7 +16,7 @@ fn push_box(lo: Vec3, hi: Vec3, v: &mut Vec<Vec3>, f: &mut Vec<[u32; 3]>) {
     }
 }
 
-fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
+pub(super) fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
     let (mut v, mut f) = (Vec::new(), Vec::new());
     push_box(Vec3::from_array(lo), Vec3::from_array(hi), &mut v, &mut f);
     TriMesh::new(v, &f, "box").unwrap()
@@ -105,7 +105,7 @@ fn fan_top_box(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
 }
 
 /// One mesh of overlapping boxes (a shell each), as CAD exports of several bodies come.
-fn boxes_mesh(boxes: &[([f64; 3], [f64; 3])]) -> TriMesh {
+pub(super) fn boxes_mesh(boxes: &[([f64; 3], [f64; 3])]) -> TriMesh {
     let (mut v, mut f) = (Vec::new(), Vec::new());
     for &(lo, hi) in boxes {
         push_box(Vec3::from_array(lo), Vec3::from_array(hi), &mut v, &mut f);
@@ -114,7 +114,7 @@ fn boxes_mesh(boxes: &[([f64; 3], [f64; 3])]) -> TriMesh {
 }
 
 /// A box of side 4 with a cubic cavity of side 2 (an inward shell) at its centre.
-fn hollow_box() -> TriMesh {
+pub(super) fn hollow_box() -> TriMesh {
     let (mut v, mut f) = (Vec::new(), Vec::new());
     push_box(Vec3::splat(-2.0), Vec3::splat(2.0), &mut v, &mut f);
     let outer = f.len();
@@ -158,13 +158,13 @@ fn sum_box(a: &Aabb, b: &Aabb) -> Aabb {
     Aabb::new(a.min + b.min, a.max + b.max)
 }
 
-struct Lcg(u64);
+pub(super) struct Lcg(pub(super) u64);
 impl Lcg {
-    fn next(&mut self) -> f64 {
+    pub(super) fn next(&mut self) -> f64 {
         self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
-    fn point(&mut self, b: &Aabb) -> Vec3 {
+    pub(super) fn point(&mut self, b: &Aabb) -> Vec3 {
         let e = b.extent();
         b.min + Vec3::new(self.next() * e.x, self.next() * e.y, self.next() * e.z)
     }
@@ -363,7 +363,7 @@ fn overlapping_shells_are_their_union_and_cavities_are_holes() {
 
 /// A closed, outward torus around the z axis (`n` major by `m` minor segments); its quads
 /// are planar, so their diagonals are flat edges.
-fn torus_mesh(big: f64, small: f64, n: usize, m: usize) -> TriMesh {
+pub(super) fn torus_mesh(big: f64, small: f64, n: usize, m: usize) -> TriMesh {
     let mut v = Vec::new();
     for i in 0..n {
         let phi = std::f64::consts::TAU * i as f64 / n as f64;

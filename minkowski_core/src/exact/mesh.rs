@@ -1,6 +1,6 @@
-//! [`TriMesh`]: a closed triangle mesh with a binary BVH of one triangle per leaf (so that
-//! pairs of nodes of two meshes can be refined lazily, one level at a time) and an exact
-//! point-in-solid test by ray parity.
+//! [`TriMesh`]: a triangle mesh with a binary BVH of one triangle per leaf (so that pairs of
+//! nodes of two meshes can be refined lazily, one level at a time). A closed one (a
+//! candidate solid) also has the exact winding number of [`super::winding`].
 
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
@@ -71,7 +71,8 @@ pub(crate) fn unit(v: Vec3, scale: f64) -> Vec3 {
     }
 }
 
-/// A closed, consistently oriented triangle mesh (outward normals) with its BVH.
+/// A triangle mesh with its BVH: closed and consistently oriented (outward normals, from
+/// [`TriMesh::new`]) or any set of triangles (a surface, from [`TriMesh::surface`]).
 #[derive(Clone, Debug)]
 pub struct TriMesh {
     /// Vertex positions.
@@ -82,39 +83,47 @@ pub struct TriMesh {
     pub nodes: Vec<MeshNode>,
     /// Box around the mesh.
     pub aabb: Aabb,
-    /// One vertex of every connected shell.
+    /// One vertex of every connected shell (vertex-connected component).
     pub anchors: Vec<Vec3>,
+    /// Whether every edge is used once in each direction (then the winding number is
+    /// defined off the surface).
+    pub closed: bool,
+    /// Whether it bounds a solid (closed, winding number never negative: see
+    /// [`super::winding`]); only then may [`TriMesh::contains`] be asked.
+    pub solid: bool,
 }
 
-/// Ray directions for the parity test, tried in order until one meets no edge or vertex.
-const RAY_DIRS: [[f64; 3]; 6] = [
-    [0.577_350_269_189_625_8, 0.618_033_988_749_894_8, 0.532_088_886_237_956_1],
-    [-0.381_966_011_250_105, 0.707_106_781_186_547_5, -0.595_241_580_617_241],
-    [0.267_949_192_431_122_7, -0.809_016_994_374_947_4, 0.523_598_775_598_298_8],
-    [-0.723_606_797_749_979, -0.223_606_797_749_979, 0.652_475_842_498_527_9],
-    [0.142_857_142_857_142_85, 0.394_784_176_043_574_3, -0.907_446_052_160_137_5],
-    [0.899_888_006_999_999, -0.314_159_265_358_979_3, -0.302_775_637_731_994_6],
-];
-
 impl TriMesh {
-    /// Build from vertices and triangles. `what` names the mesh in errors.
+    /// A solid from vertices and triangles. `what` names the mesh in errors.
     ///
     /// # Errors
     /// [`CoreError::InvalidGeometry`] when the mesh is empty, has a non-finite vertex or an
-    /// index out of range, or is not closed and consistently oriented (every edge used
-    /// exactly once in each direction).
+    /// index out of range, is not closed and consistently oriented (every edge used
+    /// exactly once in each direction), or is closed but no solid: its winding number is
+    /// negative somewhere (inverted faces or shells; [`TriMesh::front_windings`]).
     pub fn new(vertices: Vec<Vec3>, faces: &[[u32; 3]], what: &str) -> CoreResult<TriMesh> {
         let bad = |detail: String| CoreError::InvalidGeometry { what: what.into(), detail };
-        if faces.is_empty() {
-            return Err(bad("has no triangles".into()));
+        check_arrays(&vertices, faces, what)?;
+        TriMesh::check_closed(faces, what)?;
+        let mut mesh = TriMesh { closed: true, ..TriMesh::surface(vertices, faces, what)? };
+        let fronts = mesh.front_windings();
+        let inverted = fronts.iter().filter(|w| w.is_some_and(|w| w < 0)).count();
+        let unknown = fronts.iter().filter(|w| w.is_none()).count();
+        if inverted > 0 || unknown > 0 {
+            return Err(bad(format!(
+                "is closed but bounds no solid: {inverted} of {} triangles have the inside in front of them (winding number below 0: inverted faces or shells) and {unknown} lie on other triangles; repair it or use it as a surface",
+                fronts.len()
+            )));
         }
-        if vertices.iter().any(|v| !v.is_finite()) {
-            return Err(bad("has a non-finite vertex".into()));
-        }
-        let nv = vertices.len() as u32;
-        if let Some(f) = faces.iter().find(|f| f.iter().any(|&i| i >= nv)) {
-            return Err(bad(format!("triangle {f:?} refers to a vertex beyond the {nv} given")));
-        }
+        mesh.solid = true;
+        Ok(mesh)
+    }
+
+    /// Whether every edge of `faces` is used once in each direction.
+    ///
+    /// # Errors
+    /// [`CoreError::InvalidGeometry`] saying how many edges are not.
+    pub fn check_closed(faces: &[[u32; 3]], what: &str) -> CoreResult<()> {
         let mut edges: HashMap<(u32, u32), i32> = HashMap::with_capacity(faces.len() * 3);
         for f in faces {
             for k in 0..3 {
@@ -127,16 +136,29 @@ impl TriMesh {
         }
         let open = edges.values().filter(|&&c| c != 0).count();
         if open > 0 {
-            return Err(bad(format!(
-                "is not closed and consistently oriented ({open} edges are not used once in each direction); repair it first"
-            )));
+            return Err(CoreError::InvalidGeometry {
+                what: what.into(),
+                detail: format!("is not closed and consistently oriented ({open} edges are not used once in each direction); repair it first"),
+            });
         }
+        Ok(())
+    }
+
+    /// Any set of triangles (open, overlapping, inconsistently wound: a *surface*, as FCL
+    /// sees a mesh). It has no inside: [`TriMesh::contains`] must not be asked.
+    ///
+    /// # Errors
+    /// [`CoreError::InvalidGeometry`] when the mesh is empty, has a non-finite vertex or an
+    /// index out of range.
+    pub fn surface(vertices: Vec<Vec3>, faces: &[[u32; 3]], what: &str) -> CoreResult<TriMesh> {
+        check_arrays(&vertices, faces, what)?;
+        let nv = vertices.len();
         let tris: Vec<Tri> =
             faces.iter().map(|f| Tri::new([vertices[f[0] as usize], vertices[f[1] as usize], vertices[f[2] as usize]])).collect();
         let aabb = Aabb::from_points(&vertices);
         let nodes = build_nodes(&tris);
         // one vertex per connected shell (union-find over the triangles' corners)
-        let mut shells = UnionFind::new(nv as usize);
+        let mut shells = UnionFind::new(nv);
         for f in faces {
             shells.union(f[0] as usize, f[1] as usize);
             shells.union(f[0] as usize, f[2] as usize);
@@ -148,7 +170,7 @@ impl TriMesh {
                 anchors.push(vertices[f[0] as usize]);
             }
         }
-        Ok(TriMesh { vertices, tris, nodes, aabb, anchors })
+        Ok(TriMesh { vertices, tris, nodes, aabb, anchors, closed: false, solid: false })
     }
 
     /// The same mesh reflected through the origin (`-v`), still outward oriented.
@@ -158,97 +180,53 @@ impl TriMesh {
         let aabb = Aabb::from_points(&vertices);
         let nodes = build_nodes(&tris);
         let anchors = self.anchors.iter().map(|v| -*v).collect();
-        TriMesh { vertices, tris, nodes, aabb, anchors }
+        TriMesh { vertices, tris, nodes, aabb, anchors, closed: self.closed, solid: self.solid }
     }
 
-
-    /// Whether `q` lies in the closed solid bounded by the mesh: the winding number along a
-    /// ray (exits minus entries) is non-zero, so overlapping shells are their union and
-    /// inward cavity shells are holes. A ray that passes within rounding of an edge or
-    /// vertex is replaced by the next direction; a point on the surface counts as inside.
-    pub fn contains(&self, q: Vec3) -> bool {
-        if !self.aabb.contains_point(q) {
-            return false;
-        }
-        let reach = 2.0 * self.aabb.diagonal() + (q - self.aabb.center()).length() + 1.0;
-        let mut last = false;
-        for d in RAY_DIRS {
-            let d = Vec3::from_array(d).normalize();
-            match self.parity(q, d, reach) {
-                Parity::Surface => return true,
-                Parity::Count(c) => return c != 0,
-                Parity::Degenerate(c) => last = c != 0,
-            }
-        }
-        last
-    }
-
-    fn parity(&self, q: Vec3, d: Vec3, reach: f64) -> Parity {
-        let far = q + d * reach;
-        let scale = self.aabb.diagonal().max(1e-300);
-        let mut count = 0i64;
-        let mut degenerate = false;
+    /// Whether a triangle meets the closed box `b` (separating axes, with the rounding
+    /// slack of [`super::Facet::overlaps_box`]: touching counts).
+    pub fn meets_box(&self, b: &Aabb) -> bool {
         let mut stack = vec![0u32];
         while let Some(ni) = stack.pop() {
             let n = &self.nodes[ni as usize];
-            if !n.aabb.overlaps_segment(q, far) {
+            if !n.aabb.overlaps(b) {
                 continue;
             }
             if !n.is_leaf() {
-                stack.push(n.left);
-                stack.push(n.left + 1);
+                stack.extend([n.left, n.left + 1]);
                 continue;
             }
             let t = &self.tris[n.tri as usize];
-            let (e1, e2) = (t.p[1] - t.p[0], t.p[2] - t.p[0]);
-            let pv = d.cross(e2);
-            let det = e1.dot(pv);
-            let s = q - t.p[0];
-            let area = e1.cross(e2).length();
-            if area <= 1e-14 * scale * scale {
-                continue; // a degenerate triangle bounds nothing
+            let tri = super::Facet { p: [t.p[0], t.p[1], t.p[2], Vec3::ZERO], n: 3, k: 0 };
+            if tri.overlaps_box(b, 0.0) {
+                return true;
             }
-            if det.abs() <= 1e-12 * e1.length() * e2.length() {
-                // ray parallel to the plane: it matters only within the plane
-                if (s.dot(e1.cross(e2)) / area).abs() <= 1e-12 * scale {
-                    degenerate = true;
-                }
-                continue;
-            }
-            let inv = 1.0 / det;
-            let u = s.dot(pv) * inv;
-            let qv = s.cross(e1);
-            let v = d.dot(qv) * inv;
-            let dist = e2.dot(qv) * inv;
-            let tol = 1e-9;
-            if u < -tol || v < -tol || u + v > 1.0 + tol {
-                continue;
-            }
-            if dist.abs() <= 1e-12 * scale {
-                return Parity::Surface;
-            }
-            if dist < 0.0 {
-                continue;
-            }
-            if u <= tol || v <= tol || u + v >= 1.0 - tol {
-                degenerate = true;
-                continue;
-            }
-            // det = −d · n: negative when the ray leaves through an outward face
-            count += if det < 0.0 { 1 } else { -1 };
         }
-        if degenerate {
-            Parity::Degenerate(count)
-        } else {
-            Parity::Count(count)
-        }
+        false
+    }
+
+    /// Whether the solid contains the closed box `b`: no triangle meets it and its centre
+    /// is inside.
+    pub fn contains_box(&self, b: &Aabb) -> bool {
+        debug_assert!(self.solid, "containment in a surface");
+        !self.meets_box(b) && self.contains(b.center())
     }
 }
 
-enum Parity {
-    Surface,
-    Count(i64),
-    Degenerate(i64),
+/// Non-empty, finite, indices in range.
+fn check_arrays(vertices: &[Vec3], faces: &[[u32; 3]], what: &str) -> CoreResult<()> {
+    let bad = |detail: String| CoreError::InvalidGeometry { what: what.into(), detail };
+    if faces.is_empty() {
+        return Err(bad("has no triangles".into()));
+    }
+    if vertices.iter().any(|v| !v.is_finite()) {
+        return Err(bad("has a non-finite vertex".into()));
+    }
+    let nv = vertices.len() as u32;
+    if let Some(f) = faces.iter().find(|f| f.iter().any(|&i| i >= nv)) {
+        return Err(bad(format!("triangle {f:?} refers to a vertex beyond the {nv} given")));
+    }
+    Ok(())
 }
 
 /// Median-split BVH with one triangle per leaf.

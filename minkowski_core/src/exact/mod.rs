@@ -21,14 +21,27 @@
 //! `B` (C-obstacles of many obstacles for one robot, `B = −R`), optionally with the outside
 //! of a box of allowed translations (walls), each grown by a cube of half-width `margin`.
 //!
-//! Entry points: [`ExactSource`], [`TriMesh`].
+//! Solids and surfaces: a mesh is a *solid* ([`TriMesh::new`]: closed, and its winding
+//! number never negative, see [`winding`]) or a *surface* ([`TriMesh::surface`]: any
+//! triangles, no inside, as FCL sees a mesh). Containment counts only for solids: the
+//! nesting test above asks a solid. A pair with a surface has no reduced convolution; every
+//! one of its pieces is a boundary candidate, kept per cell as pairs of BVH nodes that are
+//! split as the cells shrink (see `root_records`), so no `n·m` list is built.
+//!
+//! Entry points: [`ExactSource`], [`TriMesh`], [`ExactSource::verify_box`].
 
 mod convolution;
 mod gauss;
 mod mesh;
 mod piece;
+mod verify;
+pub mod winding;
 #[cfg(test)]
 mod exact_tests;
+#[cfg(test)]
+mod surface_pair_tests;
+#[cfg(test)]
+mod winding_tests;
 
 pub use convolution::{convolution, Facet};
 #[cfg(test)]
@@ -40,9 +53,39 @@ use crate::bvh::Bvh;
 use crate::math::{Aabb, Vec3};
 use crate::octree::{merge_sorted, CellSource, Label};
 
-/// Records at or above this are walls (`WALL + side`, side = 2 · axis + upper); below,
-/// facet indices.
+/// Records at or above this are walls (`WALL + side`, side = 2 · axis + upper); below
+/// [`PAIR`], facet indices.
 const WALL: u32 = u32::MAX - 7;
+
+/// A record `[PAIR, k, a, b]`: the pieces of obstacle `k` (a surface pair) under BVH nodes
+/// `a` of the obstacle and `b` of `B`.
+const PAIR: u32 = WALL - 1;
+
+/// One record of a cell's list.
+#[derive(Clone, Copy, Debug)]
+enum Rec {
+    /// A reduced-convolution facet.
+    Facet(usize),
+    /// The pieces of obstacle `k` under a pair of BVH nodes.
+    Pair(usize, u32, u32),
+    /// The slab beyond wall `side`.
+    Wall(usize),
+}
+
+/// The records of a cell's list, decoded.
+fn records(cand: &[u32]) -> impl Iterator<Item = Rec> + '_ {
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        let r = *cand.get(i)?;
+        if r == PAIR {
+            i += 4;
+            Some(Rec::Pair(cand[i - 3] as usize, cand[i - 2], cand[i - 1]))
+        } else {
+            i += 1;
+            Some(if r >= WALL { Rec::Wall((r - WALL) as usize) } else { Rec::Facet(r as usize) })
+        }
+    })
+}
 
 /// Longest record list [`ExactSource::carry`] scans; beyond it a point query is cheaper.
 const CARRY_MAX: usize = 256;
@@ -54,6 +97,9 @@ pub struct ExactSource {
     pub obstacles: Vec<TriMesh>,
     /// The mesh `B` (for C-obstacles `O ⊕ (−R)`: the robot reflected through its origin).
     pub b: TriMesh,
+    /// The obstacles whose pair with `B` has a surface (no reduced convolution: every piece
+    /// is a boundary candidate).
+    pub surface_pairs: Vec<usize>,
     /// Growth of every sum by the cube `[-margin, margin]^3`.
     pub margin: f64,
     /// When set, everything outside this box is solid too (closed slabs beyond each face).
@@ -62,7 +108,7 @@ pub struct ExactSource {
     pub aabb: Aabb,
     /// Largest possible piece extent: no cell wider than this lies inside one piece.
     max_piece: f64,
-    /// The reduced convolution facets of every `A_k` with `B`.
+    /// The reduced convolution facets of every solid `A_k` with a solid `B`.
     pub facets: Vec<Facet>,
     /// BVH over the facets' boxes (grown by `margin`).
     fbvh: Bvh,
@@ -104,10 +150,17 @@ impl ExactSource {
         let tri_ext = |m: &TriMesh| m.tris.iter().map(|t| Aabb::from_points(&t.p).extent().max_element()).fold(0.0f64, f64::max);
         let max_a = obstacles.iter().map(tri_ext).fold(0.0f64, f64::max);
         let max_piece = (max_a + tri_ext(&b) + 2.0 * margin) * 1.000_001;
-        let facets: Vec<Facet> = obstacles.iter().enumerate().flat_map(|(k, a)| convolution(a, &b, k as u32)).collect();
+        let surface_pairs: Vec<usize> = (0..obstacles.len()).filter(|&k| !(obstacles[k].solid && b.solid)).collect();
+        let facets: Vec<Facet> = obstacles
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| !surface_pairs.contains(k))
+            .flat_map(|(k, a)| convolution(a, &b, k as u32))
+            .collect();
+        assert!(facets.len() < PAIR as usize, "too many facets for the record encoding");
         let boxes: Vec<Aabb> = facets.iter().map(|f| f.aabb(margin)).collect();
         let fbvh = Bvh::build(&boxes);
-        ExactSource { full_witness: walls.is_some(), obstacles, b, margin, walls, aabb, max_piece, facets, fbvh }
+        ExactSource { full_witness: walls.is_some(), obstacles, b, surface_pairs, margin, walls, aabb, max_piece, facets, fbvh }
     }
 
     /// Whether `p` lies in the exact (ungrown) solid, walls excluded.
@@ -196,9 +249,9 @@ impl ExactSource {
 
     fn nested_k(&self, k: usize, p: Vec3) -> bool {
         let a = &self.obstacles[k];
-        // a shell of p − B inside A: its vertex p − b in A; a shell of A inside p − B:
-        // p − a in B
-        self.b.anchors.iter().any(|&b0| a.contains(p - b0)) || a.anchors.iter().any(|&a0| self.b.contains(p - a0))
+        // a shell of p − B inside the solid A: its vertex p − b in A; a shell of A inside
+        // the solid p − B: p − a in B (a surface contains nothing)
+        (a.solid && self.b.anchors.iter().any(|&b0| a.contains(p - b0))) || (self.b.solid && a.anchors.iter().any(|&a0| self.b.contains(p - a0)))
     }
 
     /// Visit the leaf pieces of obstacle `k` whose summed boxes pass `test`, until `f`
@@ -211,10 +264,16 @@ impl ExactSource {
     /// Visit the triangle pairs `(i, j)` of obstacle `k` whose summed boxes (grown by `m`)
     /// pass `test`, by a traversal of pairs of BVH nodes, until `f` returns true; whether it
     /// did.
-    fn any_pair(&self, k: usize, m: f64, test: impl Fn(&Aabb) -> bool, mut f: impl FnMut(usize, usize) -> bool) -> bool {
+    fn any_pair(&self, k: usize, m: f64, test: impl Fn(&Aabb) -> bool, f: impl FnMut(usize, usize) -> bool) -> bool {
+        self.any_pair_under(k, [0, 0], m, test, f)
+    }
+
+    /// [`ExactSource::any_pair`] below the node pair `start`.
+    fn any_pair_under(&self, k: usize, start: [u32; 2], m: f64, test: impl Fn(&Aabb) -> bool, mut f: impl FnMut(usize, usize) -> bool) -> bool {
         // median-split BVHs are at most ~log2(n) deep, so the pair stack stays short; a
         // deeper one spills to the heap
         let mut fixed = [[0u32; 2]; 64];
+        fixed[0] = start;
         let mut len = 1usize;
         let mut spill: Vec<[u32; 2]> = Vec::new();
         let (ma, mb) = (&self.obstacles[k].nodes, &self.b.nodes);
@@ -338,6 +397,21 @@ impl ExactSource {
             }
             best = best.min(f.separation(p, self.margin).max(0.0));
         }
+        for &k in &self.surface_pairs {
+            // every piece of a surface pair is a boundary candidate
+            let bound = std::cell::Cell::new(best);
+            let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+            self.any_pair(
+                k,
+                self.margin,
+                |bx| (bx.min - p).max(p - bx.max).max(Vec3::ZERO).length() < bound.get(),
+                |i, j| {
+                    bound.set(bound.get().min(Piece::new(&ta[i], &tb[j], self.margin, false).separation(p).max(0.0)));
+                    false
+                },
+            );
+            best = bound.get();
+        }
         best
     }
 
@@ -356,6 +430,7 @@ impl ExactSource {
         self.fbvh.for_each_overlapping(cell, |i| {
             touched = touched || self.facets[i].overlaps_box(cell, self.margin);
         });
+        touched = touched || self.surface_pairs.iter().any(|&k| self.any_piece(k, self.margin, true, |bx| bx.overlaps(cell), |piece, _, _| piece.overlaps_box(cell)));
         if touched || self.walls.is_some_and(|w| !(w.min.cmplt(cell.min).all() && cell.max.cmplt(w.max).all())) {
             return None;
         }
@@ -370,20 +445,61 @@ impl ExactSource {
             return None;
         }
         let seg = Aabb::new(q.min(p), q.max(p));
-        for &r in cand {
-            if r >= WALL {
-                let side = (r - WALL) as usize;
-                if self.wall_gap(side, q) <= 0.0 || self.wall_gap(side, p) <= 0.0 {
-                    return None;
+        for rec in records(cand) {
+            let crossed = match rec {
+                Rec::Wall(side) => self.wall_gap(side, q) <= 0.0 || self.wall_gap(side, p) <= 0.0,
+                Rec::Facet(i) => {
+                    let f = &self.facets[i];
+                    f.aabb(self.margin).overlaps(&seg) && f.clip(q, p, self.margin).is_some()
                 }
-            } else {
-                let f = &self.facets[r as usize];
-                if f.aabb(self.margin).overlaps(&seg) && f.clip(q, p, self.margin).is_some() {
-                    return None;
-                }
+                Rec::Pair(k, a, b) => self.pieces_meet_segment(k, [a, b], self.margin, q, p),
+            };
+            if crossed {
+                return None;
             }
         }
         Some(sq)
+    }
+
+    /// Whether a piece of obstacle `k` below the node pair `start`, grown by `m`, meets the
+    /// closed segment `a → b`.
+    fn pieces_meet_segment(&self, k: usize, start: [u32; 2], m: f64, a: Vec3, b: Vec3) -> bool {
+        let seg = Aabb::new(a.min(b), a.max(b));
+        let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+        self.any_pair_under(k, start, m, |bx| bx.overlaps(&seg) && bx.overlaps_segment(a, b), |i, j| Piece::new(&ta[i], &tb[j], m, false).clip(a, b).is_some())
+    }
+
+    /// Split the node pair `start` of obstacle `k` (a surface pair) against `cell`: push
+    /// `[PAIR, k, a, b]` records of the pairs whose pieces may meet it — leaf pairs whose
+    /// piece does, and inner pairs no larger than about the cell (all the way to leaves
+    /// when `finest`). Whether one piece contains the whole cell (then it is FULL).
+    fn refine_pair(&self, k: usize, start: [u32; 2], cell: &Aabb, finest: bool, out: &mut Vec<u32>) -> bool {
+        let m = self.margin;
+        let big = 2.0 * cell.extent().max_element();
+        let (ma, mb) = (&self.obstacles[k].nodes, &self.b.nodes);
+        let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+        let mut stack = vec![start];
+        while let Some([a, b]) = stack.pop() {
+            let bx = self.sum_box(k, a, b, m);
+            if !bx.overlaps(cell) {
+                continue;
+            }
+            let (na, nb) = (&ma[a as usize], &mb[b as usize]);
+            if na.is_leaf() && nb.is_leaf() {
+                let piece = Piece::new(&ta[na.tri as usize], &tb[nb.tri as usize], m, true);
+                if piece.contains_box(cell) {
+                    return true;
+                }
+                if piece.overlaps_box(cell) {
+                    out.extend([PAIR, k as u32, a, b]);
+                }
+            } else if finest || bx.extent().max_element() > big {
+                stack.extend(self.split(k, a, b).map(|[_, ca, cb]| [ca, cb]));
+            } else {
+                out.extend([PAIR, k as u32, a, b]);
+            }
+        }
+        false
     }
 
     /// Whether the closed segment `a → b` stays out of the solid grown by a further cube of
@@ -399,14 +515,19 @@ impl ExactSource {
         self.fbvh.for_each_overlapping(&q, |i| {
             hit = hit || self.facets[i].clip(a, b, m).is_some();
         });
-        // no grown facet meets the segment: all of it is inside or all outside
+        hit = hit || self.surface_pairs.iter().any(|&k| self.pieces_meet_segment(k, [0, 0], m, a, b));
+        // no grown boundary candidate meets the segment: all of it is inside or all outside
         !hit && !self.exact_point(a)
     }
 }
 
 impl CellSource for ExactSource {
+    /// Every facet, one `[PAIR, k, 0, 0]` (the root nodes) per surface pair, the walls.
     fn root_records(&self) -> Vec<u32> {
         let mut r: Vec<u32> = (0..self.facets.len() as u32).collect();
+        for &k in &self.surface_pairs {
+            r.extend([PAIR, k as u32, 0, 0]);
+        }
         if self.walls.is_some() {
             r.extend((0..6).map(|s| WALL + s));
         }
@@ -422,27 +543,35 @@ impl CellSource for ExactSource {
         Some(known.and_then(|(q, s)| self.carry(cand, q, s, c)).unwrap_or_else(|| self.cell_contains(own, c)))
     }
 
-    fn classify_near(&self, cell: &Aabb, cand: &[u32], _finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
-        for &r in cand {
-            if r >= WALL {
-                let (inside, meets) = self.wall_box((r - WALL) as usize, cell);
-                if inside {
-                    out.clear();
-                    return Label::Full;
+    fn classify_near(&self, cell: &Aabb, cand: &[u32], finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
+        for rec in records(cand) {
+            match rec {
+                Rec::Wall(side) => {
+                    let (inside, meets) = self.wall_box(side, cell);
+                    if inside {
+                        out.clear();
+                        return Label::Full;
+                    }
+                    if meets {
+                        out.push(WALL + side as u32);
+                    }
                 }
-                if meets {
-                    out.push(r);
+                Rec::Facet(i) => {
+                    if self.facets[i].overlaps_box(cell, self.margin) {
+                        out.push(i as u32);
+                    }
                 }
-                continue;
-            }
-            let f = &self.facets[r as usize];
-            if f.overlaps_box(cell, self.margin) {
-                out.push(r);
+                Rec::Pair(k, a, b) => {
+                    if self.refine_pair(k, [a, b], cell, finest, out) {
+                        out.clear();
+                        return Label::Full;
+                    }
+                }
             }
         }
         if out.is_empty() {
-            // no boundary in the cell: its centre decides (not in any grown facet), carried
-            // from the parent's known point when no boundary lies between them
+            // no boundary in the cell: its centre decides (not in any grown candidate),
+            // carried from the parent's known point when no boundary lies between them
             let c = cell.center();
             let inside = known.and_then(|(q, s)| self.carry(cand, q, s, c)).unwrap_or_else(|| self.exact_point(c));
             return if inside { Label::Full } else { Label::Empty };
@@ -455,12 +584,16 @@ impl CellSource for ExactSource {
     }
 
     fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {
-        for &r in cand {
-            if r >= WALL {
-                if self.in_wall((r - WALL) as usize, p, 0.0) {
-                    return true;
+        for rec in records(cand) {
+            let inside = match rec {
+                Rec::Wall(side) => self.in_wall(side, p, 0.0),
+                Rec::Facet(i) => self.facets[i].contains_point(p, self.margin),
+                Rec::Pair(k, a, b) => {
+                    let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+                    self.any_pair_under(k, [a, b], self.margin, |bx| bx.contains_point(p), |i, j| pair_contains_point(&ta[i], &tb[j], self.margin, p))
                 }
-            } else if self.facets[r as usize].contains_point(p, self.margin) {
+            };
+            if inside {
                 return true;
             }
         }
@@ -469,27 +602,41 @@ impl CellSource for ExactSource {
 
     fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>) {
         out.clear();
-        for &r in cand {
-            if r >= WALL {
-                // inside the slab: gap <= 0, linear along the segment
-                let side = (r - WALL) as usize;
-                let (fa, fb) = (self.wall_gap(side, a), self.wall_gap(side, b));
-                if fa <= 0.0 && fb <= 0.0 {
-                    out.push((0.0, 1.0));
-                } else if fa <= 0.0 {
-                    out.push((0.0, fa / (fa - fb)));
-                } else if fb <= 0.0 {
-                    out.push((fa / (fa - fb), 1.0));
+        for rec in records(cand) {
+            match rec {
+                Rec::Wall(side) => {
+                    // inside the slab: gap <= 0, linear along the segment
+                    let (fa, fb) = (self.wall_gap(side, a), self.wall_gap(side, b));
+                    if fa <= 0.0 && fb <= 0.0 {
+                        out.push((0.0, 1.0));
+                    } else if fa <= 0.0 {
+                        out.push((0.0, fa / (fa - fb)));
+                    } else if fb <= 0.0 {
+                        out.push((fa / (fa - fb), 1.0));
+                    }
                 }
-            } else if let Some(t) = self.facets[r as usize].clip(a, b, self.margin) {
-                out.push(t);
+                Rec::Facet(i) => {
+                    if let Some(t) = self.facets[i].clip(a, b, self.margin) {
+                        out.push(t);
+                    }
+                }
+                Rec::Pair(k, na, nb) => {
+                    let seg = Aabb::new(a.min(b), a.max(b));
+                    let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+                    self.any_pair_under(k, [na, nb], self.margin, |bx| bx.overlaps(&seg), |i, j| {
+                        if let Some(t) = Piece::new(&ta[i], &tb[j], self.margin, false).clip(a, b) {
+                            out.push(t);
+                        }
+                        false
+                    });
+                }
             }
         }
         merge_sorted(out);
     }
 
     fn solid_intervals(&self, a: Vec3, b: Vec3, sa: bool, sb: bool, bnd: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
-        // the facets and slabs are solid; between them the segment meets no boundary, so
+        // the facets, pieces and slabs are solid; between them the segment meets no boundary, so
         // each gap is all in or all out: the ends decide the outer ones, a point the others
         out.clear();
         out.extend_from_slice(bnd);

@@ -42,11 +42,19 @@ pub struct Certificate {
     pub goal_component_size: usize,
     /// Whether the walled component is the start's (`false`: the goal's).
     pub walls_around_start: bool,
-    /// FULL leaves face-adjacent to the walled component, with a primitive containing each.
+    /// FULL leaves face-adjacent to the walled component, each with the primitive (exact
+    /// source: obstacle, or `n_obstacle + side` for a wall) that [`CSpace::verify_leaf`]
+    /// showed to contain it, `usize::MAX` where that could not be shown.
     pub walls: Vec<(usize, usize)>,
+    /// Whether every wall leaf was shown to be blocked (the certificate holds).
+    pub verified: bool,
     /// Number of components of the non-FULL leaves.
     pub n_components: usize,
 }
+
+/// Box tests [`CSpace::certificate`] spends at most re-verifying the wall leaves of the
+/// exact source.
+const VERIFY_BUDGET: usize = 2_000_000;
 
 /// The C-obstacles of a [`CSpace`] and the walls outside its bounds.
 #[derive(Clone, Debug)]
@@ -479,9 +487,25 @@ impl CSpace {
         found
     }
 
+    /// The primitive (exact source: obstacle, or `n_obstacle + side` for a wall) shown to
+    /// contain the closed box of leaf `i` by an exact test that does not trust the octree's
+    /// label: a convex primitive containing it, or [`ExactSource::verify_box`] (triangle
+    /// pairs and nesting, never the reduced convolution). `budget`: box tests left for the
+    /// exact source.
+    pub fn verify_leaf(&self, i: usize, budget: &mut usize) -> Option<usize> {
+        match &self.obstacles {
+            Obstacles::Union(_) => self.primitive_containing_leaf(i),
+            Obstacles::Exact(e) => e.verify_box(&self.oct.cell_box(&self.oct.leaves[i]), budget).map(|w| match w {
+                Witness::Piece { k, .. } | Witness::Nested { k } => k,
+                Witness::Wall { side } => self.n_obstacle + side,
+            }),
+        }
+    }
+
     /// When the leaves of `start` and `goal` lie in different components of the non-FULL
     /// (EMPTY ∪ MIXED) leaves, the certificate: the smaller of the two components and the
-    /// FULL leaves around it. `None` when they are connected (or a point is outside).
+    /// FULL leaves around it, each re-verified ([`CSpace::verify_leaf`]). `None` when they
+    /// are connected (or a point is outside).
     pub fn certificate(&self, start: Vec3, goal: Vec3) -> Option<Certificate> {
         let s = self.locate(start)?;
         let g = self.locate(goal)?;
@@ -512,8 +536,10 @@ impl CSpace {
                 walls.insert(leaf);
             }
         }
-        let walls = walls.into_iter().map(|w| (w, self.primitive_containing_leaf(w).unwrap_or(usize::MAX))).collect();
-        Some(Certificate { labels: labels.clone(), goal_component_size: mg.len(), start_component: ms, walls_around_start: around_start, walls, n_components })
+        let mut budget = VERIFY_BUDGET;
+        let walls: Vec<(usize, usize)> = walls.into_iter().map(|w| (w, self.verify_leaf(w, &mut budget).unwrap_or(usize::MAX))).collect();
+        let verified = walls.iter().all(|w| w.1 != usize::MAX);
+        Some(Certificate { labels: labels.clone(), goal_component_size: mg.len(), start_component: ms, walls_around_start: around_start, walls, verified, n_components })
     }
 }
 

@@ -1,0 +1,103 @@
+//! Tests of surface pairs: every piece a boundary candidate, containment only in solids.
+
+use super::exact_tests::{box_mesh, push_box, torus_mesh, Lcg};
+use super::*;
+use crate::octree::{Label, Octree};
+
+/// The box `[lo, hi]` without its top (z = hi) face: an open surface.
+fn open_box(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::from_array(lo), Vec3::from_array(hi), &mut v, &mut f);
+    f.retain(|t| !t.iter().all(|&i| i >= 4)); // push_box's top quad uses vertices 4..8
+    TriMesh::surface(v, &f, "open box").unwrap()
+}
+
+/// Brute force over all triangle pairs, plus containment in a solid partner.
+fn truth(a: &TriMesh, b: &TriMesh, p: Vec3) -> bool {
+    let pair = a.tris.iter().any(|t| b.tris.iter().any(|s| pair_contains_point(t, s, 0.0, p)));
+    let a_in_b = b.solid && a.anchors.iter().any(|&a0| b.contains(p - a0));
+    let b_in_a = a.solid && b.anchors.iter().any(|&b0| a.contains(p - b0));
+    pair || a_in_b || b_in_a
+}
+
+fn cases() -> Vec<(TriMesh, TriMesh)> {
+    vec![
+        // an open box (a cup) and a solid robot that fits inside it
+        (open_box([0.0; 3], [3.0, 3.0, 2.0]), box_mesh([-0.4; 3], [0.4; 3]).negated()),
+        // a surface robot (an open box) and a solid obstacle it could swallow
+        (box_mesh([0.0; 3], [0.5, 0.5, 0.5]), open_box([-1.0; 3], [1.0; 3]).negated()),
+        // a closed torus used as a surface and a solid box
+        (TriMesh { solid: false, ..torus_mesh(1.5, 0.5, 12, 8) }, box_mesh([-0.3; 3], [0.3; 3]).negated()),
+    ]
+}
+
+#[test]
+fn surface_pairs_have_no_facets_and_membership_matches_brute_force() {
+    for (a, b) in cases() {
+        let src = ExactSource::new(vec![a.clone()], b.clone(), 0.0, None);
+        assert!(src.facets.is_empty());
+        assert_eq!(src.surface_pairs, vec![0]);
+        let mut rng = Lcg(5);
+        let region = src.aabb.inflated(0.3);
+        for _ in 0..3000 {
+            let p = rng.point(&region);
+            assert_eq!(src.contains_point(p), truth(&a, &b, p), "{p:?}");
+        }
+    }
+}
+
+#[test]
+fn a_solid_inside_a_cup_is_free_and_a_swallowed_one_collides() {
+    let cup = open_box([0.0; 3], [3.0, 3.0, 2.0]);
+    let robot = box_mesh([-0.4; 3], [0.4; 3]).negated();
+    let src = ExactSource::new(vec![cup], robot, 0.0, None);
+    assert!(!src.contains_point(Vec3::new(1.5, 1.5, 1.0)), "inside the cup, touching nothing");
+    assert!(src.contains_point(Vec3::new(1.5, 1.5, 0.3)), "touching the bottom");
+    // a solid robot around a small obstacle surface contains it
+    let src = ExactSource::new(vec![open_box([0.0; 3], [0.2; 3])], box_mesh([-1.0; 3], [1.0; 3]).negated(), 0.0, None);
+    assert!(src.contains_point(Vec3::splat(0.1)));
+}
+
+#[test]
+fn octree_labels_over_surface_pairs_are_exact() {
+    for (a, b) in cases() {
+        let src = ExactSource::new(vec![a.clone()], b.clone(), 0.0, None);
+        let region = src.aabb.inflated(0.2);
+        let oct = Octree::build(&src, &region, 0.1, 1 << 22).unwrap();
+        let mut rng = Lcg(9);
+        let (mut empty, mut full) = (0, 0);
+        for leaf in &oct.leaves {
+            let cell = oct.cell_box(leaf);
+            match leaf.label {
+                Label::Empty => {
+                    empty += 1;
+                    for _ in 0..4 {
+                        let p = rng.point(&cell);
+                        assert!(!truth(&a, &b, p), "EMPTY cell {cell:?} holds {p:?}");
+                    }
+                }
+                Label::Full => {
+                    full += 1;
+                    for _ in 0..4 {
+                        let p = rng.point(&cell);
+                        assert!(truth(&a, &b, p), "FULL cell {cell:?} misses {p:?}");
+                    }
+                }
+                Label::Mixed => {}
+            }
+        }
+        assert!(empty > 0 && full > 0, "{empty} empty, {full} full");
+    }
+}
+
+#[test]
+fn segments_over_surface_pairs() {
+    let cup = open_box([0.0; 3], [3.0, 3.0, 2.0]);
+    let src = ExactSource::new(vec![cup], box_mesh([-0.4; 3], [0.4; 3]).negated(), 0.0, None);
+    // down into the cup through its open top, and across its floor through a wall
+    assert!(src.segment_is_free(Vec3::new(1.5, 1.5, 4.0), Vec3::new(1.5, 1.5, 1.0), 0.0));
+    assert!(!src.segment_is_free(Vec3::new(1.5, 1.5, 1.0), Vec3::new(5.0, 1.5, 1.0), 0.0));
+    assert!(!src.segment_is_free(Vec3::new(1.5, 1.5, 4.0), Vec3::new(1.5, 1.5, 1.0), 0.7), "the margin meets the floor");
+    assert!(src.signed_distance(Vec3::new(1.5, 1.5, 1.0)) > 0.0);
+    assert!(src.signed_distance(Vec3::new(1.5, 1.5, 1.0)) <= 0.6 + 1e-9, "a lower bound of 0.6");
+}

@@ -1,0 +1,86 @@
+//! Certificates re-verified: whether a closed box lies in the solid, shown without the
+//! boundary candidates.
+//!
+//! A no-path certificate stands on its FULL wall cells. The octree labels a cell FULL when
+//! one piece contains it, or when no boundary candidate (facet) meets it and its centre is
+//! inside — and the facets are complete only for solids that are what they claim to be.
+//! [`ExactSource::verify_box`] shows a box blocked from the triangles alone: every part of
+//! it lies in a wall slab, in one triangle-pair piece `T_i ⊕ S_j` (a contact: always in the
+//! sum), or in the region where a vertex of one mesh lies inside the other, solid, mesh
+//! (a solid mesh containing a box: no triangle meets the box, the winding number at its
+//! centre is not zero). Boxes none of these shows are split into octants, a few times.
+
+use super::{ExactSource, Witness};
+use crate::math::{Aabb, Vec3};
+
+/// Octant splits of one box at most.
+const MAX_SPLITS: u32 = 6;
+
+/// Vertices of a mesh tried as the nested one per box: its shell anchors, then evenly
+/// spaced others up to this many.
+const NESTED_VERTICES: usize = 12;
+
+impl ExactSource {
+    /// Why every point of the closed box `cell` lies in the (grown) solid, shown from the
+    /// triangles alone (see the module documentation), or `None` when that cannot be shown
+    /// within `budget` box tests (decremented) and a few octant splits. The witness is that
+    /// of the first part shown.
+    pub fn verify_box(&self, cell: &Aabb, budget: &mut usize) -> Option<Witness> {
+        let mut stack = vec![(*cell, 0u32)];
+        let mut first = None;
+        while let Some((bx, depth)) = stack.pop() {
+            if *budget == 0 {
+                return None;
+            }
+            *budget -= 1;
+            if let Some(w) = self.box_shown(&bx) {
+                first.get_or_insert(w);
+                continue;
+            }
+            if depth == MAX_SPLITS {
+                return None;
+            }
+            stack.extend(octants(&bx).map(|c| (c, depth + 1)));
+        }
+        first
+    }
+
+    /// A wall slab, one piece, or one vertex nested for the whole box.
+    fn box_shown(&self, bx: &Aabb) -> Option<Witness> {
+        if self.walls.is_some() {
+            if let Some(side) = (0..6).find(|&side| self.wall_box(side, bx).0) {
+                return Some(Witness::Wall { side });
+            }
+        }
+        if let Some(w) = self.piece_contains_box(bx) {
+            return Some(w);
+        }
+        (0..self.obstacles.len()).find(|&k| self.vertex_nested(k, bx)).map(|k| Witness::Nested { k })
+    }
+
+    /// Whether at every `p` of the box a vertex of `p − B` lies in the solid `A_k` (the box
+    /// `bx − b` inside `A_k` for a vertex `b` of `B`), or a vertex `a` of `A_k` lies in the
+    /// solid `p − B` (`bx − a` inside `B`): then `A_k` and `p − B` meet.
+    fn vertex_nested(&self, k: usize, bx: &Aabb) -> bool {
+        let a = &self.obstacles[k];
+        let shifted = |v: Vec3| Aabb::new(bx.min - v, bx.max - v);
+        (a.solid && sample(&self.b.anchors, &self.b.vertices).any(|b0| a.contains_box(&shifted(b0))))
+            || (self.b.solid && sample(&a.anchors, &a.vertices).any(|a0| self.b.contains_box(&shifted(a0))))
+    }
+}
+
+/// The shell anchors, then evenly spaced vertices, [`NESTED_VERTICES`] in all at most.
+fn sample<'a>(anchors: &'a [Vec3], vertices: &'a [Vec3]) -> impl Iterator<Item = Vec3> + 'a {
+    let step = (vertices.len() / NESTED_VERTICES).max(1);
+    anchors.iter().copied().chain(vertices.iter().step_by(step).copied()).take(NESTED_VERTICES)
+}
+
+/// The eight octants of a box.
+fn octants(b: &Aabb) -> impl Iterator<Item = Aabb> + '_ {
+    let c = b.center();
+    (0..8).map(move |i| {
+        let pick = |bit: usize, axis: usize| if i >> bit & 1 == 0 { (b.min[axis], c[axis]) } else { (c[axis], b.max[axis]) };
+        let (x, y, z) = (pick(0, 0), pick(1, 1), pick(2, 2));
+        Aabb::new(Vec3::new(x.0, y.0, z.0), Vec3::new(x.1, y.1, z.1))
+    })
+}

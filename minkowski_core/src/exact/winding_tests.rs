@@ -1,0 +1,141 @@
+//! Tests of the winding number, the solid test and certificate re-verification.
+
+use super::exact_tests::{box_mesh, boxes_mesh, hollow_box, push_box, Lcg};
+use super::*;
+use crate::octree::{Label, Octree};
+
+/// A floor slab wound inside out and a wall wound outward, overlapping, in one mesh (the
+/// winding number is −1 in the floor, +1 in the wall, 0 where they overlap), as OMPL.app's
+/// Easy frame is imported.
+fn inverted_frame() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::new(0.0, 0.0, 0.0), Vec3::new(10.0, 1.0, 10.0), &mut v, &mut f);
+    for t in &mut f {
+        t.swap(1, 2);
+    }
+    push_box(Vec3::new(0.0, 0.0, 0.0), Vec3::new(10.0, 10.0, 1.0), &mut v, &mut f);
+    (v, f)
+}
+
+/// The inverted frame claimed to be a solid, bypassing the check (what an importer that
+/// trusts a consistently wound surface would hand over).
+fn fake_solid_frame() -> TriMesh {
+    let (v, f) = inverted_frame();
+    TriMesh { closed: true, solid: true, ..TriMesh::surface(v, &f, "frame").unwrap() }
+}
+
+#[test]
+fn winding_number_counts_shells() {
+    let two = boxes_mesh(&[([0.0; 3], [2.0, 1.0, 1.0]), ([1.0, 0.0, 0.0], [3.0, 1.0, 1.0])]);
+    assert_eq!(two.winding(Vec3::new(0.5, 0.5, 0.5)), Some(1));
+    assert_eq!(two.winding(Vec3::new(1.5, 0.5, 0.5)), Some(2));
+    assert_eq!(two.winding(Vec3::new(3.5, 0.5, 0.5)), Some(0));
+    assert_eq!(two.winding(Vec3::new(0.0, 0.5, 0.5)), None, "on the surface");
+    let hollow = hollow_box();
+    assert_eq!(hollow.winding(Vec3::splat(1.5)), Some(1));
+    assert_eq!(hollow.winding(Vec3::ZERO), Some(0), "the cavity");
+}
+
+#[test]
+fn front_windings_are_zero_on_a_solid_and_tell_overlaps_and_cavities() {
+    let b = box_mesh([0.0; 3], [1.0, 2.0, 3.0]);
+    assert!(b.solid);
+    assert!(b.front_windings().iter().all(|&w| w == Some(0)));
+    // overlapping outward shells: faces inside the other shell have the solid in front
+    let two = boxes_mesh(&[([0.0; 3], [2.0, 1.0, 1.0]), ([1.0, 0.0, 0.0], [3.0, 1.0, 1.0])]);
+    let fronts = two.front_windings();
+    assert!(fronts.iter().all(|w| matches!(w, Some(0) | Some(1))), "{fronts:?}");
+    assert!(fronts.contains(&Some(1)));
+    // a box inside another sharing its top and bottom planes: its top and bottom lie on
+    // the other's, and are told just in front of them
+    let inner = boxes_mesh(&[([0.0; 3], [3.0, 3.0, 1.0]), ([1.0, 1.0, 0.0], [2.0, 2.0, 1.0])]);
+    assert!(inner.solid);
+    let fronts = inner.front_windings();
+    assert!(fronts.iter().all(|w| matches!(w, Some(0) | Some(1))), "{fronts:?}");
+    // a cavity's faces point into it: winding 0 there
+    assert!(hollow_box().front_windings().iter().all(|&w| w == Some(0)));
+}
+
+#[test]
+fn an_inverted_shell_glued_to_another_is_no_solid() {
+    let (v, f) = inverted_frame();
+    let surface = TriMesh::surface(v.clone(), &f, "frame").unwrap();
+    let fronts = TriMesh { closed: true, ..surface }.front_windings();
+    // the floor's faces outside the wall have the floor (winding −1) in front of them
+    assert!(fronts.iter().any(|&w| w == Some(-1)), "{fronts:?}");
+    let err = TriMesh::new(v, &f, "frame").unwrap_err().to_string();
+    assert!(err.contains("bounds no solid"), "{err}");
+    // one inside-out box alone is no solid either
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::ZERO, Vec3::ONE, &mut v, &mut f);
+    for t in &mut f {
+        t.swap(1, 2);
+    }
+    assert!(TriMesh::new(v, &f, "inside out").is_err());
+}
+
+/// The physical truth for the frame and a robot box: the robot meets the floor or the
+/// wall (their union as boxes).
+fn frame_blocks(robot: &Aabb, p: Vec3) -> bool {
+    let at = Aabb::new(robot.min + p, robot.max + p);
+    let floor = Aabb::new(Vec3::ZERO, Vec3::new(10.0, 1.0, 10.0));
+    let wall = Aabb::new(Vec3::ZERO, Vec3::new(10.0, 10.0, 1.0));
+    at.overlaps(&floor) || at.overlaps(&wall)
+}
+
+#[test]
+fn verification_refuses_false_walls_of_a_solid_that_is_not_one() {
+    let robot = Aabb::new(Vec3::splat(-0.3), Vec3::splat(0.3));
+    let src = ExactSource::new(vec![fake_solid_frame()], box_mesh([-0.3; 3], [0.3; 3]).negated(), 0.0, None);
+    let region = Aabb::new(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(11.0, 4.0, 11.0));
+    let oct = Octree::build(&src, &region, 0.25, 1 << 22).unwrap();
+    let mut rng = Lcg(11);
+    let (mut false_full, mut verified) = (0, 0);
+    let mut budget = usize::MAX;
+    for leaf in oct.leaves.iter().filter(|l| l.label == Label::Full) {
+        let cell = oct.cell_box(leaf);
+        let wrong = (0..16).map(|_| rng.point(&cell)).any(|p| !frame_blocks(&robot, p));
+        let shown = src.verify_box(&cell, &mut budget);
+        if wrong {
+            false_full += 1;
+            assert!(shown.is_none(), "a false FULL cell {cell:?} passed verification");
+        }
+        if shown.is_some() {
+            verified += 1;
+            for _ in 0..16 {
+                let p = rng.point(&cell);
+                assert!(frame_blocks(&robot, p), "verified cell {cell:?} holds free {p:?}");
+            }
+        }
+    }
+    assert!(false_full > 0, "the trusted inverted frame should give false FULL cells");
+    assert!(verified > 0);
+}
+
+#[test]
+fn verification_shows_true_walls_by_pieces_and_nesting() {
+    // a thick block and a small robot: FULL cells deep inside need nesting, cells at the
+    // surface pieces or splits
+    let src = ExactSource::new(vec![box_mesh([0.0; 3], [4.0, 4.0, 4.0])], box_mesh([-0.2; 3], [0.2; 3]).negated(), 0.0, None);
+    let mut budget = 100_000;
+    let deep = Aabb::new(Vec3::splat(1.0), Vec3::splat(3.0));
+    assert!(matches!(src.verify_box(&deep, &mut budget), Some(Witness::Nested { k: 0 })));
+    let skin = Aabb::new(Vec3::new(-0.1, 1.0, 1.0), Vec3::new(0.6, 3.0, 3.0));
+    assert!(src.verify_box(&skin, &mut budget).is_some(), "a box across the contact shell");
+    let partly_free = Aabb::new(Vec3::new(-0.5, 1.0, 1.0), Vec3::new(0.5, 3.0, 3.0));
+    assert!(src.verify_box(&partly_free, &mut budget).is_none());
+    let mut none = 0;
+    assert!(src.verify_box(&deep, &mut none).is_none(), "no budget, no proof");
+}
+
+#[test]
+fn a_surface_contains_nothing_in_verification() {
+    // the same block as a surface: a robot wholly inside it meets no triangle
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::ZERO, Vec3::splat(4.0), &mut v, &mut f);
+    let src = ExactSource::new(vec![TriMesh::surface(v, &f, "block").unwrap()], box_mesh([-0.2; 3], [0.2; 3]).negated(), 0.0, None);
+    let mut budget = 100_000;
+    assert!(src.verify_box(&Aabb::new(Vec3::splat(1.0), Vec3::splat(3.0)), &mut budget).is_none());
+    assert!(!src.contains_point(Vec3::splat(2.0)));
+    assert!(src.contains_point(Vec3::new(0.1, 2.0, 2.0)));
+}
