@@ -2,9 +2,12 @@
 
 Public API:
 
-- :func:`load_scenario` -> :class:`Scenario`; :func:`plan` -> :class:`PlanOutcome`
+- :func:`load_problem` (scenario YAML, OMPL.app ``.cfg``, assembly YAML),
+  :func:`load_scenario` -> :class:`Scenario`; :func:`plan` -> :class:`PlanOutcome`
 - :func:`load_assembly`, :func:`plan_assembly` -> :class:`AssemblyResult`
 - :func:`minkowski_sum`, :func:`c_obstacle` -> :class:`MinkowskiResult`
+- :func:`choose_source` -> a C-obstacle :class:`Source` (exact or decomposition) that
+  every one of those takes
 - :func:`decompose` -> :class:`Decomposition` (convex pieces, cached)
 - :func:`load_mesh`, :func:`validate_solid`, :func:`repair_mesh`, :func:`mirror`
 - :mod:`planner.errors` (every error minkplan raises), :data:`tol` (all tolerances)
@@ -20,7 +23,7 @@ except ImportError as _exc:  # pragma: no cover - depends on how it was installe
         "this is probably the source tree shadowing an installed minkplan (run from another "
         "directory, or install with `pip install -e .` so the module is built here)"
     ) from _exc
-from .assembly import AssemblyResult, load_assembly, plan_assembly
+from .assembly import AssemblyResult, plan_assembly
 from .decompose import Decomposition, decompose
 from .errors import (
     GeometryError,
@@ -30,15 +33,19 @@ from .errors import (
     ResourceLimitError,
     ScenarioError,
 )
+from .io import load_assembly, load_problem, load_scenario
 from .meshes import load_mesh, mirror, repair_mesh, validate_solid
 from .minkowski import MinkowskiResult, c_obstacle, minkowski_sum
-from .planning import PlanOutcome, plan
-from .scenario import Scenario, load_scenario
+from .planning import PlanOutcome, PlanStatus, plan
+from .problem import Assembly, Part, PlannerSettings, Scenario
+from .sources import Source, SourceSettings
+from .sources import choose as choose_source
 from .tolerances import Tolerances, tol
 
 __version__ = _minkowski_core.__version__
 
 __all__ = [
+    "Assembly",
     "AssemblyResult",
     "Decomposition",
     "GeometryError",
@@ -46,15 +53,22 @@ __all__ = [
     "InvalidParameterError",
     "MinkowskiResult",
     "MinkplanError",
+    "Part",
     "PlanOutcome",
+    "PlanStatus",
+    "PlannerSettings",
     "ResourceLimitError",
     "Scenario",
     "ScenarioError",
+    "Source",
+    "SourceSettings",
     "Tolerances",
     "c_obstacle",
+    "choose_source",
     "decompose",
     "load_assembly",
     "load_mesh",
+    "load_problem",
     "load_scenario",
     "minkowski_sum",
     "mirror",

@@ -13,6 +13,7 @@ __all__ = [
     "Primitives",
     "__version__",
     "build_octree",
+    "crossing_windings",
     "front_windings",
     "num_threads",
     "union_surface",
@@ -62,6 +63,10 @@ def front_windings(
     vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
 ) -> npt.NDArray[np.int64]:
     """Winding number just in front of each face of a closed mesh (int64 min: unknown)."""
+def crossing_windings(
+    vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
+) -> npt.NDArray[np.int64]:
+    """Winding number in front of both faces of each crossing (int64 min: unknown)."""
 def winding_numbers(
     vertices: npt.NDArray[np.float64],
     faces: npt.NDArray[np.int64],
@@ -88,6 +93,10 @@ class ExactSum:
     def facets(self) -> int: ...
     def contains(self, points: npt.NDArray[np.float64]) -> npt.NDArray[np.bool_]: ...
     def segment_is_free(self, a: list[float], b: list[float], margin: float = 0.0) -> bool: ...
+    def signed_distance(self, points: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]: ...
+    def segment_intervals(
+        self, a: npt.NDArray[np.float64], b: npt.NDArray[np.float64]
+    ) -> list[tuple[float, float]]: ...
     def surface(
         self, eps: float, max_cells: int = 8000000, max_refinements: int = 2, simplify: bool = True
     ) -> dict[str, Any]: ...

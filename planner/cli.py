@@ -9,9 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 _MESH_SUFFIXES = {".stl", ".obj", ".ply", ".off", ".glb"}
@@ -145,38 +143,6 @@ def _fail(message: str) -> int:
     return 2
 
 
-def _unwritable(path: Path) -> str | None:
-    """Why a file cannot be written at ``path`` (its missing folders would be created), or
-    ``None``: checked before the work, so a bad path costs nothing."""
-    if path.is_dir():
-        return "is a directory"
-    for parent in path.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                return f"{parent} is a file, not a folder"
-            if not os.access(parent, os.W_OK | os.X_OK):
-                return f"folder {parent} is not writable"
-            return None
-    return None
-
-
-def _atomic_write(path: Path, write) -> None:
-    """Write via a temporary file in the same directory, then rename: never half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual permissions
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 def _cmd_minkowski(args) -> int:
     out = Path(args.output)
     if out.suffix.lower() not in _MESH_SUFFIXES:
@@ -189,9 +155,11 @@ def _cmd_minkowski(args) -> int:
             return _fail(f"{label}: {f!r} is a directory, not a mesh file")
         if not Path(f).is_file():
             return _fail(f"{label}: file {f!r} not found")
+    from planner.output import atomic_write, unwritable
+
     targets = [("--output", out)] + ([("--stats", Path(args.stats))] if args.stats else [])
     for flag, target in targets:
-        problem = _unwritable(target)
+        problem = unwritable(target)
         if problem:
             return _fail(f"{flag} {target}: {problem}")
 
@@ -207,11 +175,11 @@ def _cmd_minkowski(args) -> int:
         eps=args.eps,
         seed=args.seed,
         progress=False if args.no_progress else None,
-        exact={"auto": "auto", "true": True, "false": False}[args.exact],
+        exact=args.exact,
         **kwargs,
     )
     try:
-        _atomic_write(
+        atomic_write(
             out, lambda tmp: result.mesh.export(tmp, file_type=out.suffix.lower().lstrip("."))
         )
     except OSError as exc:
@@ -229,8 +197,8 @@ def _cmd_minkowski(args) -> int:
     if args.stats:
         stats_path = Path(args.stats)
         try:
-            _atomic_write(stats_path,
-                          lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))
+            atomic_write(stats_path,
+                         lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))
         except OSError as exc:
             return _fail(f"--stats {stats_path}: cannot write it ({exc.strerror or exc})")
     sys.stdout.write(
@@ -240,11 +208,6 @@ def _cmd_minkowski(args) -> int:
         f"{result.stats['decomposition_excess']:.4g}), {result.stats['seconds']['total']:.2f} s\n"
     )
     return 0
-
-
-def _write_json(path: Path, document, indent: int | None = 2) -> None:
-    text = json.dumps(document, indent=indent, allow_nan=False) + "\n"
-    _atomic_write(path, lambda tmp: Path(tmp).write_text(text))
 
 
 def _cmd_plan(args) -> int:
@@ -261,8 +224,9 @@ def _cmd_plan(args) -> int:
     if not scenario_path.is_file():
         return _fail(f"scenario: file {str(scenario_path)!r} not found")
 
+    from planner.io import load_scenario
+    from planner.output import write_json
     from planner.planning import plan
-    from planner.scenario import load_scenario
 
     scenario = load_scenario(scenario_path)
     overrides = {}
@@ -271,7 +235,7 @@ def _cmd_plan(args) -> int:
     if args.seed is not None:
         overrides["seed"] = args.seed
     if args.exact is not None:
-        overrides["exact"] = {"auto": "auto", "true": True, "false": False}[args.exact]
+        overrides["exact"] = args.exact
     if overrides:
         from planner.errors import InvalidParameterError
 
@@ -287,11 +251,11 @@ def _cmd_plan(args) -> int:
         cache_dir=args.cache_dir,
         progress=False if args.no_progress else None,
     )
-    _write_json(out / "path.json", outcome.path_json())
-    _write_json(out / "report.json", outcome.report_json())
+    write_json(out / "path.json", outcome.path_json())
+    write_json(out / "report.json", outcome.report_json())
     certificate = outcome.certificate_json()
     if certificate is not None:
-        _write_json(out / "certificate.json", certificate, indent=None)
+        write_json(out / "certificate.json", certificate, indent=None)
     detail = ""
     if outcome.found:
         detail = (
@@ -318,10 +282,24 @@ def _cmd_assemble(args) -> int:
         return _fail(f"--out {out}: exists and is not a directory")
     if not Path(args.assembly).is_file():
         return _fail(f"assembly: file {args.assembly!r} not found")
-    from planner.assembly import assemble_command
+    from planner.assembly import plan_assembly
+    from planner.io import load_assembly
+    from planner.output import write_json
 
-    return assemble_command(args.assembly, out, html=args.html, cache_dir=args.cache_dir,
-                            progress=False if args.no_progress else None, write=_write_json)
+    assembly = load_assembly(args.assembly)
+    result = plan_assembly(assembly, cache_dir=args.cache_dir,
+                           progress=False if args.no_progress else None)
+    write_json(out / "sequence.json", result.sequence_json())
+    write_json(out / "report.json", result.report_json())
+    sys.stdout.write(f"{assembly.name}: {result.message} (contact tolerance "
+                     f"{result.contact_tolerance:.3g}); {result.seconds:.2f} s; "
+                     f"wrote {out}/sequence.json\n")
+    if args.html:
+        from planner.viz import scene_for_assembly, write_html
+
+        page = write_html(scene_for_assembly(result), out / "assembly.html")
+        sys.stdout.write(f"wrote {page} (self-contained; open it in a browser)\n")
+    return result.exit_code
 
 
 def _cmd_view(args) -> int:
@@ -342,7 +320,7 @@ def _cmd_view(args) -> int:
         plan_json = path_file
 
     from planner import viz
-    from planner.scenario import load_scenario
+    from planner.io import load_scenario
 
     scenario = load_scenario(scenario_path)
     scene = viz.scene_for_plan(scenario, plan_json, c_obstacle=not args.no_c_obstacle)

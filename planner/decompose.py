@@ -34,10 +34,12 @@ import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
 from .errors import GeometryError, InvalidParameterError
-from .meshes import split_solid, validate_solid, winding_numbers
+from .meshes import split_solid, validate_solid
 from .tolerances import scale_of, tol
+from .values import check_seed
 
-__all__ = ["CACHE_ENV", "Decomposition", "decompose", "default_cache_dir"]
+__all__ = ["CACHE_ENV", "Decomposition", "check_threshold", "decompose", "default_cache_dir",
+           "is_convex_body"]
 
 log = logging.getLogger(__name__)
 
@@ -101,6 +103,7 @@ def decompose(
     name: str = "mesh",
     progress: bool | None = None,
     coacd_options: dict | None = None,
+    checked: bool = False,
 ) -> Decomposition:
     """Decompose a solid into convex pieces (exact where possible, else CoACD), cached.
 
@@ -122,7 +125,7 @@ def decompose(
         mesh: ``trimesh.Trimesh`` of a solid.
         threshold: CoACD concavity threshold in ``(0, 1]`` (smaller: more, tighter
             pieces, slower). Not used when every body is convex.
-        seed: CoACD random seed, ``0 <= seed < 2**32``.
+        seed: CoACD random seed (see :data:`planner.values.SEED_LIMIT`).
         cache_dir: cache directory; default :func:`default_cache_dir`. Caching is
             skipped (with a warning) when the directory cannot be written.
         name: label for messages and logs.
@@ -130,6 +133,8 @@ def decompose(
             when stderr is a terminal.
         coacd_options: extra keyword arguments for ``coacd.run_coacd`` (e.g.
             ``{"resolution": 1000}``); part of the cache key.
+        checked: the mesh is already the output of :func:`validate_solid` (not checked
+            again).
 
     Returns:
         :class:`Decomposition`.
@@ -140,10 +145,10 @@ def decompose(
         GeometryError: CoACD failed or returned no usable piece for a body.
     """
     start = time.perf_counter()
-    threshold = _check_threshold(threshold)
+    threshold = check_threshold(threshold)
     seed = _check_seed(seed)
     options = _check_options(coacd_options)
-    solid = validate_solid(mesh, name=name)
+    solid = mesh if checked else validate_solid(mesh, name=name)
     vertices = np.ascontiguousarray(solid.vertices, dtype="<f8")
     faces = np.ascontiguousarray(solid.faces, dtype="<i8")
     key = _cache_key(vertices, faces, threshold, seed, options)
@@ -186,7 +191,7 @@ def decompose(
         method, excess, deficit = "convex", 0.0, 0.0
     else:
         method = "coacd" if len(approx_bodies) == len(bodies) else "mixed"
-        excess, deficit = _measure(solid, bodies, approx, approx_bodies, pieces)
+        excess, deficit = _measure(solid, approx, approx_bodies, pieces)
     meta = {
         "key": key,
         "exact": exact,
@@ -220,7 +225,8 @@ def decompose(
 # ------------------------------------------------------------------ parameters
 
 
-def _check_threshold(threshold) -> float:
+def check_threshold(threshold) -> float:
+    """A CoACD concavity threshold in ``(0, 1]``, or :class:`InvalidParameterError`."""
     try:
         value = float(threshold)
     except (TypeError, ValueError) as exc:
@@ -236,11 +242,10 @@ def _check_threshold(threshold) -> float:
 
 
 def _check_seed(seed) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise InvalidParameterError(f"seed = {seed!r}: must be an integer in [0, 2**32)")
-    if not 0 <= int(seed) < 2**32:
-        raise InvalidParameterError(f"seed = {seed!r}: must be in [0, 2**32)")
-    return int(seed)
+    try:
+        return check_seed(seed)
+    except ValueError as error:
+        raise InvalidParameterError(f"seed = {seed!r}: {error}") from None
 
 
 _COACD_FORBIDDEN = {"mesh", "threshold", "seed"}
@@ -372,7 +377,7 @@ def _run_coacd(body, threshold, seed, options, label) -> list[np.ndarray]:
     return pieces
 
 
-def _measure(solid, bodies, approx, approx_bodies, all_pieces) -> tuple[float, float]:
+def _measure(solid, approx, approx_bodies, all_pieces) -> tuple[float, float]:
     """Sampled (excess, deficit) of the CoACD pieces w.r.t. the solid."""
     count = tol.excess_samples
     scale = scale_of(solid)
@@ -384,7 +389,7 @@ def _measure(solid, bodies, approx, approx_bodies, all_pieces) -> tuple[float, f
         trimesh.util.concatenate(hulls), count, seed=tol.sample_seed
     )
     samples = np.concatenate([samples, *approx])
-    outside = ~_inside_solid(solid, bodies, samples, slack)
+    outside = ~_inside_solid(solid, samples)
     excess = 0.0
     if outside.any():
         _, distance, _ = trimesh.proximity.closest_point(solid, samples[outside])
@@ -418,27 +423,15 @@ def _plane_excess(equations: np.ndarray, points: np.ndarray) -> np.ndarray:
     return (points @ equations[:, :3].T + equations[:, 3]).max(axis=1)
 
 
-_WINDING_BUDGET = 50_000_000  # point-triangle pairs (~5 s) for the exact winding test
+def _inside_solid(solid, points: np.ndarray) -> np.ndarray:
+    """Points inside the solid, by the core's exact winding number (a BVH ray cast per
+    point; robust to bodies touching face to face and to cavities; points on the surface
+    count as inside)."""
+    from ._minkowski_core import winding_numbers as core_windings  # noqa: PLC0415
 
-
-def _inside_solid(solid, bodies, points: np.ndarray, slack: float) -> np.ndarray:
-    """Points inside the solid (points on its surface may go either way).
-
-    Small inputs use the generalised winding number of the whole solid (exact, robust
-    to bodies touching face to face and to cavities). Large ones fall back to trimesh's
-    ray test body by body (ray parity on one body is reliable; across bodies touching
-    face to face it is not, because coincident hits are merged)."""
-    if len(points) * len(solid.faces) <= _WINDING_BUDGET:
-        return winding_numbers(points, np.asarray(solid.triangles)) > 0.5
-    inside = np.zeros(len(points), dtype=bool)
-    for body in bodies:
-        lo, hi = body.bounds
-        candidate = ~inside & np.all(points >= lo - slack, axis=1) & np.all(
-            points <= hi + slack, axis=1
-        )
-        if candidate.any():
-            inside[candidate] = body.contains(points[candidate])
-    return inside
+    vertices = np.ascontiguousarray(solid.vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(solid.faces, dtype=np.int64)
+    return core_windings(vertices, faces, np.ascontiguousarray(points, dtype=np.float64)) != 0
 
 
 # ------------------------------------------------------------------ cache

@@ -2,9 +2,10 @@
 
 ``minkowski_sum(a, b)`` approximates ``A ⊕ B = {a + b}``; ``c_obstacle(obstacle, robot)``
 approximates ``O ⊕ (−R)``, the set of translations ``t`` at which ``R + t`` meets ``O``.
-Both decompose the operands into convex pieces (exactly where a body is convex, else with
-CoACD, cached on disk), form every pairwise sum of pieces in the native core, and extract
-a closed surface of their union on an adaptive octree (Varadhan & Manocha 2006).
+Both take the pair's C-obstacle from a :mod:`planner.sources` source (the exact
+boundary convolution of the meshes, or pairwise sums of convex pieces: exact for convex
+bodies, CoACD's otherwise, cached on disk) and extract a closed surface of it on an
+adaptive octree (Varadhan & Manocha 2006).
 
 The error bound is the two-sided Hausdorff distance between the result's surface and the
 true boundary: the grid's part ``sqrt(3) h (1 + 2e-4)`` is proved when no complex cell is
@@ -25,8 +26,10 @@ import numpy as np
 import trimesh
 
 from . import _minkowski_core as core
-from .decompose import Decomposition, _check_threshold, decompose
+from .decompose import check_threshold
 from .errors import GeometryError, InvalidMeshError, InvalidParameterError, ResourceLimitError
+from .problem import Part
+from .sources import PairCObstacle, Source, SourceSettings, choose, parse_exact
 from .tolerances import tol
 
 log = logging.getLogger(__name__)
@@ -60,8 +63,9 @@ class MinkowskiResult:
         exact: True when both operands were decomposed exactly (convex bodies).
         stats: pieces, primitives, cells per label and level, triangles, seconds per
             stage, decomposition details.
-        primitives: the native primitive set (the pairwise sums), for point, distance and
-            segment queries.
+        primitives: the native object (the pairwise sums, or the exact sum), for point,
+            distance and segment queries.
+        pair: the same as a :class:`~planner.sources.PairCObstacle`.
     """
 
     mesh: trimesh.Trimesh
@@ -72,6 +76,7 @@ class MinkowskiResult:
     exact: bool
     stats: dict = field(repr=False)
     primitives: object = field(repr=False)
+    pair: PairCObstacle | None = field(default=None, repr=False)
 
 
 def _as_mesh(obj, name: str) -> trimesh.Trimesh:
@@ -90,6 +95,15 @@ def _label(mesh: trimesh.Trimesh, role: str) -> str:
     """How errors and logs name an operand: its role, and the file it came from if any."""
     path = mesh.metadata.get("file_path")
     return f"{role} {Path(path).name}" if path else role
+
+
+def _as_part(obj, role: str) -> Part:
+    """An operand as a :class:`~planner.problem.Part`: a part as it is (a problem's, whose
+    kind and checks a source keeps), a mesh or a mesh file as a solid named by its role."""
+    if isinstance(obj, Part):
+        return obj
+    mesh = _as_mesh(obj, role)
+    return Part(_label(mesh, role), mesh, f"operand {role}")
 
 
 def _check_eps(eps) -> float:
@@ -147,35 +161,31 @@ def _progress_bar(show: bool | None, total: int, desc: str):
     return tqdm(total=total, desc=desc, unit="stage", leave=False, file=sys.stderr)
 
 
-def _sum(
-    a,
-    b,
-    *,
-    mirror_b: bool,
-    eps,
-    threshold: float,
-    seed: int,
-    cache_dir,
-    progress,
-    max_cells,
-    max_refinements: int,
-    simplify: bool,
-    names: tuple[str, str],
-    exact="auto",
-) -> MinkowskiResult:
+def _sum(a, b, *, mirror_b: bool, eps, threshold: float, seed: int, cache_dir, progress,
+         max_cells, max_refinements: int, simplify: bool, names: tuple[str, str],
+         exact="auto", source: Source | None = None) -> MinkowskiResult:
     t_start = time.perf_counter()
-    exact = check_exact(exact, "exact")
-    _check_threshold(threshold)
-    a = _as_mesh(a, names[0])
-    b = _as_mesh(b, names[1])
-    names = (_label(a, names[0]), _label(b, names[1]))
+    exact = parse_exact(exact, "exact")
+    check_threshold(threshold)
+    parts = (_as_part(a, names[0]), _as_part(b, names[1]))
+    names = (parts[0].name, parts[1].name)
     max_cells = tol.max_cells if max_cells is None else int(max_cells)
     if max_refinements < 0:
         raise InvalidParameterError(f"max_refinements = {max_refinements}: must be >= 0")
-    if exact is True or (exact == "auto" and not (convex_bodies(a) and convex_bodies(b))):
-        return _exact_sum(a, b, mirror_b=mirror_b, eps=eps, max_cells=max_cells,
-                          max_refinements=max_refinements, simplify=simplify, names=names,
-                          t_start=t_start, chosen="asked" if exact is True else "auto")
+    if source is None:
+        source = choose(parts, SourceSettings(exact=exact, threshold=threshold, seed=seed,
+                                              cache_dir=cache_dir, progress=False))
+    grid = dict(eps=eps, max_cells=max_cells, max_refinements=max_refinements,
+                simplify=simplify, names=names, t_start=t_start)
+    if source.kind == "exact":
+        chosen = "asked" if exact is True else "auto"
+        return _exact_sum(source, parts, mirror_b=mirror_b, chosen=chosen, **grid)
+    return _decomposition_sum(source, parts, mirror_b=mirror_b, progress=progress, **grid)
+
+
+def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
+                       max_cells: int, max_refinements: int, simplify: bool,
+                       names: tuple[str, str], t_start: float, progress) -> MinkowskiResult:
     bar = _progress_bar(progress, 4, "minkowski")
 
     def step(label: str) -> None:
@@ -184,126 +194,72 @@ def _sum(
             bar.update(1)
 
     try:
-        # validate both before the slow work: bad input fails fast
-        dec_a: Decomposition = decompose(
-            a, threshold=threshold, seed=seed, cache_dir=cache_dir, name=names[0], progress=False
-        )
+        # validate and decompose both before the slow work: bad input fails fast
+        dec_a = source.decomposition(parts[0])  # type: ignore[attr-defined]
         step(f"decomposed {names[0]}")
-        dec_b: Decomposition = decompose(
-            b, threshold=threshold, seed=seed, cache_dir=cache_dir, name=names[1], progress=False
-        )
+        dec_b = source.decomposition(parts[1])  # type: ignore[attr-defined]
         step(f"decomposed {names[1]}")
-
-        box = _result_box(a, b, mirror_b)
+        box = _result_box(parts[0].mesh, parts[1].mesh, mirror_b)
         diag = float(np.linalg.norm(box[1] - box[0]))
         eps_value = _grid_eps(box, diag, eps, max_cells)
-
         t0 = time.perf_counter()
-        prims = core.Primitives.pairwise_sums(dec_a.pieces, dec_b.pieces, subtract=mirror_b)
+        pair = source.pair(*parts, mirror_b=mirror_b)
         t_pairs = time.perf_counter() - t0
         step("pairwise sums")
-
-        surf = core.union_surface(
-            prims,
-            eps_value,
-            max_cells=max_cells,
-            max_refinements=max_refinements,
-            simplify=simplify,
-        )
+        surf = core.union_surface(pair.native, eps_value, max_cells=max_cells,
+                                  max_refinements=max_refinements, simplify=simplify)
         step("surface")
     finally:
         if bar is not None:
             bar.close()
-
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names)
-    excess_a = max(dec_a.excess, dec_a.deficit)
-    excess_b = max(dec_b.excess, dec_b.deficit)
-    error_bound = float(surf["error_bound"]) + excess_a + excess_b
-
-    def dec_stats(d: Decomposition) -> dict:
-        return {
-            "exact": d.exact,
-            "method": d.method,
-            "pieces": len(d.pieces),
-            "bodies": d.bodies,
-            "excess": d.excess,
-            "deficit": d.deficit,
-            "cache_hit": d.cache_hit,
-            "threshold": d.threshold,
-            "seconds": d.seconds,
-        }
-
+    error_bound = float(surf["error_bound"]) + pair.excess
     stats = {
         "source": "decomposition",
-        "pieces_a": len(dec_a.pieces),
-        "pieces_b": len(dec_b.pieces),
-        "primitives": len(prims),
+        **pair.stats,
         **surface_stats,
         "eps": eps_value,
-        "decomposition_excess": excess_a + excess_b,
-        "exact": bool(dec_a.exact and dec_b.exact),
-        "decomposition": {"a": dec_stats(dec_a), "b": dec_stats(dec_b)},
-        "seconds": {
-            "decompose_a": dec_a.seconds,
-            "decompose_b": dec_b.seconds,
-            "pairwise": t_pairs,
-            **surface_seconds,
-            "total": time.perf_counter() - t_start,
-        },
+        "decomposition_excess": pair.excess,
+        "exact": pair.exact,
+        "decomposition": {"a": _dec_stats(dec_a), "b": _dec_stats(dec_b)},
+        "seconds": {"decompose_a": dec_a.seconds, "decompose_b": dec_b.seconds,
+                    "pairwise": t_pairs, **surface_seconds,
+                    "total": time.perf_counter() - t_start},
     }
-    log.info(
-        "%s ⊕ %s: %d primitives, %d triangles, bound %.4g (grid %.4g + decomposition %.4g), %.3fs",
-        names[0],
-        names[1],
-        len(prims),
-        len(mesh.faces),
-        error_bound,
-        surf["error_bound"],
-        excess_a + excess_b,
-        stats["seconds"]["total"],
-    )
+    log.info("%s ⊕ %s: %d primitives, %d triangles, bound %.4g (grid %.4g + decomposition "
+             "%.4g), %.3fs", names[0], names[1], stats["primitives"], len(mesh.faces),
+             error_bound, surf["error_bound"], pair.excess, stats["seconds"]["total"])
     return MinkowskiResult(
-        mesh=mesh,
-        error_bound=error_bound,
-        eps=eps_value,
-        bound_kind="two-sided" if stats["exact"] else "outer",
-        bound_guaranteed=surface_stats["complex_cells"] == 0 and stats["exact"],
-        exact=stats["exact"],
-        stats=stats,
-        primitives=prims,
-    )
+        mesh=mesh, error_bound=error_bound, eps=eps_value,
+        bound_kind="two-sided" if pair.exact else "outer",
+        bound_guaranteed=surface_stats["complex_cells"] == 0 and pair.exact,
+        exact=pair.exact, stats=stats, primitives=pair.native, pair=pair)
 
 
-def check_exact(value, field: str = "exact"):
-    """``True``, ``False`` or ``"auto"`` (also the strings ``"true"``/``"false"``)."""
-    if isinstance(value, str) and value.lower() in ("true", "false", "auto"):
-        value = {"true": True, "false": False, "auto": "auto"}[value.lower()]
-    if value is True or value is False or value == "auto":
-        return value
-    raise InvalidParameterError(f"{field} = {value!r}: expected true, false or auto")
+def _dec_stats(d) -> dict:
+    return {"exact": d.exact, "method": d.method, "pieces": len(d.pieces), "bodies": d.bodies,
+            "excess": d.excess, "deficit": d.deficit, "cache_hit": d.cache_hit,
+            "threshold": d.threshold, "seconds": d.seconds}
 
 
 def convex_bodies(mesh: trimesh.Trimesh) -> bool:
     """Whether every body of ``mesh`` is convex (its decomposition is then exact and
-    cheap, no CoACD), by the same test :func:`planner.decompose.decompose` uses."""
-    from .decompose import is_convex_body
-    from .meshes import split_solid, validate_solid
+    cheap, no CoACD), by the same test :func:`planner.decompose.decompose` uses; ``False``
+    for a mesh that is no solid."""
+    from .sources import CheckedParts
 
     try:
-        bodies = split_solid(validate_solid(mesh, name="mesh"))
+        return CheckedParts().convex(Part("mesh", mesh, "mesh"))
     except InvalidMeshError:
         return False
-    return all(is_convex_body(body) for body in bodies)
 
 
 def mesh_arrays(mesh: trimesh.Trimesh, name: str) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (float64) and faces (int64) of a closed, outward solid for the exact
     source (checked and cleaned by :func:`planner.meshes.validate_solid`)."""
-    from .meshes import validate_solid
+    from .sources import CheckedParts
 
-    solid = validate_solid(mesh, name=name)
-    return (np.ascontiguousarray(solid.vertices, dtype=np.float64),
-            np.ascontiguousarray(solid.faces, dtype=np.int64))
+    return CheckedParts().arrays(Part(name, mesh, "mesh"))
 
 
 def _surface_mesh(surf: dict, names: tuple[str, str]) -> tuple[trimesh.Trimesh, dict, dict]:
@@ -343,28 +299,22 @@ def _surface_mesh(surf: dict, names: tuple[str, str]) -> tuple[trimesh.Trimesh, 
     return mesh, stats, seconds
 
 
-def _exact_sum(a, b, *, mirror_b, eps, max_cells, max_refinements, simplify, names, t_start,
-               chosen) -> MinkowskiResult:
-    from .meshes import mirror
-
-    bb = mirror(b) if mirror_b else b
-    va, fa = mesh_arrays(a, names[0])
-    vb, fb = mesh_arrays(bb, names[1])
+def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
+               max_cells: int, max_refinements: int, simplify: bool, names: tuple[str, str],
+               t_start: float, chosen: str) -> MinkowskiResult:
     t0 = time.perf_counter()
-    source = core.ExactSum((va, fa), (vb, fb))
+    pair = source.pair(*parts, mirror_b=mirror_b)
     t_source = time.perf_counter() - t0
-    box = np.asarray(source.bounds)
+    box = np.asarray(pair.native.bounds)
     diag = float(np.linalg.norm(box[1] - box[0]))
     eps_value = _grid_eps(box, diag, eps, max_cells)
-    surf = source.surface(eps_value, max_cells=max_cells, max_refinements=max_refinements,
-                          simplify=simplify)
+    surf = pair.native.surface(eps_value, max_cells=max_cells, max_refinements=max_refinements,
+                               simplify=simplify)
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names)
     stats = {
         "source": "exact",
         "exact_chosen": chosen,
-        "triangles_a": int(source.triangles[0]),
-        "triangles_b": int(source.triangles[1]),
-        "facets": int(source.facets),
+        **pair.stats,
         **surface_stats,
         "eps": eps_value,
         "decomposition_excess": 0.0,
@@ -375,15 +325,9 @@ def _exact_sum(a, b, *, mirror_b, eps, max_cells, max_refinements, simplify, nam
     log.info("%s ⊕ %s (exact source): %d triangles, bound %.4g, %.3fs", names[0], names[1],
              len(mesh.faces), surf["error_bound"], stats["seconds"]["total"])
     return MinkowskiResult(
-        mesh=mesh,
-        error_bound=float(surf["error_bound"]),
-        eps=eps_value,
-        bound_kind="two-sided",
-        bound_guaranteed=surface_stats["complex_cells"] == 0,
-        exact=True,
-        stats=stats,
-        primitives=source,
-    )
+        mesh=mesh, error_bound=float(surf["error_bound"]), eps=eps_value,
+        bound_kind="two-sided", bound_guaranteed=surface_stats["complex_cells"] == 0,
+        exact=True, stats=stats, primitives=pair.native, pair=pair)
 
 
 def minkowski_sum(
@@ -399,11 +343,13 @@ def minkowski_sum(
     max_refinements: int = 2,
     simplify: bool = True,
     exact: bool | str = "auto",
+    source: Source | None = None,
 ) -> MinkowskiResult:
-    """Approximate ``A ⊕ B = {a + b : a ∈ A, b ∈ B}`` of two closed meshes.
+    r"""Approximate ``A ⊕ B = {a + b : a ∈ A, b ∈ B}`` of two closed meshes.
 
     Args:
-        a, b: ``trimesh.Trimesh`` solids (watertight) or mesh file paths.
+        a, b: ``trimesh.Trimesh`` solids (watertight), mesh file paths, or
+            :class:`~planner.problem.Part`\ s (solids or surfaces).
         eps: the grid's share of the error bound (absolute); default
             ``tol.eps_rel`` (0.5%) of the result's bounding-box diagonal.
         threshold: CoACD concavity threshold for non-convex bodies.
@@ -421,6 +367,9 @@ def minkowski_sum(
             the bound one-sided); ``"auto"`` (default): the decomposition when every body
             is convex (exact and fastest), else the exact source. ``stats["source"]``
             says which was used.
+        source: a :class:`~planner.sources.Source` to take the pair from (then ``exact``,
+            ``threshold``, ``seed`` and ``cache_dir`` are its own); a plan's
+            ``outcome.source`` gives the C-obstacles it planned on.
 
     Returns:
         :class:`MinkowskiResult` with ``.mesh``, ``.error_bound`` and ``.stats``.
@@ -445,6 +394,7 @@ def minkowski_sum(
         simplify=simplify,
         names=("a", "b"),
         exact=exact,
+        source=source,
     )
 
 
@@ -461,6 +411,7 @@ def c_obstacle(
     max_refinements: int = 2,
     simplify: bool = True,
     exact: bool | str = "auto",
+    source: Source | None = None,
 ) -> MinkowskiResult:
     """The translational C-obstacle ``O ⊕ (−R) = {t : (R + t) ∩ O ≠ ∅}``.
 
@@ -482,4 +433,5 @@ def c_obstacle(
         simplify=simplify,
         names=("obstacle", "robot"),
         exact=exact,
+        source=source,
     )

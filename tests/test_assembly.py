@@ -10,19 +10,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import planner.assembly as assembly_module
+import planner.sources as sources_module
+from benchmarks.removals import benchmark_removals
 from planner.assembly import (
     DIRECTIONS,
     PairCache,
-    assemble_command,
-    benchmark_removals,
-    load_assembly,
-    parse_assembly,
     plan_assembly,
     removal_problems,
     removal_scenario,
 )
+from planner.cli import main
 from planner.errors import InvalidParameterError, ScenarioError
+from planner.io import load_assembly, parse_assembly
 from planner.validation import FclChecker
 
 DEMOS = Path(__file__).resolve().parents[1] / "scenarios" / "assemblies"
@@ -85,7 +84,8 @@ def test_latched_box_needs_a_planned_removal():
 
 
 def test_linked_rings_are_interlocked(tmp_path, capsys):
-    code = assemble_command(DEMOS / "linked_rings.yaml", tmp_path / "out", progress=False)
+    code = main(["assemble", str(DEMOS / "linked_rings.yaml"), "--out", str(tmp_path / "out"),
+                 "--no-progress"])
     assert code == 1
     sequence = json.loads((tmp_path / "out" / "sequence.json").read_text())
     assert sequence["status"] == "interlocked"
@@ -99,7 +99,8 @@ def test_linked_rings_are_interlocked(tmp_path, capsys):
 
 
 def test_cli_writes_sequence(tmp_path):
-    code = assemble_command(DEMOS / "pegs_and_holes.yaml", tmp_path, progress=False)
+    code = main(["assemble", str(DEMOS / "pegs_and_holes.yaml"), "--out", str(tmp_path),
+                 "--no-progress"])
     assert code == 0
     sequence = json.loads((tmp_path / "sequence.json").read_text())
     assert [p["part"] for p in sequence["parts"]] == ["lower", "upper"]
@@ -202,7 +203,7 @@ def test_contact_normal_direction(tmp_path):
 
 
 def test_html_animation_and_benchmark(tmp_path):
-    from planner.assembly import scene_for_assembly
+    from planner.viz import scene_for_assembly
 
     result = plan_assembly(load_assembly(DEMOS / "peg_in_block.yaml"))
     scene = scene_for_assembly(result)
@@ -210,7 +211,8 @@ def test_html_animation_and_benchmark(tmp_path):
     (track,) = scene.tracks
     assert track.path == "assembly/peg"
     np.testing.assert_array_equal(track.positions[-1], np.zeros(3))
-    assert assemble_command(DEMOS / "peg_in_block.yaml", tmp_path, html=True) == 0
+    assert main(["assemble", str(DEMOS / "peg_in_block.yaml"), "--out", str(tmp_path),
+                 "--html", "--no-progress"]) == 0
     assert (tmp_path / "assembly.html").stat().st_size > 10_000
     rows = benchmark_removals(result, planners=("minkplan", "ompl:RRTConnect"))
     assert [(r["planner"], r["status"], r["valid"]) for r in rows] == [
@@ -222,20 +224,16 @@ def test_html_animation_and_benchmark(tmp_path):
 
 def test_pair_c_obstacles_are_built_once_and_reused(monkeypatch):
     """The C-obstacle of part j for moving part i does not change when other parts leave:
-    over the 6 removal steps of the latched box, each ordered pair's sums are built once
-    (counted at the native call), and later steps reuse them."""
-    real = assembly_module.Primitives
-    built: list[bytes] = []
+    over the 6 removal steps of the latched box, each ordered pair's C-obstacle is built
+    once (counted where the source builds it), and later steps reuse them."""
+    built: list[tuple[str, str]] = []
+    for kind in (sources_module.ExactSource, sources_module.DecompositionSource):
+        def counting(self, a, b, *, mirror_b=True, real=kind.pair):
+            assert mirror_b
+            built.append((a.name, b.name))
+            return real(self, a, b, mirror_b=mirror_b)
 
-    class Counting:
-        @staticmethod
-        def pairwise_sums(pieces_a, pieces_b, subtract=False):
-            assert subtract
-            built.append(b"".join(p.tobytes() for p in [*pieces_a, b"|", *pieces_b]
-                                  if not isinstance(p, bytes)) + bytes(len(pieces_a)))
-            return real.pairwise_sums(pieces_a, pieces_b, subtract=subtract)
-
-    monkeypatch.setattr(assembly_module, "Primitives", Counting)
+        monkeypatch.setattr(kind, "pair", counting)
     result = plan_assembly(load_assembly(DEMOS / "latched_box.yaml"))
     assert result.found
     reuse = result.reuse
@@ -401,3 +399,26 @@ def test_benchmark_problems_of_an_interlocked_result():
         ("ring_a", 0, "no_path"), ("ring_a", 1, "no_path"),
         ("ring_b", 0, "no_path"), ("ring_b", 1, "no_path")]
     assert all(0 < r["planning_seconds"] <= r["seconds"] for r in rows)
+
+
+def test_an_exact_assembly_runs_no_coacd_and_says_what_it_used(tmp_path, monkeypatch):
+    """planner.exact: true on an assembly: every pair and every planned removal on the
+    exact source (no decomposition at all, so no CoACD), and the reports say so."""
+    import coacd
+
+    def no_coacd(*args, **kwargs):
+        raise AssertionError("CoACD ran")
+
+    monkeypatch.setattr(coacd, "run_coacd", no_coacd)
+    text = (DEMOS / "latched_box.yaml").read_text()
+    assert "planner: {time_limit: 30}" in text
+    assembly = parse_assembly(text.replace("planner: {time_limit: 30}",
+                                           "planner: {time_limit: 30, exact: true}"), DEMOS)
+    assert assembly.settings.exact is True
+    result = plan_assembly(assembly, cache_dir=tmp_path / "cache")
+    assert result.found
+    report = result.report_json()
+    assert report["source"] == {"used": "exact", "why": "planner.exact: true"}
+    assert report["reuse"]["decompositions"] == 0
+    assert not (tmp_path / "cache").exists()  # nothing was decomposed, nothing cached
+    _revalidate(result)

@@ -13,7 +13,7 @@ import pytest
 
 from planner.cli import main
 from planner.planning import plan
-from planner.scenario import load_scenario
+from planner.io import load_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 PATH_KEYS = {"status", "waypoints", "length", "clearance", "timings", "validation"}

@@ -40,7 +40,8 @@ from planner.errors import InvalidMeshError
 from planner.meshes import mirror, repair_mesh, split_solid
 from planner.minkowski import convex_bodies, mesh_arrays
 from planner.planning import FOUND, NO_PATH, plan
-from planner.scenario import Body, load_scenario
+from planner.io import load_scenario
+from planner.problem import Body
 from planner.validation import FclChecker
 
 try:  # tests/ as a package or as a plain directory on sys.path

@@ -13,7 +13,7 @@ import pytest
 import trimesh
 
 from planner.planning import plan
-from planner.scenario import load_scenario
+from planner.io import load_scenario
 
 
 def plate_with_hole(hole: float, half: float = 40.0, thickness: float = 2.0) -> trimesh.Trimesh:

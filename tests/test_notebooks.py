@@ -102,7 +102,7 @@ def test_notebook_runs_and_shows_its_scenes(path, monkeypatch, tmp_path):
     # the colour the first scene must show beside the orange obstacles / fixed parts
     second, saturation = viz.COLORS["sum"], 0.2
     if path.name == "03_assembly.ipynb":
-        from planner.assembly import PART_COLORS
+        from planner.viz.assembly import PART_COLORS
 
         results = namespace["results"]
         pegs, rings = results["pegs_and_holes.yaml"], results["linked_rings.yaml"]

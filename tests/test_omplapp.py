@@ -21,7 +21,7 @@ from trimesh.collision import CollisionManager
 
 from planner.errors import ScenarioError
 from planner.meshes import load_mesh
-from planner.omplapp import (
+from planner.io.omplapp import (
     APP_FROM_ZUP,
     load_omplapp,
     path_state_transform,
@@ -29,7 +29,7 @@ from planner.omplapp import (
     read_omplapp_path,
     robot_reference_point,
 )
-from planner.scenario import load_scenario
+from planner.io import load_scenario
 
 ASSETS = Path(__file__).resolve().parents[2] / "shared" / "assets" / "omplapp"
 PROBLEMS = ["Easy", "cubicles"]

@@ -14,7 +14,7 @@ from scipy.spatial import ConvexHull
 from planner._minkowski_core import CSpace, Primitives
 from planner.decompose import decompose
 from planner.planning import FOUND, NO_PATH, NOT_FOUND, OctreeParams, plan
-from planner.scenario import load_scenario
+from planner.io import load_scenario
 from planner.validation import FclChecker
 
 try:  # tests/ as a package or as a plain directory on sys.path
@@ -255,3 +255,28 @@ def test_unknown_planner_is_an_error():
         plan(scenario, planner="astar")
     with pytest.raises(InvalidParameterError, match="unknown OMPL planner"):
         plan(scenario, planner="ompl:Nope")
+
+
+def test_the_html_scene_draws_the_c_obstacle_that_was_planned():
+    """With a non-default source setting (exact: true on convex boxes, where auto would
+    take the decomposition), the scene's C-obstacle comes from the plan's own source, not
+    from a second computation with default settings."""
+    import dataclasses
+
+    import planner.viz as viz
+    from planner import c_obstacle
+
+    scenario = load_scenario(SCENARIOS / "sealed_chamber_open.yaml")
+    asked = dataclasses.replace(scenario, settings=dataclasses.replace(
+        scenario.settings, exact=True))
+    outcome = plan(asked, progress=False)
+    assert outcome.found and outcome.source.kind == "exact"
+    scene = viz.scene_for_plan(asked, outcome, c_obstacle=True)
+    for body in asked.obstacles:
+        drawn = scene.layers[f"cspace/c_obstacle/{viz.scene.node_name(body.name)}"]
+        planned = c_obstacle(body, asked.robot, source=outcome.source).mesh
+        np.testing.assert_array_equal(drawn.vertices, planned.vertices)
+        np.testing.assert_array_equal(drawn.faces, planned.faces)
+        default = c_obstacle(body.mesh, asked.robot.mesh).mesh  # auto: the decomposition
+        assert len(default.faces) != len(planned.faces) or not np.array_equal(
+            default.vertices, planned.vertices)

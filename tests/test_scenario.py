@@ -13,14 +13,10 @@ import trimesh
 
 from planner.errors import InvalidParameterError, ScenarioError
 from planner.primitives import make_primitive
-from planner.scenario import PlannerSettings as Settings
-from planner.scenario import (
-    Pose,
-    default_bounds,
-    load_scenario,
-    parse_orientation,
-    parse_scenario,
-)
+from planner.io import load_scenario, parse_scenario
+from planner.io.fields import parse_orientation, settings_from_mapping
+from planner.problem import PlannerSettings as Settings
+from planner.problem import Pose, default_bounds
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLES = REPO / "scenarios" / "_schema_examples"
@@ -545,12 +541,12 @@ def test_parse_scenario_rejects_a_path(folder):
 def test_planner_settings_keys_and_validation():
     assert Settings.keys() == ("resolution", "time_limit", "seed", "contact_tolerance",
                                "decomposition_threshold", "exact", "clearance", "simplify")
-    assert Settings.from_mapping({"time_limit": 5, "exact": True}) == Settings(
+    assert settings_from_mapping({"time_limit": 5, "exact": True}) == Settings(
         time_limit=5.0, exact=True)
-    assert Settings.from_mapping(None) == Settings()
-    assert Settings.from_mapping({"seed": None}).seed == 0  # null takes the default
+    assert settings_from_mapping(None) == Settings()
+    assert settings_from_mapping({"seed": None}).seed == 0  # null takes the default
     with pytest.raises(ScenarioError) as info:
-        Settings.from_mapping({"sede": 1})
+        settings_from_mapping({"sede": 1})
     assert info.value.field == "planner.sede" and "did you mean 'seed'" in str(info.value)
     with pytest.raises(InvalidParameterError, match="PlannerSettings.clearance"):
         Settings(clearance=-1)

@@ -20,7 +20,7 @@ from planner._minkowski_core import CSpace
 from planner.errors import InvalidMeshError
 from planner.meshes import validate_solid
 from planner.planning.ompl_baseline import plan_ompl
-from planner.scenario import Body, PlannerSettings, Robot, Scenario
+from planner.problem import Body, PlannerSettings, Robot, Scenario
 from planner.validation import FclChecker
 
 EASY = Path(__file__).resolve().parents[2] / "shared" / "assets" / "omplapp" / "Easy.cfg"
@@ -38,8 +38,9 @@ def folded_box() -> trimesh.Trimesh:
 
 
 def test_a_closed_mesh_with_inverted_faces_is_no_solid():
-    with pytest.raises(InvalidMeshError, match=r"not a solid: 2 of 12 faces have the inside in "
-                                               r"front of them \(winding number -1"):
+    with pytest.raises(InvalidMeshError, match=r"not a solid: 2 of 12 faces and 6 of 6 crossings "
+                                               r"of faces have the inside in front of them "
+                                               r"\(winding number -1"):
         validate_solid(folded_box(), name="folded")
     # a whole shell inside out is flipped; overlapping outward shells are their union
     floor = trimesh.creation.box(bounds=[[0, 0, 0], [10, 1, 10]])

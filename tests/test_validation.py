@@ -16,8 +16,8 @@ from planner.validation import (
     StateValidityChecker,
     ompl_check_path,
     resolution_for_clearance,
-    winding_numbers,
 )
+from planner.meshes import winding_numbers
 from planner.validation.ompl_check import DEFAULT_RESOLUTION, MIN_RESOLUTION
 
 BOUNDS = [[-5.0, -5.0, -5.0], [5.0, 5.0, 5.0]]
@@ -85,7 +85,7 @@ def test_checker_satisfies_protocols():
 
 def test_winding_numbers_inside_outside_and_cavity():
     shell = hollow_box(4.0, 2.0)
-    w = winding_numbers([[0, 0, 0], [1.5, 0, 0], [3, 0, 0]], shell.vertices, shell.faces)
+    w = winding_numbers(np.array([[0, 0, 0], [1.5, 0, 0], [3, 0, 0]], float), shell.triangles)
     np.testing.assert_allclose(w, [0.0, 1.0, 0.0], atol=1e-9)
 
 

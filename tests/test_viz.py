@@ -25,7 +25,7 @@ import umsgpack
 import planner
 import planner.viz as viz
 from planner import _minkowski_core as core
-from planner.scenario import parse_scenario
+from planner.io import parse_scenario
 from planner.viz import lower, scene, shapes
 
 SCENARIO = """

@@ -246,6 +246,20 @@ fn front_windings<'py>(py: Python<'py>, vertices: PyReadonlyArray2<'py, f64>, fa
     Ok(out.into_pyarray(py))
 }
 
+/// The winding number in the wedge in front of both triangles of every crossing of two
+/// triangles of the closed mesh (vertices (n, 3), faces (m, 3)): (k,) int64, the smallest
+/// int64 where it could not be told. With the front windings, the mesh bounds a solid when
+/// none is negative. Parallel.
+#[pyfunction]
+fn crossing_windings<'py>(py: Python<'py>, vertices: PyReadonlyArray2<'py, f64>, faces: PyReadonlyArray2<'py, i64>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let mesh = closed_mesh(&vertices, &faces)?;
+    let out: Vec<i64> = py.detach(|| {
+        let crossings = mesh.crossings();
+        mesh.crossing_windings(&crossings).into_iter().map(|w| w.unwrap_or(i64::MIN)).collect()
+    });
+    Ok(out.into_pyarray(py))
+}
+
 /// The winding numbers of `points` (k, 3) for the closed mesh (vertices (n, 3), faces
 /// (m, 3)): (k,) int64, the smallest int64 for points on the surface. Parallel.
 #[pyfunction]
@@ -317,6 +331,20 @@ impl ExactSum {
         Ok(self.inner.segment_is_free(vec3_any(&a, "a")?, vec3_any(&b, "b")?, margin.max(0.0)))
     }
 
+    /// Signed distance bounds of `points` (n, 3), (n,): outside, a lower bound on the
+    /// distance to the sum; inside, minus a lower bound on the depth. Parallel.
+    fn signed_distance<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let pts = points_of(&points, "points")?;
+        let src = self.inner.clone();
+        let out: Vec<f64> = py.detach(move || pts.par_iter().map(|p| src.signed_distance(*p)).collect());
+        Ok(out.into_pyarray(py))
+    }
+
+    /// The parameter intervals of the segment a → b inside the sum, sorted and merged.
+    fn segment_intervals(&self, a: PyReadonlyArray1<'_, f64>, b: PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
+        Ok(self.inner.segment_intervals(vec3_of(&a, "a")?, vec3_of(&b, "b")?))
+    }
+
     /// The closed surface of the sum at resolution `eps` (as `union_surface`).
     #[pyo3(signature = (eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
     fn surface<'py>(&self, py: Python<'py>, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
@@ -341,6 +369,7 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(build_octree, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
     m.add_function(wrap_pyfunction!(front_windings, m)?)?;
+    m.add_function(wrap_pyfunction!(crossing_windings, m)?)?;
     m.add_function(wrap_pyfunction!(winding_numbers, m)?)?;
     m.add_class::<PyCSpace>()?;
     m.add_class::<ExactSum>()?;

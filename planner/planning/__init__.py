@@ -2,25 +2,33 @@
 
 Entry point: :func:`plan` -> :class:`PlanOutcome` (``status`` ``"found"``, ``"no_path"``
 or ``"not_found"``; waypoints, length, clearance, timings, validation, certificate,
-report). ``planner="minkplan"`` (default) is the octree roadmap of
-:mod:`.octree_planner`; ``planner="ompl:NAME"`` runs OMPL's planner ``NAME`` with the FCL
-checker (:mod:`.ompl_baseline`) and reports the same way.
+report). ``planner="minkplan"`` (default) is the octree roadmap,
+:class:`~.octree_planner.OctreePlanner` (setup and solve, as OMPL's planners);
+``planner="ompl:NAME"`` runs OMPL's planner ``NAME`` with the FCL checker
+(:mod:`.ompl_baseline`) and reports the same way. :class:`~.cspace_checker.CSpaceChecker`
+makes the native C-space a validity checker and motion validator for OMPL.
 """
 
 from __future__ import annotations
 
 from planner.errors import InvalidParameterError
-from planner.scenario import Scenario
+from planner.problem import Scenario
+from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
+from planner.sources import Source
 
-from .octree_planner import OctreeParams, default_contact_tolerance, plan_octree
-from .outcome import FOUND, NO_PATH, NOT_FOUND, PlanOutcome
+from .cspace_checker import CSpaceChecker
+from .octree_planner import OctreeParams, OctreePlanner, default_contact_tolerance
+from .outcome import PlanOutcome
 
 __all__ = [
     "FOUND",
     "NOT_FOUND",
     "NO_PATH",
+    "CSpaceChecker",
     "OctreeParams",
+    "OctreePlanner",
     "PlanOutcome",
+    "PlanStatus",
     "default_contact_tolerance",
     "plan",
 ]
@@ -28,11 +36,11 @@ __all__ = [
 
 def plan(scenario: Scenario, *, planner: str = "minkplan", cache_dir=None,
          progress: bool | None = None, params: OctreeParams | None = None,
-         validate: bool = True) -> PlanOutcome:
+         validate: bool = True, source: Source | None = None) -> PlanOutcome:
     """Plan a translational path for ``scenario``.
 
     Args:
-        scenario: a :class:`~planner.scenario.Scenario` (``planner.load_scenario``).
+        scenario: a :class:`~planner.problem.Scenario` (``planner.load_scenario``).
         planner: ``"minkplan"`` or ``"ompl:NAME"`` (``ompl:RRTConnect``, ``ompl:PRM``,
             ``ompl:BITstar``, ...).
         cache_dir: decomposition cache directory (default ``$MINKPLAN_CACHE_DIR`` or
@@ -40,18 +48,19 @@ def plan(scenario: Scenario, *, planner: str = "minkplan", cache_dir=None,
         progress: status line on stderr; ``None``: only on a TTY.
         params: octree planner parameters (scale-free defaults).
         validate: validate found paths with FCL and OMPL on the original meshes.
+        source: the C-obstacle source (default: chosen from the scenario's settings).
 
     Returns:
         :class:`PlanOutcome`; planning outcomes are statuses, never exceptions.
 
     Raises:
-        InvalidParameterError: unknown planner, or ``planner.exact: true`` with a part
-            that needs an approximate decomposition.
+        InvalidParameterError: unknown planner.
+        ScenarioError: ``planner.exact: false`` with a part that is a surface.
         InvalidMeshError, GeometryError: unusable meshes.
     """
     if planner == "minkplan":
-        return plan_octree(scenario, params=params, cache_dir=cache_dir, progress=progress,
-                           validate=validate)
+        return OctreePlanner(scenario, params=params, source=source, cache_dir=cache_dir,
+                             progress=progress, validate=validate).solve()
     if planner.startswith("ompl:") and len(planner) > 5:
         from .ompl_baseline import plan_ompl
 

@@ -11,11 +11,12 @@ import time
 
 import numpy as np
 
-from planner.scenario import Scenario
-from planner.validation import FclChecker, OmplPlanner, PlanStatus
+from planner.problem import Scenario
+from planner.roles import FOUND, NO_PATH, NOT_FOUND
+from planner.validation import FclChecker, OmplPlanner
 
 from .octree_planner import default_contact_tolerance
-from .outcome import FOUND, NO_PATH, NOT_FOUND, PlanOutcome
+from .outcome import PlanOutcome
 from .validate import validate_path
 
 __all__ = ["plan_ompl"]
@@ -40,7 +41,8 @@ def plan_ompl(scenario: Scenario, name: str, *, validate: bool = True) -> PlanOu
     result = planner.solve(scenario.start, scenario.goal, scenario.settings.time_limit)
     timings = {"search": result.seconds}
     report = {"scenario": scenario.describe(), "contact_tolerance": delta,
-              "ompl": {"planner": planner.name, "status": result.status.value,
+              "ompl": {"planner": planner.name, "status": str(result.status),
+                       "reason": result.reason,
                        "valid_checks": result.n_valid_checks,
                        "invalid_checks": result.n_invalid_checks,
                        "message": result.message}}
@@ -50,20 +52,22 @@ def plan_ompl(scenario: Scenario, name: str, *, validate: bool = True) -> PlanOu
         return PlanOutcome(status=status, reason=reason, message=message, planner=label,
                            timings=timings, report=report, **kw)
 
-    if result.status in (PlanStatus.INVALID_START, PlanStatus.INVALID_GOAL):
-        which = "start" if result.status is PlanStatus.INVALID_START else "goal"
+    for which in ("start", "goal"):
+        if result.reason not in (f"{which}_in_collision", f"{which}_out_of_bounds"):
+            continue
         p = np.asarray(scenario.start if which == "start" else scenario.goal)
-        hit = checker.colliding_obstacle(p)
         collision = {"which": which, "position": p.tolist()}
-        if hit is not None:
+        hit = checker.colliding_obstacle(p)
+        if result.status == NO_PATH and hit is not None:
             collision.update(obstacle=hit[0], depth_upper_bound=hit[1])
             message = f"the {which} is in collision with {hit[0]} (depth about {hit[1]:.4g})"
             return done(NO_PATH, f"{which}_in_collision", message, collision=collision)
         return done(NOT_FOUND, f"{which}_invalid", f"the {which} is out of bounds",
                     collision=collision)
     if not result.solved:
-        return done(NOT_FOUND, "ompl_status",
-                    f"{planner.name}: {result.status.value} {result.message}".strip())
+        return done(NOT_FOUND, result.reason or "planner_status",
+                    f"{planner.name}: {result.status} ({result.reason}) "
+                    f"{result.message}".strip())
     waypoints = np.asarray(result.waypoints, dtype=np.float64)
     validation = {"fcl": {}, "ompl": {}}
     clearance = float("nan")

@@ -12,47 +12,23 @@ certificate's summary) and ``certificate_json()`` the full no-path certificate.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-__all__ = ["FOUND", "NOT_FOUND", "NO_PATH", "PlanOutcome", "jsonable"]
+from planner.output import jsonable
+from planner.roles import FOUND, PlanStatus
 
-FOUND = "found"
-"""A path was found and passed both independent validations."""
-NO_PATH = "no_path"
-"""No collision-free path exists: proved by a certificate, or the start or goal collides."""
-NOT_FOUND = "not_found"
-"""Nothing found and nothing proved (floor, budget or time limit reached)."""
-
-
-def jsonable(value: Any) -> Any:
-    """``value`` with numpy scalars and arrays turned into Python ones, non-finite floats
-    into ``None`` (JSON has no inf/nan)."""
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, (np.bool_, bool)):
-        return bool(value)
-    if isinstance(value, (np.integer, int)):
-        return int(value)
-    if isinstance(value, (np.floating, float)):
-        number = float(value)
-        return number if math.isfinite(number) else None
-    return value
-
+__all__ = ["PlanOutcome"]
 
 @dataclass
 class PlanOutcome:
     """The result of :func:`planner.planning.plan`.
 
     Attributes:
-        status: :data:`FOUND`, :data:`NO_PATH` or :data:`NOT_FOUND`.
+        status: a :class:`~planner.roles.PlanStatus` (``"found"``, ``"no_path"`` or
+            ``"not_found"``).
         waypoints: ``(n, 3)`` translations from start to goal; ``(0, 3)`` unless found.
         length: path length (``nan`` without a path).
         clearance: minimum robot-obstacle distance along the path measured by FCL on the
@@ -62,7 +38,8 @@ class PlanOutcome:
         message: one line saying what happened.
         reason: machine-readable cause: ``"path"``, ``"certificate"``,
             ``"start_in_collision"``, ``"goal_in_collision"``, ``"floor"``,
-            ``"budget"``, ``"time_limit"``, ``"validation_failed"``, ``"ompl_status"``.
+            ``"budget"``, ``"time_limit"``, ``"validation_failed"``,
+            ``"certificate_unverified"``, or an OMPL planner's reason.
         planner: ``"minkplan"`` or ``"ompl:NAME"``.
         certificate: for a proved no-path: summary plus the walled-off component and its
             FULL wall cells (boxes, primitives, obstacles), else ``None``.
@@ -71,9 +48,11 @@ class PlanOutcome:
             rounds, graph size, decomposition, resolution).
         cspace: the native C-space (octree leaves, roadmap) the answer came from, for
             visualisation (``planner.viz.scene_for_plan``); ``None`` for OMPL baselines.
+        source: the C-obstacle :class:`~planner.sources.Source` the answer came from (the
+            viz draws its C-obstacles); ``None`` for OMPL baselines.
     """
 
-    status: str
+    status: PlanStatus
     waypoints: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     length: float = float("nan")
     clearance: float = float("nan")
@@ -86,6 +65,7 @@ class PlanOutcome:
     collision: dict[str, Any] | None = None
     report: dict[str, Any] = field(default_factory=dict)
     cspace: Any = field(default=None, repr=False, compare=False)
+    source: Any = field(default=None, repr=False, compare=False)
 
     @property
     def found(self) -> bool:

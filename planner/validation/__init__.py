@@ -1,7 +1,5 @@
 """Independent validation of translation paths (FCL, OMPL) and OMPL planners as baselines.
 
-- :mod:`.protocols` -- ``StateValidityChecker``, ``MotionValidator``, ``Planner``
-  protocols, ``PlanStatus`` and ``PlanResult``.
 - :mod:`.fcl_checker` -- :class:`FclChecker`: collision (including containment),
   clearance and conservative-advancement segment/path checks on the original meshes.
 - :mod:`.ompl_check` -- :func:`ompl_check_path`: OMPL's ``PathGeometric.check()`` of a
@@ -9,13 +7,16 @@
 - :mod:`.ompl_planners` -- :class:`OmplPlanner`: RRTConnect, PRM, BIT*, ... driven by
   the same checker, every returned path re-validated.
 
-OMPL is imported lazily (only when an OMPL function runs).
+The roles these fill (``StateValidityChecker``, ``MotionValidator``, ``Planner``,
+``PlanStatus``, ``PlanResult``) are in :mod:`planner.roles`, re-exported here. OMPL is
+imported lazily (only when an OMPL function runs).
 """
 
-from .fcl_checker import CheckerTolerances, FclChecker, PathCheck, SegmentCheck, winding_numbers
+from planner.roles import MotionValidator, Planner, PlanResult, PlanStatus, StateValidityChecker
+
+from .fcl_checker import CheckerTolerances, FclChecker, PathCheck, SegmentCheck
 from .ompl_check import OmplPathCheck, ompl_check_path, resolution_for_clearance
 from .ompl_planners import OmplPlanner, available_planners
-from .protocols import MotionValidator, Planner, PlanResult, PlanStatus, StateValidityChecker
 
 __all__ = [
     "CheckerTolerances",
@@ -32,5 +33,4 @@ __all__ = [
     "available_planners",
     "ompl_check_path",
     "resolution_for_clearance",
-    "winding_numbers",
 ]

@@ -5,17 +5,17 @@ Entry points:
 - :class:`FclChecker` -- ``collides(t)``, ``is_valid(t)``, ``distance(t)``,
   ``clearance(t)``, ``colliding_obstacle(t)``, ``check_segment(a, b)``,
   ``check_path(waypoints)``, ``check_motion(a, b)``. It is both a
-  :class:`~planner.validation.protocols.StateValidityChecker` and a
-  :class:`~planner.validation.protocols.MotionValidator`.
-- :func:`winding_numbers` -- generalized winding numbers of points w.r.t. a closed mesh.
+  :class:`~planner.roles.StateValidityChecker` and a
+  :class:`~planner.roles.MotionValidator`.
 - :class:`SegmentCheck`, :class:`PathCheck` -- results; :class:`CheckerTolerances`.
 
 The robot ``R`` is a closed triangle mesh in its own frame, with a fixed orientation; at
 translation ``t`` it occupies ``R + t``. Obstacles ``O_k`` are meshes already posed in the
 world. Parts are *solids* by default: touching counts as contact, and so does one part
 lying wholly inside the other (python-fcl's mesh-mesh query tests triangles only and
-misses that case; this module adds a winding-number containment test). A part marked as a
-*surface* collides only where triangles meet, as FCL sees every mesh.
+misses that case; this module adds a winding-number containment test, by solid angles:
+:func:`planner.meshes.winding_numbers`, which shares no code with the native core). A
+part marked as a *surface* collides only where triangles meet, as FCL sees every mesh.
 
 Contact tolerance ``delta >= 0`` (one definition, shared with the planner): let
 ``pd(t)`` be the translational penetration depth, the length of the shortest translation
@@ -54,6 +54,7 @@ import trimesh
 from numpy.typing import ArrayLike
 
 from planner.errors import InvalidParameterError
+from planner.meshes import winding_numbers
 from planner.tolerances import scale_of
 
 __all__ = [
@@ -61,7 +62,6 @@ __all__ = [
     "FclChecker",
     "PathCheck",
     "SegmentCheck",
-    "winding_numbers",
 ]
 
 
@@ -148,42 +148,6 @@ class PathCheck:
     first_invalid: np.ndarray | None = None
     clearance_lower_bound: float = float("nan")
     obstacle: str | None = None
-
-
-def winding_numbers(points: ArrayLike, vertices: ArrayLike, faces: ArrayLike) -> np.ndarray:
-    """Generalized winding numbers of ``points`` w.r.t. a triangle mesh.
-
-    The solid angle of every triangle seen from the point (Van Oosterom--Strackee),
-    summed and divided by ``4 pi``: about ``1`` inside a closed outward-oriented mesh,
-    ``0`` outside, ``-1`` inside a reversed (cavity) shell; points on the surface are
-    ambiguous. No rays are cast, so there are no edge/vertex hit degeneracies.
-
-    Args:
-        points: ``(m, 3)`` query points.
-        vertices: ``(n, 3)`` mesh vertices.
-        faces: ``(f, 3)`` triangle vertex indices, counter-clockwise seen from outside.
-
-    Returns:
-        ``(m,)`` winding numbers.
-    """
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    tri = np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
-    out = np.zeros(len(pts))
-    chunk = max(1, 2_000_000 // max(1, len(tri)))
-    for start in range(0, len(pts), chunk):
-        p = pts[start : start + chunk, None, None, :]
-        rel = tri[None, :, :, :] - p  # (m, f, 3, 3)
-        a, b, c = rel[..., 0, :], rel[..., 1, :], rel[..., 2, :]
-        la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
-        det = np.einsum("mfi,mfi->mf", a, np.cross(b, c))
-        div = (
-            la * lb * lc
-            + np.einsum("mfi,mfi->mf", a, b) * lc
-            + np.einsum("mfi,mfi->mf", b, c) * la
-            + np.einsum("mfi,mfi->mf", c, a) * lb
-        )
-        out[start : start + chunk] = np.arctan2(det, div).sum(axis=1) / (2.0 * math.pi)
-    return out
 
 
 class _Part:
@@ -318,11 +282,11 @@ class FclChecker:
         lo, hi = r.lo + t, r.hi + t
         if part.solid and np.all(lo >= part.lo) and np.all(hi <= part.hi):
             reps = r.representatives + t
-            if np.any(winding_numbers(reps, part.vertices, part.faces) > 0.5):
+            if np.any(winding_numbers(reps, part.vertices[part.faces]) > 0.5):
                 return True
         if r.solid and np.all(part.lo >= lo) and np.all(part.hi <= hi):
             reps = part.representatives - t
-            if np.any(winding_numbers(reps, r.vertices, r.faces) > 0.5):
+            if np.any(winding_numbers(reps, r.vertices[r.faces]) > 0.5):
                 return True
         return False
 
@@ -685,7 +649,7 @@ class FclChecker:
         )
 
     def check_motion(self, a: ArrayLike, b: ArrayLike) -> tuple[bool, float | None]:
-        """:class:`~planner.validation.protocols.MotionValidator` interface: ``(True,
+        """:class:`~planner.roles.MotionValidator` interface: ``(True,
         None)`` when ``a -> b`` is valid, else ``(False, last valid fraction)``."""
         seg = self.check_segment(a, b)
         if seg.valid:

@@ -4,7 +4,7 @@ Entry point: :func:`ompl_check_path`, returning :class:`OmplPathCheck`.
 
 The path is loaded into OMPL as an ``og.PathGeometric`` over a
 ``RealVectorStateSpace(3)`` with the scenario bounds, whose ``SpaceInformation`` uses a
-validity checker backed by any :class:`~planner.validation.protocols.StateValidityChecker`
+validity checker backed by any :class:`~planner.roles.StateValidityChecker`
 (normally the :class:`~planner.validation.fcl_checker.FclChecker`), and checked with
 ``PathGeometric.check()``, i.e. every state plus OMPL's discrete motion validator between
 consecutive states. Optionally OMPL's ``PathSimplifier`` shortens it (re-checked after).
@@ -214,7 +214,7 @@ def ompl_check_path(
 
     Args:
         waypoints: ``(n, 3)`` translations, ``n >= 1``.
-        checker: a :class:`~planner.validation.protocols.StateValidityChecker`
+        checker: a :class:`~planner.roles.StateValidityChecker`
             (``is_valid``); if it also has ``check_path`` (the FCL checker) it provides
             the clearance and re-checks the simplified path.
         bounds: ``(2, 3)`` ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]``; states outside

@@ -1,7 +1,7 @@
 """OMPL's geometric planners, driven by the same checker, as baselines.
 
-Entry points: :class:`OmplPlanner` (a :class:`~planner.validation.protocols.Planner`)
-and :func:`available_planners`.
+Entry points: :class:`OmplPlanner` (a :class:`~planner.roles.Planner`) and
+:func:`available_planners`.
 
 Every query builds its own OMPL objects (state space, ``SpaceInformation``,
 ``ProblemDefinition``, planner) and drops them before returning, so nothing OMPL-owned
@@ -20,9 +20,10 @@ Optimizing planners (BIT*, RRT*, PRM*, ...) get a path-length objective whose co
 threshold is infinite, so they stop at their first solution instead of spending the whole
 budget (pass ``optimize=True`` to let them improve it until the time limit).
 
-A returned path is reported as :attr:`PlanStatus.EXACT_SOLUTION` only when OMPL says the
-solution is exact *and* the path passes ``checker.check_path`` (FCL conservative
-advancement); otherwise the status says why and no waypoints are returned.
+A returned path is reported as :attr:`PlanStatus.FOUND` only when OMPL says the solution
+is exact *and* the path passes ``checker.check_path`` (FCL conservative advancement);
+otherwise the status (``no_path`` for a start or goal in collision, else ``not_found``)
+and its reason say why, and no waypoints are returned.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from planner.errors import InvalidParameterError
+from planner.roles import PlanResult, PlanStatus
 
 from .ompl_check import (
     DEFAULT_RESOLUTION,
@@ -43,7 +45,6 @@ from .ompl_check import (
     quiet_ompl,
     states_to_array,
 )
-from .protocols import PlanResult, PlanStatus
 
 __all__ = ["OmplPlanner", "available_planners"]
 
@@ -113,12 +114,14 @@ def _path_length(waypoints: np.ndarray) -> float:
     return float(np.linalg.norm(np.diff(waypoints, axis=0), axis=1).sum())
 
 
-_STATUS_MAP = {
-    "INVALID_START": PlanStatus.INVALID_START,
-    "INVALID_GOAL": PlanStatus.INVALID_GOAL,
-    "TIMEOUT": PlanStatus.TIMEOUT,
-    "APPROXIMATE_SOLUTION": PlanStatus.APPROXIMATE_SOLUTION,
+_REASONS = {
+    "TIMEOUT": "time_limit",
+    "APPROXIMATE_SOLUTION": "approximate_solution",
+    "INVALID_START": "start_invalid",
+    "INVALID_GOAL": "goal_invalid",
 }
+"""OMPL's ``PlannerStatus`` names to the reasons of a ``not_found``; OMPL's own
+``INFEASIBLE`` is not a proof, so it is ``not_found`` too (reason ``planner_status``)."""
 
 
 class OmplPlanner:
@@ -190,6 +193,10 @@ class OmplPlanner:
     def __repr__(self) -> str:
         return f"OmplPlanner({self.name!r}, seed={self.seed}, resolution={self.resolution})"
 
+    def setup(self) -> None:
+        """Nothing to prepare: every query builds its own OMPL objects (see the module
+        documentation)."""
+
     def _in_bounds(self, t: np.ndarray) -> bool:
         return bool(np.all(t >= self.bounds[0]) and np.all(t <= self.bounds[1]))
 
@@ -197,9 +204,9 @@ class OmplPlanner:
         """Plan from ``start`` to ``goal`` within ``time_limit`` seconds.
 
         Returns:
-            :class:`~planner.validation.protocols.PlanResult`; ``waypoints`` only with
-            ``EXACT_SOLUTION`` (re-validated by ``checker.check_path``). OMPL's own
-            "infeasible" is not a proof and is reported as ``NOT_FOUND``.
+            :class:`~planner.roles.PlanResult`; ``waypoints`` only when ``found``
+            (re-validated by ``checker.check_path``). A start or goal in collision is
+            ``no_path``; OMPL's own "infeasible" is not a proof and is ``not_found``.
         """
         t0 = time.perf_counter()
         s = np.asarray(start, dtype=np.float64).reshape(-1)
@@ -210,9 +217,11 @@ class OmplPlanner:
         if not (time_limit > 0 and math.isfinite(time_limit)):
             raise InvalidParameterError(f"time_limit = {time_limit!r}: must be finite and > 0")
 
-        def result(status: PlanStatus, message: str = "", counter=None, **kw) -> PlanResult:
+        def result(status: PlanStatus, reason: str, message: str = "", counter=None,
+                   **kw) -> PlanResult:
             return PlanResult(
                 status=status,
+                reason=reason,
                 seconds=time.perf_counter() - t0,
                 n_valid_checks=counter.valid if counter else 0,
                 n_invalid_checks=counter.invalid if counter else 0,
@@ -221,22 +230,26 @@ class OmplPlanner:
                 **kw,
             )
 
-        if not self._in_bounds(s) or not self.checker.is_valid(s):
-            return result(PlanStatus.INVALID_START, "start is out of bounds or in collision")
-        if not self._in_bounds(g) or not self.checker.is_valid(g):
-            return result(PlanStatus.INVALID_GOAL, "goal is out of bounds or in collision")
+        for which, p in (("start", s), ("goal", g)):
+            if not self._in_bounds(p):
+                return result(PlanStatus.NOT_FOUND, f"{which}_out_of_bounds",
+                              f"{which} is out of bounds")
+            if not self.checker.is_valid(p):
+                return result(PlanStatus.NO_PATH, f"{which}_in_collision",
+                              f"{which} is in collision")
 
         counter = CheckCounter()
-        raw, simplified, status, message = self._plan(s, g, float(time_limit), counter)
-        if status is not PlanStatus.EXACT_SOLUTION:
-            return result(status, message, counter)
+        raw, simplified, reason, message = self._plan(s, g, float(time_limit), counter)
+        if reason != "path":
+            return result(PlanStatus.NOT_FOUND, reason, message, counter)
         for candidate, label in ((simplified, "simplified"), (raw, "raw")):
             if candidate is None:
                 continue
             check = self.checker.check_path(candidate)
             if check.valid:
                 return result(
-                    PlanStatus.EXACT_SOLUTION,
+                    PlanStatus.FOUND,
+                    "path",
                     message if label == "raw" else "",
                     counter,
                     waypoints=candidate,
@@ -246,10 +259,11 @@ class OmplPlanner:
                 f"OMPL's {label} path failed re-validation at segment "
                 f"{check.first_bad_segment} (obstacle {check.obstacle})"
             )
-        return result(PlanStatus.NOT_FOUND, message, counter)
+        return result(PlanStatus.NOT_FOUND, "validation_failed", message, counter)
 
     def _plan(self, s: np.ndarray, g: np.ndarray, time_limit: float, counter: CheckCounter):
-        """Run OMPL; returns (raw waypoints, simplified waypoints, status, message)."""
+        """Run OMPL; returns (raw waypoints, simplified waypoints, reason, message), the
+        reason ``"path"`` for an exact solution."""
         from ompl import base as ob
         from ompl import geometric as og
         from ompl import util as ou
@@ -282,10 +296,10 @@ class OmplPlanner:
             if kind != "EXACT_SOLUTION" or not pdef.hasExactSolution() or (
                 pdef.hasApproximateSolution()
             ):
-                mapped = _STATUS_MAP.get(kind, PlanStatus.NOT_FOUND)
+                reason = _REASONS.get(kind, "planner_status")
                 if kind == "EXACT_SOLUTION":  # inconsistent report: trust the pdef
-                    mapped = PlanStatus.APPROXIMATE_SOLUTION
-                return None, None, mapped, f"OMPL status {kind}"
+                    reason = "approximate_solution"
+                return None, None, reason, f"OMPL status {kind}"
             path = pdef.getSolutionPath()
             raw = states_to_array(path)
             simplified = None
@@ -294,4 +308,4 @@ class OmplPlanner:
                 copy = og.PathGeometric(path)
                 og.PathSimplifier(si).simplify(copy, max(0.05, min(1.0, remaining)))
                 simplified = states_to_array(copy)
-        return raw, simplified, PlanStatus.EXACT_SOLUTION, ""
+        return raw, simplified, "path", ""

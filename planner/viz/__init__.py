@@ -10,10 +10,11 @@ it one of three ways:
   interrupted (:func:`open_live` for a handle that does not block).
 
 Scenes for minkplan's results: :func:`scene_for_minkowski`, :func:`scene_for_plan`
-(scenario + plan + C-space + C-obstacles), :func:`as_scene` (anything :func:`show`
-accepts). The layout and its colours are documented in :mod:`planner.viz.scene`;
-geometry-to-message conversion is :mod:`planner.viz.lower`, kept apart from transport
-(:mod:`planner.viz.html`, :mod:`planner.viz.live`).
+(scenario + plan + C-space + C-obstacles), :func:`scene_for_assembly` (the parts moving
+in), :func:`as_scene` (anything :func:`show` accepts). The layout and its colours are
+documented in :mod:`planner.viz.scene`; geometry-to-message conversion is
+:mod:`planner.viz.lower`, kept apart from transport (:mod:`planner.viz.html`,
+:mod:`planner.viz.live`).
 
 Example::
 
@@ -23,6 +24,7 @@ Example::
     planner.viz.write_html(planner.viz.scene_for_minkowski(result, a, b), "sum.html")
 """
 
+from .assembly import scene_for_assembly
 from .html import notebook_html, show, to_html, write_html
 from .layout import (
     as_scene,
@@ -52,6 +54,7 @@ __all__ = [
     "open_live",
     "plan_parts",
     "roadmap_from_cspace",
+    "scene_for_assembly",
     "scene_for_minkowski",
     "scene_for_plan",
     "serve",

@@ -126,14 +126,23 @@ def _cspace_arrays(cspace) -> dict[str, np.ndarray]:
         f"got {type(cspace).__name__}")
 
 
-def compute_c_obstacles(scenario, *, eps: float | None = None, cache_dir=None,
-                        progress: bool | None = False) -> dict[str, trimesh.Trimesh]:
-    """``{obstacle name: C-obstacle surface}`` from ``planner.c_obstacle`` (``eps``:
-    default the core's relative default)."""
+def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
+                        cache_dir=None, progress: bool | None = False
+                        ) -> dict[str, trimesh.Trimesh]:
+    """``{obstacle name: C-obstacle surface}`` from :func:`planner.c_obstacle` on
+    ``source`` (a plan's ``outcome.source``: the C-obstacles it planned on), or on the
+    source the scenario's settings choose (``eps``: default the core's relative default).
+    """
     from planner.minkowski import c_obstacle
+    from planner.sources import SourceSettings, choose
 
-    return {body.name: c_obstacle(body.mesh, scenario.robot.mesh, eps=eps,
-                                  cache_dir=cache_dir, progress=progress).mesh
+    if source is None:
+        s = scenario.settings
+        source = choose([scenario.robot, *scenario.obstacles], SourceSettings(
+            exact=s.exact, threshold=s.decomposition_threshold, seed=s.seed,
+            cache_dir=cache_dir, progress=progress), field="planner.exact")
+    return {body.name: c_obstacle(body, scenario.robot, eps=eps, progress=progress,
+                                  source=source).mesh
             for body in scenario.obstacles}
 
 
@@ -146,14 +155,14 @@ def _read_json(path: Path) -> Any:
 
 def plan_parts(plan) -> dict[str, Any]:
     """What a scene needs of a plan: ``status``, ``reason``, ``waypoints`` ``(k, 3)``,
-    ``certificate`` (dict or ``None``), ``cspace`` (or ``None``).
+    ``certificate`` (dict or ``None``), ``cspace`` and ``source`` (or ``None``).
 
     ``plan`` is ``None``, a ``PlanOutcome``, the ``path.json`` dict (optionally with a
     ``"certificate"``) or the path of a ``path.json`` file (a ``certificate.json`` beside
     it is read too). Missing parts come back empty.
     """
     parts: dict[str, Any] = {"status": None, "reason": None, "waypoints": np.zeros((0, 3)),
-                             "certificate": None, "cspace": None}
+                             "certificate": None, "cspace": None, "source": None}
     if plan is None:
         return parts
     if isinstance(plan, (str, os.PathLike)):
@@ -170,6 +179,7 @@ def plan_parts(plan) -> dict[str, Any]:
         document = dict(plan.path_json())
         document["certificate"] = getattr(plan, "certificate", None)
         parts["cspace"] = getattr(plan, "cspace", None)
+        parts["source"] = getattr(plan, "source", None)
         plan = document
     if not isinstance(plan, Mapping):
         raise InvalidParameterError(
@@ -221,14 +231,15 @@ def scene_for_plan(scenario, plan=None, cspace=None, *, c_obstacle=None, certifi
             or ``(boxes, labels)``; default: the plan's, if it carries one.
         c_obstacle: C-obstacle surface(s): a mesh, a ``MinkowskiResult``, a mapping
             ``{name: mesh}``, or ``True`` to compute them with the core
-            (:func:`compute_c_obstacles`).
+            (:func:`compute_c_obstacles`, on the plan's source when it is a
+            ``PlanOutcome``: what is drawn is what was planned).
         certificate: a no-path certificate, overriding the plan's.
         animate: add the robot moving along the path.
         cell_style: how to draw cells (see :meth:`Scene.add_boxes`).
         title: page title (default: the scenario's name and the plan's status).
     """
     if isinstance(scenario, (str, os.PathLike)):
-        from planner.scenario import load_scenario
+        from planner.io import load_scenario
 
         scenario = load_scenario(scenario)
     parts = plan_parts(plan)
@@ -242,8 +253,8 @@ def scene_for_plan(scenario, plan=None, cspace=None, *, c_obstacle=None, certifi
         goal_color=COLORS["robot_collision"] if reason == "goal_in_collision" else None,
     )
 
-    if c_obstacle is True:
-        c_obstacle = compute_c_obstacles(scenario)
+    if c_obstacle is True:  # on the source the plan used, if it says
+        c_obstacle = compute_c_obstacles(scenario, source=parts["source"])
     if c_obstacle is not None and c_obstacle is not False:
         scene.add_c_obstacle(c_obstacle)
 

@@ -45,7 +45,9 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 sys.path.insert(0, str(ROOT))
 
-from planner.assembly import benchmark_removals, load_assembly, plan_assembly  # noqa: E402
+from removals import benchmark_removals  # noqa: E402
+
+from planner import load_assembly, plan_assembly  # noqa: E402
 
 log = logging.getLogger("bench_assembly")
 

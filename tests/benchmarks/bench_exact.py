@@ -19,7 +19,7 @@ Cases, all in this one process:
 3. Minkowski sums of tests/test_minkowski.py's ``l_bracket+icosphere`` and ``torus+ball``
    at eps 1 % and 0.5 % of the sum's bounding-box diagonal;
 4. planning: OMPL.app's Easy (``../shared/assets/omplapp/Easy.cfg``, via
-   ``planner.omplapp.load_omplapp``).
+   ``planner.io.load_omplapp``).
 
 Each case is run three ways: ``exact=True``; ``exact=False`` cold (a fresh, empty
 decomposition cache directory: CoACD runs for non-convex bodies); ``exact=False`` cached
@@ -74,15 +74,9 @@ sys.path.insert(0, str(ROOT))            # repository root: planner
 from benchlib import jsonable  # noqa: E402
 
 import planner  # noqa: E402
-from planner.assembly import (  # noqa: E402
-    load_assembly,
-    plan_assembly,
-    removal_problems,
-    removal_scenario,
-)
-from planner.omplapp import load_omplapp  # noqa: E402
+from planner.assembly import plan_assembly, removal_problems, removal_scenario  # noqa: E402
+from planner.io import load_assembly, load_omplapp, load_scenario  # noqa: E402
 from planner.planning import FOUND, NO_PATH, plan  # noqa: E402
-from planner.scenario import load_scenario  # noqa: E402
 
 log = logging.getLogger("bench_exact")
 

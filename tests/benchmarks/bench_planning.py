@@ -42,7 +42,7 @@ ROOT = HERE.parent.parent
 sys.path.insert(0, str(ROOT))
 
 from planner.planning import FOUND, NO_PATH, plan  # noqa: E402
-from planner.scenario import load_scenario  # noqa: E402
+from planner.io import load_scenario  # noqa: E402
 
 EXPECTED = {
     "peg_in_hole": FOUND,

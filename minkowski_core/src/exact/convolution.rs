@@ -401,31 +401,51 @@ impl Parts {
     fn new(verts: &[Vec3], faces: &[[u32; 3]], m: &TriMesh) -> Parts {
         let scale = verts.iter().fold(0.0f64, |acc, v| acc.max(v.abs().max_element())).max(1e-300);
         let mut parts = Parts { corners: Vec::new(), at: vec![Vec::new(); verts.len()], inner: 1e-12 * scale };
-        // shells: triangles joined by shared (welded) corners
-        let mut joined = UnionFind::new(verts.len());
+        // shells: triangles joined across edges that are used once in each direction (not
+        // across a corner or an edge where more shells meet: those are distinct bodies)
+        let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
         for f in faces {
-            joined.union(f[0] as usize, f[1] as usize);
-            joined.union(f[0] as usize, f[2] as usize);
+            for c in 0..3 {
+                *uses.entry((f[c], f[(c + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        let manifold = |a: u32, b: u32| uses.get(&(a, b)) == Some(&1) && uses.get(&(b, a)) == Some(&1);
+        let mut half: HashMap<(u32, u32), usize> = HashMap::new();
+        for (i, f) in faces.iter().enumerate() {
+            for c in 0..3 {
+                half.insert((f[c], f[(c + 1) % 3]), i);
+            }
+        }
+        let mut joined = UnionFind::new(faces.len());
+        for (&(a, b), &i) in &half {
+            if let Some(&j) = half.get(&(b, a)) {
+                if manifold(a, b) {
+                    joined.union(i, j);
+                }
+            }
         }
         let mut shell_of_root: HashMap<usize, usize> = HashMap::new();
         let mut shells: Vec<Vec<usize>> = Vec::new();
-        for (i, f) in faces.iter().enumerate() {
-            let r = joined.find(f[0] as usize);
+        let mut shell_of = vec![0usize; faces.len()];
+        for i in 0..faces.len() {
+            let r = joined.find(i);
             let k = *shell_of_root.entry(r).or_insert_with(|| {
                 shells.push(Vec::new());
                 shells.len() - 1
             });
             shells[k].push(i);
+            shell_of[i] = k;
         }
         if shells.len() < 2 {
             return parts; // one shell: it is the solid, whose features the tests already see
         }
-        // a part must lie in the solid: with every shell outward (positive volume, and not
-        // self-intersecting, as the meshes' checks assume) each adds 0 or 1 to the winding
-        // number, so the solid is their union; an inward shell (a cavity) can cut a hole
-        // into a part, and then no part is used at all
+        // a part must lie in the solid: with every shell outward (positive volume) and
+        // not passing through itself, each adds 0 or 1 to the winding number, so the solid
+        // is their union; an inward shell (a cavity) or one that crosses itself can cut a
+        // hole into a part, and then no part is used at all
         let volume = |tris: &Vec<usize>| tris.iter().map(|&t| m.tris[t].p[0].dot(m.tris[t].p[1].cross(m.tris[t].p[2]))).sum::<f64>();
-        if shells.iter().any(|t| volume(t) <= 0.0) {
+        let self_crossing = m.crossing.iter().any(|&[s, t]| shell_of[s as usize] == shell_of[t as usize]);
+        if self_crossing || shells.iter().any(|t| volume(t) <= 0.0) {
             return parts;
         }
         // vertices by x, so each part scans only those within its box's x range

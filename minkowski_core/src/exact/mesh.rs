@@ -79,6 +79,11 @@ pub struct TriMesh {
     pub vertices: Vec<Vec3>,
     /// Triangles.
     pub tris: Vec<Tri>,
+    /// Their vertex indices.
+    pub faces: Vec<[u32; 3]>,
+    /// The pairs of triangles that cross each other (see [`super::crossing`]); filled for
+    /// solids only.
+    pub crossing: Vec<[u32; 2]>,
     /// BVH nodes; node 0 is the root.
     pub nodes: Vec<MeshNode>,
     /// Box around the mesh.
@@ -107,14 +112,20 @@ impl TriMesh {
         TriMesh::check_closed(faces, what)?;
         let mut mesh = TriMesh { closed: true, ..TriMesh::surface(vertices, faces, what)? };
         let fronts = mesh.front_windings();
-        let inverted = fronts.iter().filter(|w| w.is_some_and(|w| w < 0)).count();
-        let unknown = fronts.iter().filter(|w| w.is_none()).count();
-        if inverted > 0 || unknown > 0 {
+        let crossings = mesh.crossings();
+        let wedges = mesh.crossing_windings(&crossings);
+        let negative = |ws: &[Option<i64>]| ws.iter().filter(|w| w.is_some_and(|w| w < 0)).count();
+        let unknown = |ws: &[Option<i64>]| ws.iter().filter(|w| w.is_none()).count();
+        let (inverted, inverted_wedges) = (negative(&fronts), negative(&wedges));
+        let untold = unknown(&fronts) + unknown(&wedges);
+        if inverted + inverted_wedges + untold > 0 {
             return Err(bad(format!(
-                "is closed but bounds no solid: {inverted} of {} triangles have the inside in front of them (winding number below 0: inverted faces or shells) and {unknown} lie on other triangles; repair it or use it as a surface",
-                fronts.len()
+                "is closed but bounds no solid: {inverted} of {} triangles, and {inverted_wedges} of {} crossings of triangles, have the inside in front of them (winding number below 0: inverted faces or shells), and {untold} places could not be told; repair it or use it as a surface",
+                fronts.len(),
+                crossings.len()
             )));
         }
+        mesh.crossing = crossings.iter().map(|c| c.tris).collect();
         mesh.solid = true;
         Ok(mesh)
     }
@@ -170,7 +181,7 @@ impl TriMesh {
                 anchors.push(vertices[f[0] as usize]);
             }
         }
-        Ok(TriMesh { vertices, tris, nodes, aabb, anchors, closed: false, solid: false })
+        Ok(TriMesh { vertices, tris, faces: faces.to_vec(), crossing: Vec::new(), nodes, aabb, anchors, closed: false, solid: false })
     }
 
     /// The same mesh reflected through the origin (`-v`), still outward oriented.
@@ -180,7 +191,8 @@ impl TriMesh {
         let aabb = Aabb::from_points(&vertices);
         let nodes = build_nodes(&tris);
         let anchors = self.anchors.iter().map(|v| -*v).collect();
-        TriMesh { vertices, tris, nodes, aabb, anchors, closed: self.closed, solid: self.solid }
+        let faces = self.faces.iter().map(|f| [f[0], f[2], f[1]]).collect();
+        TriMesh { vertices, tris, faces, crossing: self.crossing.clone(), nodes, aabb, anchors, closed: self.closed, solid: self.solid }
     }
 
     /// Whether a triangle meets the closed box `b` (separating axes, with the rounding

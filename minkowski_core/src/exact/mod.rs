@@ -31,6 +31,7 @@
 //! Entry points: [`ExactSource`], [`TriMesh`], [`ExactSource::verify_box`].
 
 mod convolution;
+pub mod crossing;
 mod gauss;
 mod mesh;
 mod piece;
@@ -500,6 +501,26 @@ impl ExactSource {
             }
         }
         false
+    }
+
+    /// The parameter intervals of the segment `a → b` inside the (grown) solid, sorted and
+    /// merged: the boundary candidates the segment meets are solid, and each stretch
+    /// between them is decided by its ends or one exact point.
+    pub fn segment_intervals(&self, a: Vec3, b: Vec3) -> Vec<(f64, f64)> {
+        let seg = Aabb::new(a.min(b), a.max(b)).inflated(self.margin);
+        let mut cand: Vec<u32> = Vec::new();
+        self.fbvh.for_each_overlapping(&seg, |i| cand.push(i as u32));
+        cand.sort_unstable();
+        for &k in &self.surface_pairs {
+            cand.extend([PAIR, k as u32, 0, 0]);
+        }
+        if self.walls.is_some() {
+            cand.extend((0..6).map(|s| WALL + s));
+        }
+        let (mut bnd, mut out) = (Vec::new(), Vec::new());
+        self.boundary_intervals(&cand, a, b, &mut bnd);
+        self.solid_intervals(a, b, self.contains_point(a), self.contains_point(b), &bnd, &mut out);
+        out
     }
 
     /// Whether the closed segment `a → b` stays out of the solid grown by a further cube of

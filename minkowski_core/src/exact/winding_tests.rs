@@ -139,3 +139,61 @@ fn a_surface_contains_nothing_in_verification() {
     assert!(!src.contains_point(Vec3::splat(2.0)));
     assert!(src.contains_point(Vec3::new(0.1, 2.0, 2.0)));
 }
+
+#[test]
+fn an_inverted_shell_poking_out_through_a_face_is_no_solid() {
+    // the winding number is -1 only in the tip above the box's top, a region in front of
+    // no face sample: the crossings of the tetrahedron with the top tell it
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::ZERO, Vec3::splat(10.0), &mut v, &mut f);
+    let o = v.len() as u32;
+    v.extend([Vec3::new(3.0, 3.0, 8.0), Vec3::new(7.0, 3.0, 8.0), Vec3::new(5.0, 7.0, 8.0), Vec3::new(5.0, 4.3, 11.0)]);
+    // outward tetrahedron faces, then reversed: an inside-out tetrahedron
+    for t in [[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]] {
+        f.push([o + t[0], o + t[2], o + t[1]]);
+    }
+    let mesh = TriMesh { closed: true, ..TriMesh::surface(v.clone(), &f, "poke").unwrap() };
+    assert_eq!(mesh.winding(Vec3::new(5.0, 4.3, 10.5)), Some(-1));
+    assert!(!mesh.crossings().is_empty());
+    let err = TriMesh::new(v, &f, "poke").unwrap_err().to_string();
+    assert!(err.contains("crossings"), "{err}");
+}
+
+/// A box with a cavity whose corner touches a small box inside the solid: one shell by
+/// its corners, two by its edges; the cavity is a hole.
+fn cavity_touching_a_box() -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::ZERO, Vec3::splat(10.0), &mut v, &mut f);
+    let cavity = f.len();
+    push_box(Vec3::splat(5.0), Vec3::splat(7.0), &mut v, &mut f);
+    for t in &mut f[cavity..] {
+        t.swap(1, 2);
+    }
+    push_box(Vec3::splat(7.0), Vec3::splat(9.9), &mut v, &mut f);
+    TriMesh::new(v, &f, "cavity and box").unwrap()
+}
+
+#[test]
+fn a_cavity_joined_to_a_box_at_a_corner_stays_a_hole() {
+    let src = ExactSource::new(vec![cavity_touching_a_box()], box_mesh([-0.3; 3], [0.3; 3]).negated(), 0.0, None);
+    let truth = |p: Vec3| {
+        let meets = p.cmpge(Vec3::splat(-0.3)).all() && p.cmple(Vec3::splat(10.3)).all();
+        let in_cavity = p.cmpgt(Vec3::splat(5.3)).all() && p.cmplt(Vec3::splat(6.7)).all();
+        meets && !in_cavity
+    };
+    let mut rng = Lcg(3);
+    let region = Aabb::new(Vec3::splat(-1.0), Vec3::splat(11.0));
+    for _ in 0..3000 {
+        let p = rng.point(&region);
+        assert_eq!(src.contains_point(p), truth(p), "{p:?}");
+    }
+    assert!(!src.segment_is_free(Vec3::splat(6.0), Vec3::new(6.0, 6.0, 9.0), 0.0));
+    let oct = Octree::build(&src, &Aabb::new(Vec3::splat(4.0), Vec3::splat(8.0)), 0.05, 1 << 22).unwrap();
+    for leaf in oct.leaves.iter().filter(|l| l.label != Label::Mixed) {
+        let cell = oct.cell_box(leaf);
+        for _ in 0..4 {
+            let p = rng.point(&cell);
+            assert_eq!(truth(p), leaf.label == Label::Full, "{:?} leaf {cell:?} at {p:?}", leaf.label);
+        }
+    }
+}

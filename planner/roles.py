@@ -1,4 +1,5 @@
-"""Planning roles as ``typing.Protocol``s, after OMPL's base classes.
+"""Planning roles as ``typing.Protocol``s, after OMPL's base classes, and the one status
+vocabulary every planner answers in.
 
 Three roles are kept apart, as in ``ompl::base``:
 
@@ -12,9 +13,15 @@ Three roles are kept apart, as in ``ompl::base``:
   Planning outcomes (time-out, no path, invalid start) are statuses, never exceptions;
   exceptions are for misuse (bad arguments).
 
+:class:`PlanStatus` has three values, the strings of ``path.json``: ``found`` (a path,
+validated independently), ``no_path`` (proved: a certificate, or a start or goal in
+collision, as OMPL's ``INFEASIBLE`` and ``INVALID_START``/``INVALID_GOAL``) and
+``not_found`` (nothing found and nothing proved: OMPL's ``TIMEOUT``,
+``APPROXIMATE_SOLUTION``, ...); a ``reason`` string says which case it was.
+
 Anything with the right methods is a checker: the FCL checker on the original meshes
-(:class:`planner.validation.fcl_checker.FclChecker`) and a checker on the Minkowski
-C-obstacles are interchangeable.
+(:class:`planner.validation.fcl_checker.FclChecker`) and the native C-space
+(:class:`planner.planning.cspace_checker.CSpaceChecker`) are interchangeable.
 
 Translations ``t`` are ``(3,)`` array-likes of floats in the scenario's units; the robot
 ``R`` (fixed orientation, in its own frame) occupies ``R + t``.
@@ -30,6 +37,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 __all__ = [
+    "FOUND",
+    "NOT_FOUND",
+    "NO_PATH",
     "MotionValidator",
     "PlanResult",
     "PlanStatus",
@@ -38,29 +48,22 @@ __all__ = [
 ]
 
 
-class PlanStatus(enum.Enum):
-    """Outcome of a planning query (after OMPL's ``PlannerStatus``).
+class PlanStatus(enum.StrEnum):
+    """Outcome of a planning query; the values are ``path.json``'s ``status`` strings."""
 
-    Only :attr:`EXACT_SOLUTION` comes with a path; every other status has no waypoints,
-    in particular an approximate path (one that ends short of the goal) is never reported
-    as a solution.
-    """
-
-    EXACT_SOLUTION = "exact_solution"
-    """A collision-free path from start to goal, re-validated independently."""
-    APPROXIMATE_SOLUTION = "approximate_solution"
-    """The planner only got close to the goal; no path is returned."""
-    TIMEOUT = "timeout"
-    """The time limit ran out without a solution (nothing is proved)."""
-    INFEASIBLE = "infeasible"
-    """No path exists, with a proof (a certificate), not merely a time-out."""
-    INVALID_START = "invalid_start"
-    """The start configuration is in collision (or out of bounds)."""
-    INVALID_GOAL = "invalid_goal"
-    """The goal configuration is in collision (or out of bounds)."""
+    FOUND = "found"
+    """A collision-free path from start to goal, validated independently."""
+    NO_PATH = "no_path"
+    """No collision-free path exists: proved by a certificate, or the start or goal is in
+    collision."""
     NOT_FOUND = "not_found"
-    """The planner ended without a usable solution for another reason (e.g. its path
-    failed the independent re-validation); nothing is proved."""
+    """Nothing found and nothing proved (floor, budget or time limit reached, an
+    approximate solution, a path that failed validation)."""
+
+
+FOUND = PlanStatus.FOUND
+NO_PATH = PlanStatus.NO_PATH
+NOT_FOUND = PlanStatus.NOT_FOUND
 
 
 @dataclass(frozen=True)
@@ -69,8 +72,12 @@ class PlanResult:
 
     Attributes:
         status: the outcome.
+        reason: which case of it, machine-readable: ``"path"``, ``"certificate"``,
+            ``"start_in_collision"``, ``"goal_in_collision"``, ``"start_out_of_bounds"``,
+            ``"goal_out_of_bounds"``, ``"time_limit"``, ``"approximate_solution"``,
+            ``"validation_failed"``, ``"planner_status"``, ...
         waypoints: ``(n, 3)`` translations from start to goal; ``(0, 3)`` unless
-            ``status`` is :attr:`PlanStatus.EXACT_SOLUTION`.
+            ``status`` is :attr:`PlanStatus.FOUND`.
         length: Euclidean length of the path (``nan`` without a path).
         seconds: wall-clock time of the whole query (planning, simplification and
             re-validation).
@@ -81,6 +88,7 @@ class PlanResult:
     """
 
     status: PlanStatus
+    reason: str = ""
     waypoints: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     length: float = float("nan")
     seconds: float = 0.0
@@ -91,8 +99,8 @@ class PlanResult:
 
     @property
     def solved(self) -> bool:
-        """``True`` only for an exact, re-validated solution."""
-        return self.status is PlanStatus.EXACT_SOLUTION
+        """``True`` only for a found, re-validated path."""
+        return self.status is PlanStatus.FOUND
 
 
 @runtime_checkable
@@ -151,11 +159,16 @@ class MotionValidator(Protocol):
 
 @runtime_checkable
 class Planner(Protocol):
-    """Plans a translation path (OMPL's ``Planner``).
+    """Plans a translation path (OMPL's ``Planner``): :meth:`setup` prepares what the
+    queries share, :meth:`solve` answers one.
 
     Thread safety: one query at a time per instance; instances share no mutable state
     unless documented otherwise.
     """
+
+    def setup(self) -> None:
+        """Prepare (OMPL's ``Planner::setup``); :meth:`solve` calls it if needed."""
+        ...
 
     def solve(self, start: ArrayLike, goal: ArrayLike, time_limit: float) -> PlanResult:
         """Plan from ``start`` to ``goal`` (``(3,)`` translations) within

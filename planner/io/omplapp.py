@@ -7,7 +7,7 @@ goal pose (``start.x/y/z``, ``start.axis.x/y/z``, ``start.theta`` in radians; sa
 
 Entry points:
 
-- :func:`load_omplapp` -- a ``.cfg`` file to a :class:`~planner.scenario.Scenario`.
+- :func:`load_omplapp` -- a ``.cfg`` file to a :class:`~planner.problem.Scenario`.
 - :func:`read_app_mesh` -- a COLLADA file's triangles in OMPL.app's frame, as loaded.
 - :func:`robot_reference_point` -- OMPL.app's reference point of a robot mesh.
 - :func:`read_omplapp_path` / :func:`path_state_transform` -- OMPL.app solution files
@@ -50,10 +50,10 @@ import numpy as np
 import trimesh
 from trimesh import transformations as tf
 
-from .errors import InvalidMeshError, ScenarioError
-from .meshes import load_mesh, validate_solid
-from .scenario import Body, PlannerSettings, Robot, Scenario, default_bounds
-from .tolerances import scale_of
+from planner.errors import InvalidMeshError, ScenarioError
+from planner.meshes import load_mesh, validate_solid
+from planner.problem import Body, PlannerSettings, Robot, Scenario, default_bounds
+from planner.tolerances import scale_of
 
 __all__ = [
     "APP_FROM_ZUP",
@@ -456,14 +456,15 @@ def load_omplapp(cfg_path: str | os.PathLike[str]) -> Scenario:
     robot_mesh.apply_transform(_homogeneous(orientation))
     robot = Robot(robot_file.stem, robot_mesh,
                   f"{robot_file.resolve()} (OMPL.app frame, reference point "
-                  f"{np.round(centre, 6).tolist()})", robot_solid, robot_why)
+                  f"{np.round(centre, 6).tolist()})", robot_solid, robot_why, checked=robot_solid)
 
     try:
         parts = _world_parts(read_app_mesh(world_file), world_file.stem, notes)
     except InvalidMeshError as error:
         raise cfg.error("world", str(error)) from None
     obstacles = [Body(f"{world_file.stem}_{k}", mesh,
-                      f"{world_file.resolve()} (OMPL.app frame, piece {k})", solid, why)
+                      f"{world_file.resolve()} (OMPL.app frame, piece {k})", solid, why,
+                      checked=solid)
                  for k, (mesh, solid, why) in enumerate(parts)]
 
     if all(cfg.has(f"volume.{end}.{axis}") for end in ("min", "max") for axis in "xyz"):

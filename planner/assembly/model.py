@@ -1,0 +1,158 @@
+"""What an assembly search returns: the removal steps and the result, and their JSON
+forms (``sequence.json``, ``report.json``)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from planner.output import jsonable
+from planner.problem import Assembly
+
+__all__ = ["INTERLOCKED", "SEQUENCE", "AssemblyResult", "AssemblyStep"]
+
+
+SEQUENCE = "sequence"
+
+
+INTERLOCKED = "interlocked"
+
+
+@dataclass
+class AssemblyStep:
+    """One part's removal (in removal order) and hence insertion (reversed).
+
+    Attributes:
+        part: the part's name.
+        method: ``"straight"`` (one segment along ``direction``) or ``"planned"``.
+        direction: ``"+z"`` etc. for straight removals, the goal's side when planned.
+        removal: ``(n, 3)`` translations from ``0`` (assembled) to outside.
+        obstacles: the parts present while it moves.
+        seconds: time spent finding it.
+        validation: FCL's check of the removal path at the contact tolerance.
+    """
+
+    part: str
+    method: str
+    direction: str
+    removal: np.ndarray
+    obstacles: list[str]
+    seconds: float
+    validation: dict[str, Any]
+
+    @property
+    def insertion(self) -> np.ndarray:
+        """Translations from outside to ``0`` (the removal reversed)."""
+        return self.removal[::-1].copy()
+
+
+@dataclass
+class AssemblyResult:
+    """Outcome of :func:`plan_assembly`.
+
+    Attributes:
+        status: ``"sequence"`` or ``"interlocked"``.
+        removal: steps in removal order (for an interlocked result: those that worked).
+        interlocked: an irreducible interlocked set (empty when a sequence exists): parts
+            that cannot be taken apart, though leaving out any one of them makes that
+            possible. It may include the base when the base takes part in the lock.
+        base: the fixed part, or ``None``.
+        contact_tolerance: ``delta`` used everywhere.
+        seconds: total time.
+        attempts: per stuck part, why it could not leave with the other remaining parts
+            present (planner status, ``proved``, ``obstacles``, the goal ``sides`` tried).
+        stuck: every movable part that could not leave when the search stopped (a
+            superset of the movable parts of ``interlocked``).
+        core_attempts: the same as ``attempts`` with only the ``interlocked`` set present.
+        reuse: what the search computed and reused (see
+            :class:`~planner.assembly.pairs.PairCache`).
+        source: the C-obstacle source every pair and planned removal used (``used``,
+            ``why``).
+    """
+
+    assembly: Assembly
+    status: str
+    removal: list[AssemblyStep]
+    interlocked: list[str]
+    base: str | None
+    contact_tolerance: float
+    seconds: float
+    attempts: dict[str, dict[str, Any]] = field(default_factory=dict)
+    stuck: list[str] = field(default_factory=list)
+    core_attempts: dict[str, dict[str, Any]] = field(default_factory=dict)
+    reuse: dict[str, Any] = field(default_factory=dict)
+    source: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def found(self) -> bool:
+        return self.status == SEQUENCE
+
+    @property
+    def exit_code(self) -> int:
+        return 0 if self.found else 1
+
+    @property
+    def order(self) -> list[str]:
+        """Assembly order: the base (if any) or the last part left, then the rest."""
+        if not self.found:
+            return []
+        removed = [s.part for s in self.removal]
+        first = [p.name for p in self.assembly.parts if p.name not in removed]
+        return first + removed[::-1]
+
+    @property
+    def proved(self) -> bool:
+        """For an interlocked result: with only the ``interlocked`` parts present, no
+        movable one of them can leave, each proved by an octree certificate; ``False``
+        when some planner only gave up."""
+        movable = [n for n in self.interlocked if n != self.base]
+        return not self.found and bool(movable) and all(
+            self.core_attempts.get(n, {}).get("proved", False) for n in movable)
+
+    @property
+    def message(self) -> str:
+        if self.found:
+            return f"assembly order: {' -> '.join(self.order)}"
+        how = "proved" if self.proved else "not proved: some planner gave up"
+        text = f"no sequence: interlocked parts {', '.join(self.interlocked)} ({how})"
+        others = [n for n in self.stuck if n not in self.interlocked]
+        if others:
+            text += f"; also stuck: {', '.join(others)}"
+        return text
+
+    def sequence_json(self) -> dict[str, Any]:
+        """``sequence.json``: parts in assembly order, each with its insertion path."""
+        steps = {s.part: s for s in self.removal}
+        parts = []
+        for name in self.order:
+            step = steps.get(name)
+            if step is None:
+                parts.append({"part": name, "fixed": True, "insertion": [[0.0, 0.0, 0.0]]})
+                continue
+            parts.append({"part": name, "fixed": False, "method": step.method,
+                          "direction": step.direction, "insertion": step.insertion,
+                          "validation": step.validation})
+        return jsonable({
+            "name": self.assembly.name, "units": self.assembly.units, "status": self.status,
+            "contact_tolerance": self.contact_tolerance, "base": self.base,
+            "parts": parts, "interlocked": self.interlocked, "stuck": self.stuck,
+            "proved": self.proved, "message": self.message,
+        })
+
+    def report_json(self) -> dict[str, Any]:
+        """``report.json``: removal steps with timings, obstacles and attempts."""
+        return jsonable({
+            "name": self.assembly.name, "status": self.status, "message": self.message,
+            "contact_tolerance": self.contact_tolerance, "seconds": self.seconds,
+            "removal": [{"part": s.part, "method": s.method, "direction": s.direction,
+                         "waypoints": s.removal, "obstacles": s.obstacles,
+                         "seconds": s.seconds, "validation": s.validation}
+                        for s in self.removal],
+            "interlocked": self.interlocked, "stuck": self.stuck,
+            "attempts": self.attempts, "interlocked_attempts": self.core_attempts,
+            "reuse": self.reuse, "source": self.source,
+            "settings": dataclasses.asdict(self.assembly.settings),
+        })

@@ -1,0 +1,379 @@
+"""The disassembly search: which part (or, later, which group) can leave, along which
+path, one step at a time; the reverse is an assembly order.
+
+Search: while movable parts remain, find one that can translate from its assembled pose
+to outside the remaining parts' bounding box (its own included) grown by a margin, with
+the other remaining parts as obstacles. Cheap first: straight removals along ``±x, ±y,
+±z`` (shortest exit first), then along the escape directions of FCL's contact normals at
+the assembled pose. Whether part ``j`` alone blocks such a line for part ``i`` depends on
+the pair only, so it is decided once per (part, obstacle, direction) by the
+:class:`~planner.assembly.pairs.PairCache` -- from the pair's C-obstacle, built once per
+pair from the assembly's source and reused in every step, or by FCL on the two parts
+when the line only slides along touching faces -- and a line no present part blocks is
+then checked with all of them by FCL. Then, for each part in turn, the octree planner
+(:func:`planner.planning.plan`, on the same source) on a
+:class:`~planner.problem.Scenario` whose robot is the part (start ``0``) and whose goal
+lies outside that box on one of its six sides, the most open first (the shallowest block
+of the straight line); the region outside the box is connected, so the first path found,
+or a certificate walling off the start, settles it. When no part can leave, the stuck
+parts are shrunk to an irreducible interlocked set by greedy deletion (each part left out
+in turn, the search re-run on the rest), which is what the result reports.
+
+Contact: assembled parts touch face to face. One contact tolerance ``delta`` (the file's
+``contact_tolerance``, else :data:`~planner.problem.DEFAULT_CONTACT_REL` times the
+assembly's diagonal) is used by the straight-line checks, the planner
+(``planner.contact_tolerance``) and the final FCL validation of every reported path.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planner.errors import InvalidParameterError, MinkplanError, ScenarioError
+from planner.problem import Assembly, Part, Scenario
+from planner.roles import FOUND, NO_PATH
+from planner.validation import FclChecker
+
+from .geometry import (
+    DIRECTIONS,
+    ESCAPE_MARGIN_REL,
+    direction_vector,
+    exit_box,
+    exit_point,
+    vector_name,
+)
+from .model import INTERLOCKED, SEQUENCE, AssemblyResult, AssemblyStep
+from .pairs import PairCache
+
+__all__ = ["GOAL_SIDE", "plan_assembly", "removal_problems", "removal_scenario",
+           "validate_removal"]
+
+log = logging.getLogger(__name__)
+
+
+def validate_removal(part: Part, others: list[Part], path: np.ndarray, delta: float) -> dict:
+    """FCL's check of a removal path with ``others`` present, at the contact tolerance."""
+    checker = FclChecker(part.mesh, [p.mesh for p in others], contact_tolerance=delta,
+                         names=[p.name for p in others], solid=[p.solid for p in others],
+                         robot_solid=part.solid)
+    check = checker.check_path(path)
+    return {"valid": bool(check.valid), "min_clearance": check.min_clearance,
+            "n_checks": check.n_checks, "contact_tolerance": delta,
+            "obstacle": check.obstacle}
+
+
+GOAL_SIDE = "+z"
+"""Default side of the exit box for :func:`removal_scenario`'s goal."""
+
+
+def removal_scenario(assembly: Assembly, part: str, obstacles: list[str],
+                     direction: str | np.ndarray = GOAL_SIDE) -> Scenario:
+    """The planning problem of removing ``part`` with ``obstacles`` present: the part as
+    the robot (its own frame is the world frame, start ``0``), the goal just outside the
+    exit box along ``direction`` (an axis name such as ``"-x"``, or a vector), bounds the
+    exit box grown by the margin, and the assembly's settings (with its contact
+    tolerance). The region outside the exit box and inside the bounds is free and
+    connected, so every goal side poses the same question ("can the part leave?")."""
+    parts = {p.name: p for p in assembly.parts}
+    unknown = [n for n in [part, *obstacles] if n not in parts]
+    if unknown:
+        raise InvalidParameterError(f"{', '.join(map(repr, unknown))}: not a part of "
+                                    f"{assembly.name} (parts: {', '.join(parts)})")
+    if part in obstacles:
+        raise InvalidParameterError(f"{part!r} is both the moving part and an obstacle")
+    body = parts[part]
+    others = [parts[n] for n in obstacles]
+    margin = ESCAPE_MARGIN_REL * assembly.diagonal
+    lo, hi = exit_box(body, others, margin)
+    _, vec = direction_vector(direction)
+    goal = exit_point(vec, (lo, hi), margin)
+    return Scenario(name=f"{assembly.name}: remove {part}", units=assembly.units,
+                    robot=body, obstacles=others,
+                    start=np.zeros(3), goal=goal, orientation=np.eye(3),
+                    bounds=(lo - margin, hi + margin), settings=assembly.settings)
+
+
+@dataclass
+class _Run:
+    """One disassembly attempt of a set of parts."""
+
+    steps: list[AssemblyStep]
+    remaining: list[str]           # parts left when it stopped (base included)
+    stuck: list[str]               # movable parts among them (empty: done)
+    attempts: dict[str, dict[str, Any]]
+
+
+class _Search:
+    """The disassembly search of one assembly, with every cache shared by its runs."""
+
+    def __init__(self, assembly: Assembly, *, planner: str, cache_dir, progress,
+                 plan_parts: bool) -> None:
+        self.assembly = assembly
+        self.parts = {p.name: p for p in assembly.parts}
+        self.order = [p.name for p in assembly.parts]
+        self.planner = planner
+        self.cache_dir = cache_dir
+        self.progress = progress
+        self.plan_parts = plan_parts
+        self.delta = assembly.contact_tolerance
+        self.margin = ESCAPE_MARGIN_REL * assembly.diagonal
+        self.pairs = PairCache(assembly, cache_dir)
+        self.source = self.pairs.source
+        self._straight: dict[tuple[str, frozenset], AssemblyStep | None] = {}
+        self._planned: dict[tuple[str, frozenset], tuple[AssemblyStep | None, dict]] = {}
+        self.stats = {"planner_runs": 0, "planner_reused": 0, "runs": 0}
+
+    # ---------------------------------------------------------------- one part
+
+    def straight(self, part: str, others: list[str]) -> AssemblyStep | None:
+        """A straight removal of ``part`` with ``others`` present, or ``None``."""
+        key = (part, frozenset(others))
+        if key in self._straight:
+            return self._straight[key]
+        t0 = time.perf_counter()
+        body = self.parts[part]
+        bodies = [self.parts[n] for n in others]
+        box = exit_box(body, bodies, self.margin)
+        # Shortest exits first (less sliding along touching faces, slow to certify);
+        # then the escape directions of the contact normals.
+        goals = sorted(((float(np.linalg.norm(exit_point(d, box, self.margin))), i, name, d)
+                        for i, (name, d) in enumerate(DIRECTIONS.items())),
+                       key=lambda item: item[:2])
+        seen: list[np.ndarray] = []
+        for other in others:
+            for d in self.pairs.contact_directions(part, other):
+                if not any(float(np.dot(d, u)) > 1.0 - 1e-6 for u in seen):
+                    seen.append(d)
+                    goals.append((0.0, 0, vector_name(d), d))
+        step = None
+        for _, _, dname, vec in goals:
+            # cheap first: a part that blocks the line alone (its primitives decide, or
+            # FCL did in an earlier step); grazing pairs not decided yet give None
+            verdicts = [self.pairs.verdict(part, o, dname, vec, fcl=False) for o in others]
+            if any(v is not None and v.blocked for v in verdicts):
+                continue
+            grazing = [o for o, v in zip(others, verdicts) if v is None]
+            # then the whole motion, with every part present (FCL)
+            path = np.array([np.zeros(3), exit_point(vec, box, self.margin)])
+            validation = validate_removal(body, bodies, path, self.delta)
+            if validation["valid"]:
+                step = AssemblyStep(part, "straight", dname, path, list(others),
+                                    time.perf_counter() - t0, validation)
+                break
+            # blocked: find out which grazing parts block it alone, once, for later steps
+            for o in grazing:
+                self.pairs.verdict(part, o, dname, vec)
+        self._straight[key] = step
+        return step
+
+    def goal_sides(self, part: str, others: list[str]) -> list[str]:
+        """The six axis sides, most open first: by the longest sideways detour the
+        straight line would need around a present part (:meth:`PairCache.detour`), then
+        by the distance to the exit."""
+        body = self.parts[part]
+        box = exit_box(body, [self.parts[n] for n in others], self.margin)
+        keys = []
+        for i, (dname, vec) in enumerate(DIRECTIONS.items()):
+            detour = max((self.pairs.detour(part, other, dname, vec) for other in others),
+                         default=0.0)
+            keys.append((round(detour, 12),
+                         float(np.linalg.norm(exit_point(vec, box, self.margin))), i, dname))
+        return [k[-1] for k in sorted(keys)]
+
+    def planned(self, part: str, others: list[str]) -> tuple[AssemblyStep | None, dict]:
+        """Plan the removal of ``part`` with ``others`` present: goals on the most open
+        sides first (see :meth:`goal_sides`), stopping at the first path, at a proof that
+        the part cannot leave (the region outside the exit box is connected, so a
+        certificate walling off the start answers for every side), or after a side used
+        up the time limit (so a stuck part costs one time limit, not six)."""
+        from planner.planning import plan  # noqa: PLC0415 (lazy: native planner)
+
+        key = (part, frozenset(others))
+        if key in self._planned:
+            self.stats["planner_reused"] += 1
+            return self._planned[key]
+        t0 = time.perf_counter()
+        body = self.parts[part]
+        bodies = [self.parts[n] for n in others]
+        sides: list[dict[str, Any]] = []
+        step, attempt = None, None
+        for dname in self.goal_sides(part, others):
+            t_side = time.perf_counter()
+            scenario = removal_scenario(self.assembly, part, list(others), dname)
+            self.stats["planner_runs"] += 1
+            try:
+                outcome = plan(scenario, planner=self.planner, cache_dir=self.cache_dir,
+                               progress=self.progress, source=self.source)
+            except (InvalidParameterError, ScenarioError):
+                raise  # bad settings: the user's to fix
+            except MinkplanError as error:  # e.g. geometry the native core rejects
+                sides.append({"direction": dname, "status": "error", "reason": "error",
+                              "message": str(error),
+                              "seconds": time.perf_counter() - t_side})
+                continue
+            side = {"direction": dname, "status": outcome.status, "reason": outcome.reason,
+                    "message": outcome.message, "seconds": time.perf_counter() - t_side}
+            sides.append(side)
+            if outcome.status == FOUND:
+                path = np.asarray(outcome.waypoints, dtype=np.float64)
+                validation = validate_removal(body, bodies, path, self.delta)
+                if validation["valid"]:
+                    step = AssemblyStep(part, "planned", dname, path, list(others),
+                                        time.perf_counter() - t0, validation)
+                    break
+                side.update(status="validation_failed", validation=validation)
+                continue
+            walled = (outcome.certificate or {}).get("walled")
+            if outcome.status == NO_PATH and walled != "goal":
+                attempt = {"status": NO_PATH, "reason": outcome.reason,
+                           "message": outcome.message, "direction": dname, "proved": True}
+                break
+            if side["seconds"] >= self.assembly.settings.time_limit:
+                break  # out of time here: the other sides pose the same question
+        if step is None and attempt is None:
+            last = sides[-1] if sides else {"status": "skipped", "reason": "", "message": ""}
+            attempt = {"status": last["status"], "reason": last["reason"],
+                       "message": last["message"], "direction": sides[0]["direction"]
+                       if sides else None, "proved": False}
+        if attempt is not None:
+            attempt.update(obstacles=list(others), sides=sides,
+                           seconds=time.perf_counter() - t0)
+        self._planned[key] = (step, attempt or {})
+        return step, attempt or {}
+
+    # ---------------------------------------------------------------- a set of parts
+
+    def disassemble(self, names: list[str], base: str | None) -> _Run:
+        """Remove parts of ``names`` one at a time (straight removals of every part
+        first, then planned ones) until only the base (or one part) is left, or none
+        can leave."""
+        self.stats["runs"] += 1
+        remaining = [n for n in self.order if n in names]
+        steps: list[AssemblyStep] = []
+        attempts: dict[str, dict[str, Any]] = {}
+
+        def movable() -> list[str]:
+            return [n for n in reversed(remaining) if n != base]
+
+        while len(remaining) > 1 and movable():
+            self.pairs.step += 1
+            step = None
+            for part in movable():
+                step = self.straight(part, [n for n in remaining if n != part])
+                if step is not None:
+                    break
+            if step is None and self.plan_parts:
+                for part in movable():
+                    step, attempt = self.planned(part, [n for n in remaining if n != part])
+                    if step is not None:
+                        break
+                    attempts[part] = attempt
+            if step is None:
+                if not self.plan_parts:
+                    for part in movable():
+                        attempts.setdefault(part, {
+                            "status": "skipped", "reason": "plan_parts", "proved": False,
+                            "message": "no straight removal; planning was not asked for",
+                            "obstacles": [n for n in remaining if n != part]})
+                stuck = sorted(movable())
+                return _Run(steps, list(remaining), stuck,
+                            {k: v for k, v in attempts.items() if k in stuck})
+            steps.append(step)
+            attempts.pop(step.part, None)
+            remaining = [n for n in remaining if n != step.part]
+        return _Run(steps, list(remaining), [], {})
+
+    def irreducible(self, run: _Run, base: str | None) -> _Run:
+        """Shrink a stuck run's remaining parts to a set that still cannot be taken
+        apart but where leaving out any one part makes it possible (greedy deletion:
+        drop a part, re-run the search on the rest; when that gets stuck, continue from
+        what it could not take apart). Taking parts away never blocks a removal, so a
+        part kept once stays needed."""
+        core = run
+        tried: set[str] = set()
+        while True:
+            order = [base] if base in core.remaining else []
+            order += [n for n in core.remaining if n != base
+                      and not core.attempts.get(n, {}).get("proved")]
+            order += [n for n in core.remaining if n not in order]
+            candidate = next((n for n in order if n not in tried), None)
+            if candidate is None:
+                return core
+            tried.add(candidate)
+            rest = [n for n in core.remaining if n != candidate]
+            rest_base = base if base in rest else None
+            if len([n for n in rest if n != rest_base]) == 0 or len(rest) < 2:
+                continue  # a single part, or the base alone, is taken apart trivially
+            sub = self.disassemble(rest, rest_base)
+            if sub.stuck:
+                core = sub
+                log.info("interlocked set reduced to %s", ", ".join(sub.remaining))
+
+    def reuse(self) -> dict[str, Any]:
+        """What was computed and what was reused (see :class:`PairCache`)."""
+        several = sum(len(steps) > 1 for steps in self.pairs.uses.values())
+        return {**self.pairs.stats, "pairs": len(self.pairs.computed),
+                "pairs_reused_across_steps": several, "steps": self.pairs.step, **self.stats}
+
+
+def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=None,
+                  progress: bool | None = False, plan_parts: bool = True,
+                  minimize: bool = True) -> AssemblyResult:
+    """Find an assembly sequence by disassembly (see the module docstring).
+
+    Args:
+        assembly: from :func:`load_assembly`.
+        planner: for the full planning steps: ``"minkplan"`` or ``"ompl:NAME"``.
+        cache_dir: decomposition cache (the planner's and the pair cache's).
+        progress: the planner's status line.
+        plan_parts: run the planner when no straight removal exists (else give up there).
+        minimize: when stuck, shrink the stuck parts to an irreducible interlocked set
+            (more searches on subsets, sharing every cache).
+    """
+    t_start = time.perf_counter()
+    search = _Search(assembly, planner=planner, cache_dir=cache_dir, progress=progress,
+                     plan_parts=plan_parts)
+    base = assembly.base
+    run = search.disassemble([p.name for p in assembly.parts], base)
+    source = {"used": search.source.kind, "why": search.source.why}
+    if not run.stuck:
+        return AssemblyResult(assembly, SEQUENCE, run.steps, [], base,
+                              assembly.contact_tolerance, time.perf_counter() - t_start,
+                              reuse=search.reuse(), source=source)
+    if minimize and plan_parts:
+        core = search.irreducible(run, base)
+        interlocked = sorted(core.remaining)
+    else:  # the stuck movable parts, as found
+        core, interlocked = run, list(run.stuck)
+    return AssemblyResult(assembly, INTERLOCKED, run.steps, interlocked, base,
+                          assembly.contact_tolerance, time.perf_counter() - t_start,
+                          dict(run.attempts), stuck=list(run.stuck),
+                          core_attempts=dict(core.attempts),
+                          reuse=search.reuse(), source=source)
+
+
+def removal_problems(result: AssemblyResult) -> list[dict[str, Any]]:
+    """The removal problems a result was decided on: every removal step (expected
+    ``found``; the goal on the side it left by, or along its straight direction) and,
+    for an interlocked result, each movable part of the interlocked set with the rest of
+    the set present (expected ``no_path`` when that was proved)."""
+    problems = []
+    for step in result.removal:
+        end = np.asarray(step.removal[-1], dtype=np.float64)
+        direction = step.direction if step.direction in DIRECTIONS else end
+        problems.append({"part": step.part, "obstacles": list(step.obstacles),
+                         "direction": direction, "expected": FOUND, "method": step.method})
+    for name in result.interlocked:
+        attempt = result.core_attempts.get(name)
+        if name == result.base or not attempt:
+            continue
+        problems.append({"part": name, "obstacles": list(attempt["obstacles"]),
+                         "direction": attempt.get("direction") or GOAL_SIDE,
+                         "expected": NO_PATH if attempt.get("proved") else "unknown",
+                         "method": "interlocked"})
+    return problems

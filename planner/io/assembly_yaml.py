@@ -1,0 +1,133 @@
+"""The assembly YAML reader (the format is in ``docs/assembly.md``).
+
+Entry points: :func:`read_assembly` (a file) and :func:`parse_assembly` (text or a
+mapping), both to a validated :class:`~planner.problem.Assembly`: parts read like a
+scenario's obstacles (:mod:`planner.io.parts`), posed at their assembled pose, the
+contact tolerance given or defaulted, and the assembled pose checked for overlaps beyond
+it (FCL). Errors as for scenarios: ``"<file>:<line>: <field>: <problem>"``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner.errors import ScenarioError
+from planner.problem import DEFAULT_CONTACT_REL, Assembly, Part
+from planner.validation import FclChecker
+
+from .fields import (
+    Document,
+    check_mapping,
+    field_error,
+    load_yaml,
+    name_of,
+    real,
+    settings_from_mapping,
+)
+from .parts import OBSTACLE_KEYS, assign_names, build_mesh, object_spec
+
+__all__ = ["parse_assembly", "read_assembly"]
+
+
+TOP_LEVEL_KEYS = ("name", "units", "parts", "base", "contact_tolerance", "planner")
+
+
+def read_assembly(path: str | os.PathLike[str]) -> Assembly:
+    """Read and validate an assembly YAML file (mesh paths relative to its folder).
+
+    Raises:
+        ScenarioError: one line, ``"<file>:<line>: <field>: <problem>"``.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ScenarioError(f"{path}: assembly file not found "
+                            f"(looked in {path.parent.resolve()})") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise ScenarioError(f"{path}: cannot read the assembly file: {error}") from None
+    return _parse(text, Document(str(path)), path.parent, path.resolve(), path.stem)
+
+
+def parse_assembly(source: str | Mapping[str, Any], base_dir: str | os.PathLike[str] | None = None,
+                   *, filename: str | None = None) -> Assembly:
+    """An :class:`Assembly` from YAML text or a mapping (see :func:`read_assembly`)."""
+    base = Path(base_dir) if base_dir is not None else Path.cwd()
+    return _parse(source, Document(filename or "<assembly>"), base, None, "assembly")
+
+
+def _parse(source, document: Document, base_dir: Path, path: Path | None,
+           default_name: str) -> Assembly:
+    data = load_yaml(source, document) if isinstance(source, str) else source
+    try:
+        return _build(data, base_dir, path, default_name)
+    except ScenarioError as error:
+        raise document.locate(error) from None
+
+
+def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> Assembly:
+    if data is None:
+        raise field_error("", "the assembly is empty; it needs a list of parts")
+    if isinstance(data, Mapping) and "robot" in data and "parts" not in data:
+        raise field_error("robot", "this looks like a planning scenario (minkplan plan); an "
+                              "assembly lists its parts under 'parts:'")
+    top = check_mapping(data, "", TOP_LEVEL_KEYS, ("parts",))
+    name = default_name if top.get("name") is None else name_of(top["name"], "name")
+    units = "unitless" if top.get("units") is None else name_of(top["units"], "units")
+    settings = settings_from_mapping(top.get("planner"), field="planner")
+    raw = top["parts"]
+    if not isinstance(raw, (list, tuple)) or len(raw) < 1:
+        raise field_error("parts", "expected a non-empty list of parts")
+    specs = [object_spec(value, f"parts[{i}]", OBSTACLE_KEYS, base_dir)
+             for i, value in enumerate(raw)]
+    names = assign_names(specs)
+    base = None
+    if top.get("base") is not None:
+        base = name_of(top["base"], "base")
+        if base not in names:
+            raise field_error("base", f"'{base}' is not a part (parts: {', '.join(names)})")
+    delta = None
+    if top.get("contact_tolerance") is not None:
+        delta = real(top["contact_tolerance"], "contact_tolerance")
+        if delta < 0:
+            raise field_error("contact_tolerance", f"must be >= 0, got {delta:g}")
+    if settings.contact_tolerance is not None:
+        if delta is not None and not math.isclose(delta, settings.contact_tolerance):
+            raise field_error("planner.contact_tolerance",
+                         f"{settings.contact_tolerance:g} differs from contact_tolerance "
+                         f"{delta:g}; give it once")
+        delta = settings.contact_tolerance
+    cache: dict = {}
+    parts = []
+    for spec, part_name in zip(specs, names):
+        mesh, source = build_mesh(spec, cache)
+        mesh.apply_transform(spec.pose.matrix)
+        parts.append(Part(part_name, mesh, source, checked=True))
+    if delta is None:
+        bounds = np.array([p.mesh.bounds for p in parts])
+        delta = DEFAULT_CONTACT_REL * float(np.linalg.norm(bounds[:, 1].max(axis=0)
+                                                           - bounds[:, 0].min(axis=0)))
+    settings = dataclasses.replace(settings, contact_tolerance=delta)
+    # The assembled pose must be valid: no part overlaps another beyond the tolerance.
+    for i, part in enumerate(parts):
+        others = [p for p in parts[i + 1:]]
+        if not others:
+            continue
+        checker = FclChecker(part.mesh, [p.mesh for p in others], contact_tolerance=delta,
+                             names=[p.name for p in others])
+        if not checker.is_valid(np.zeros(3)):
+            hit = checker.colliding_obstacle(np.zeros(3))
+            other = hit[0] if hit else "another part"
+            raise field_error(f"parts[{i}]", f"part '{part.name}' collides with '{other}' in "
+                                        f"the assembled pose (overlap beyond contact "
+                                        f"tolerance {delta:g}, or clamped between faces "
+                                        f"on opposite sides)")
+    return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
+                    settings=settings, path=path)

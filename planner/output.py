@@ -1,0 +1,81 @@
+"""Output files: JSON-ready values and writes that never leave half a file.
+
+Entry points: :func:`jsonable` (numpy scalars and arrays to Python ones, non-finite floats
+to ``None``), :func:`atomic_write` (a temporary file in the same folder, then a rename),
+:func:`write_json`, :func:`unwritable` (why a file could not be written there, checked
+before the work).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["atomic_write", "jsonable", "unwritable", "write_json"]
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy scalars and arrays turned into Python ones, non-finite floats
+    into ``None`` (JSON has no inf/nan)."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, str):
+        return str(value)  # str enums (PlanStatus) as their value
+    if isinstance(value, (np.integer, int)):
+        return int(value)
+    if isinstance(value, (np.floating, float)):
+        number = float(value)
+        return number if math.isfinite(number) else None
+    return value
+
+
+def unwritable(path: Path) -> str | None:
+    """Why a file cannot be written at ``path`` (its missing folders would be created), or
+    ``None``: checked before the work, so a bad path costs nothing."""
+    if path.is_dir():
+        return "is a directory"
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                return f"{parent} is a file, not a folder"
+            if not os.access(parent, os.W_OK | os.X_OK):
+                return f"folder {parent} is not writable"
+            return None
+    return None
+
+
+def atomic_write(path: Path, write: Callable[[str], Any]) -> None:
+    """Write via a temporary file in the same directory (``write(temporary path)``), then
+    rename: never half a file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual permissions
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def write_json(path: Path, document: Any, indent: int | None = 2) -> None:
+    """``document`` as JSON (strict: no NaN), written atomically."""
+    text = json.dumps(document, indent=indent, allow_nan=False) + "\n"
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text))

@@ -1,0 +1,51 @@
+"""No-path certificates as ``report.json`` and ``certificate.json`` keep them: the
+walled-off component of EMPTY and MIXED leaves and the FULL leaves around it, each
+re-verified by the core and named by the obstacle (or the bounds) that blocks it."""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+__all__ = ["certificate_document"]
+
+
+def certificate_document(cs, raw: dict[str, Any], ends: dict[str, np.ndarray], *, exact: bool,
+                         source_kind: str, relative_to: str,
+                         obstacle_of: Callable[[int], str]) -> dict[str, Any]:
+    """The certificate as stored: summary, the walled-off component and its wall cells
+    with the primitive and obstacle verified for each (``raw``: the core's)."""
+    prims = np.asarray(raw["wall_prims"], dtype=np.int64)
+    boxes = np.asarray(raw["wall_boxes"], dtype=np.float64)
+    leaves = np.asarray(raw["wall_leaves"], dtype=np.int64)
+    obstacles = [obstacle_of(int(p)) for p in prims]
+    walled = "start" if raw["walls_around_start"] else "goal"
+    component = [int(i) for i in raw["component_leaves"]]
+    comp_boxes = np.array([cs.cell_box(i) for i in component]).reshape(-1, 2, 3)
+    volume = float(np.prod(comp_boxes[:, 1] - comp_boxes[:, 0], axis=1).sum())
+    return {
+        "exact": exact,
+        "source": source_kind,
+        "relative_to": relative_to,
+        "verified": bool(raw["verified"]),
+        "walled": walled,
+        "walled_point": ends[walled].tolist(),
+        "component_cells": len(component),
+        "component_volume": volume,
+        "start_component_cells": int(raw["start_component_size"]),
+        "goal_component_cells": int(raw["goal_component_size"]),
+        "components": int(raw["n_components"]),
+        "wall_cells": int(len(prims)),
+        "wall_cells_without_primitive": int((prims < 0).sum()),
+        "wall_cells_by_obstacle": dict(Counter(obstacles)),
+        "floor": cs.floor,
+        "contact": "touching counts as collision (contact tolerance 0 for the proof)",
+        "walls": [
+            {"leaf": int(leaf), "box": box.tolist(), "primitive": int(p), "obstacle": name}
+            for leaf, box, p, name in zip(leaves, boxes, prims, obstacles, strict=True)
+        ],
+        "component": {"leaves": component, "boxes": comp_boxes.tolist()},
+    }

@@ -1,0 +1,78 @@
+"""Bookkeeping of a planning run: seconds per stage, the status line, and the parts of
+``report.json`` that describe the octree (cells per label and level)."""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+__all__ = ["LABELS", "Clock", "Progress", "cell_report", "smallest_mixed_cell"]
+
+LABELS = ("empty", "full", "mixed")
+"""Octree labels in the core's order (``level_counts`` columns)."""
+
+
+class Clock:
+    """Seconds per stage, added up over the run (``clock.seconds``)."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = {}
+
+    def add(self, key: str, seconds: float) -> None:
+        self.seconds[key] = self.seconds.get(key, 0.0) + seconds
+
+    @contextmanager
+    def stage(self, key: str) -> Iterator[None]:
+        """Time the ``with`` block as stage ``key``."""
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.add(key, time.perf_counter() - t0)
+
+
+class Progress:
+    """One status line on stderr, rewritten in place (only when asked or on a TTY)."""
+
+    def __init__(self, enabled: bool | None) -> None:
+        self.enabled = sys.stderr.isatty() if enabled is None else bool(enabled)
+        self.shown = False
+
+    def show(self, text: str) -> None:
+        if self.enabled:
+            sys.stderr.write(f"\r\033[K{text}")
+            sys.stderr.flush()
+            self.shown = True
+
+    def close(self) -> None:
+        if self.shown:
+            sys.stderr.write("\r\033[K")
+            sys.stderr.flush()
+
+
+def smallest_mixed_cell(cs) -> float:
+    """Size of the smallest MIXED leaf of a native C-space (the coarse size if none)."""
+    for level, counts in enumerate(cs.level_counts()):
+        if counts[2] > 0:
+            return cs.floor * 2**level
+    return cs.floor * 2**cs.coarse_level
+
+
+def cell_report(counts: list, floor: float) -> dict[str, Any]:
+    """``report.json``'s ``cells``: leaves per label in total and per level (with its
+    cell size), from the core's ``level_counts``."""
+    per_level = []
+    totals: Counter[str] = Counter()
+    for level, c in enumerate(counts):
+        if sum(c) == 0:
+            continue
+        entry: dict[str, Any] = {"level": level, "size": floor * 2**level}
+        for name, n in zip(LABELS, c, strict=True):
+            entry[name] = int(n)
+            totals[name] += int(n)
+        per_level.append(entry)
+    return {"total": dict(totals), "leaves": int(sum(totals.values())), "per_level": per_level}
