@@ -11,6 +11,7 @@ import json
 import logging
 import sys
 from pathlib import Path
+from typing import NoReturn
 
 _MESH_SUFFIXES = {".stl", ".obj", ".ply", ".off", ".glb"}
 
@@ -28,7 +29,7 @@ class _Parser(argparse.ArgumentParser):
     """Argument errors as one line (``minkplan: error: …``), exit code 2, like every other
     input error; ``--help`` shows the usage."""
 
-    def error(self, message: str):  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         sys.stderr.write(f"minkplan: error: {message} (see {self.prog} --help)\n")
         raise SystemExit(2)
 

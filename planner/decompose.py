@@ -157,10 +157,10 @@ def decompose(
 
     cached = _load_entry(entry, key, name)
     if cached is not None:
-        pieces, meta = cached
+        cached_pieces, meta = cached
         log.debug("%s: decomposition cache hit %s", name, entry)
         return Decomposition(
-            pieces=pieces,
+            pieces=cached_pieces,
             exact=bool(meta["exact"]),
             excess=float(meta["excess"]),
             deficit=float(meta["deficit"]),

@@ -57,9 +57,12 @@ ExactSetting = bool | Literal["auto"]
 def check_exact(value: Any) -> ExactSetting:
     """The ``exact`` setting: ``True``, ``False`` or ``"auto"``, also written as the strings
     ``"true"``, ``"false"``, ``"auto"`` (any case). ``ValueError`` otherwise."""
-    if isinstance(value, str) and value.strip().lower() in ("true", "false", "auto"):
-        return {"true": True, "false": False, "auto": "auto"}[value.strip().lower()]
-    if value is True or value is False or value == "auto":
+    word = value.strip().lower() if isinstance(value, str) else None
+    if word == "auto" or (value == "auto" and isinstance(value, str)):
+        return "auto"
+    if word in ("true", "false"):
+        return word == "true"
+    if isinstance(value, bool):
         return value
     raise ValueError(f"expected auto, true or false, got {describe_value(value)}")
 

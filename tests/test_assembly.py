@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from benchmarks.removals import benchmark_removals
 
 import planner.sources as sources_module
-from benchmarks.removals import benchmark_removals
 from planner.assembly import (
     DIRECTIONS,
     PairCache,

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from planner.cli import main
-from planner.planning import plan
 from planner.io import load_scenario
+from planner.planning import plan
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 PATH_KEYS = {"status", "waypoints", "length", "clearance", "timings", "validation"}
@@ -163,7 +163,7 @@ def test_installed_entry_point(tmp_path, cache_dir):
 OMPLAPP = Path(__file__).resolve().parents[2] / "shared" / "assets" / "omplapp" / "Easy.cfg"
 
 
-@pytest.mark.skipif(not OMPLAPP.is_file(), reason="OMPL.app assets not available")
+@pytest.mark.assets
 def test_omplapp_problem_file(tmp_path, capsys, cache_dir):
     out = tmp_path / "easy"
     code, stdout, err = run(["plan", str(OMPLAPP), "--out", str(out), "--cache-dir",

@@ -37,10 +37,10 @@ import planner
 from planner._minkowski_core import CSpace, ExactSum
 from planner.cli import main
 from planner.errors import InvalidMeshError
+from planner.io import load_scenario
 from planner.meshes import mirror, repair_mesh, split_solid
 from planner.minkowski import convex_bodies, mesh_arrays
 from planner.planning import FOUND, NO_PATH, plan
-from planner.io import load_scenario
 from planner.problem import Body
 from planner.validation import FclChecker
 
@@ -320,6 +320,7 @@ def turned(mesh: trimesh.Trimesh, scale: float) -> trimesh.Trimesh:
     return out
 
 
+@pytest.mark.assets
 def test_asset_pairs_are_what_the_comment_says():
     for name, (clearance, dz) in PAIRS.items():
         bottle = load_repaired(ASSETS / f"{name}_cube_bottle.obj", f"{name} bottle")
@@ -359,6 +360,7 @@ def asset_scenarios(tmp_path_factory):
     return out
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize("name", sorted(PAIRS))
 def test_asset_peg_inserted_with_1mm_clearance(asset_scenarios, name):
     scenario = asset_scenarios[name]
@@ -380,6 +382,7 @@ def test_asset_peg_inserted_with_1mm_clearance(asset_scenarios, name):
     assert len(deep) and np.all(np.abs(deep[:, [0, 2]] - scenario.goal[[0, 2]]) < 5.0)
 
 
+@pytest.mark.assets
 def test_u_pair_cannot_be_inserted():
     """The U asset: the bottle's tongue is 20.0 mm wide, the peg's slot 19.2 mm, so no
     lateral offset lets the peg in even 1 mm. The exact source and FCL agree."""
@@ -602,7 +605,9 @@ def membership_samples(obstacle, robot, seed=0, n_uniform=1500, n_boundary=300):
     return uniform, near
 
 
-@pytest.mark.parametrize("name", list(PAIRS_MEMBERSHIP))
+@pytest.mark.parametrize("name", [
+    pytest.param(n, marks=pytest.mark.assets) if n.startswith("asset") else n
+    for n in PAIRS_MEMBERSHIP])
 def test_c_obstacle_membership_agrees_with_fcl(name):
     make_o, make_r, nesting = PAIRS_MEMBERSHIP[name]
     obstacle, robot = make_o(), make_r()

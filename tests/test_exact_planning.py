@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner.planning import plan
 from planner.io import load_scenario
+from planner.planning import plan
 
 
 def plate_with_hole(hole: float, half: float = 40.0, thickness: float = 2.0) -> trimesh.Trimesh:

@@ -20,7 +20,7 @@ import trimesh
 from trimesh.collision import CollisionManager
 
 from planner.errors import ScenarioError
-from planner.meshes import load_mesh
+from planner.io import load_scenario
 from planner.io.omplapp import (
     APP_FROM_ZUP,
     load_omplapp,
@@ -29,7 +29,7 @@ from planner.io.omplapp import (
     read_omplapp_path,
     robot_reference_point,
 )
-from planner.io import load_scenario
+from planner.meshes import load_mesh
 
 ASSETS = Path(__file__).resolve().parents[2] / "shared" / "assets" / "omplapp"
 PROBLEMS = ["Easy", "cubicles"]
@@ -82,6 +82,7 @@ def surface_check(name: str, frame: np.ndarray) -> tuple[int, int]:
 # ------------------------------------------------------------------------------ import
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize("name", PROBLEMS)
 def test_problem_loads_as_translational_scenario(scenarios, name):
     scenario = scenarios[name]
@@ -103,6 +104,7 @@ def test_problem_loads_as_translational_scenario(scenarios, name):
     assert load_scenario(ASSETS / f"{name}.cfg").start.tolist() == scenario.start.tolist()
 
 
+@pytest.mark.assets
 def test_what_the_import_changed_is_recorded(scenarios):
     easy, cubicles = scenarios["Easy"], scenarios["cubicles"]
     # Easy: a floor-and-side-wall frame that is closed but inside out in part (a surface),
@@ -119,6 +121,7 @@ def test_what_the_import_changed_is_recorded(scenarios):
         assert any(note.startswith("robot: dropped") for note in scenario.notes)
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize("name", PROBLEMS)
 def test_shipped_meshes_are_double_sided_and_not_watertight(name):
     for part in ("robot", "env"):
@@ -131,6 +134,7 @@ def test_shipped_meshes_are_double_sided_and_not_watertight(name):
         assert np.all(counts == 2)
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize("name", PROBLEMS)
 def test_robot_is_relative_to_the_mean_of_its_vertices(scenarios, name):
     raw = read_app_mesh(ASSETS / f"{name}_robot.dae")
@@ -143,6 +147,7 @@ def test_robot_is_relative_to_the_mean_of_its_vertices(scenarios, name):
 # ----------------------------------------------------------------------- frame checks
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize("name", PROBLEMS)
 def test_volume_is_the_world_box_in_the_app_frame(name):
     lo, hi = volume(name)
@@ -153,6 +158,7 @@ def test_volume_is_the_world_box_in_the_app_frame(name):
         assert not np.allclose(raw.bounds @ frame.T, [lo, hi], atol=1.0)
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize("name", PROBLEMS)
 def test_reference_path_starts_and_ends_at_the_cfg_poses(scenarios, name):
     rows = read_omplapp_path(ASSETS / f"{name}.path")
@@ -167,6 +173,7 @@ def test_reference_path_starts_and_ends_at_the_cfg_poses(scenarios, name):
     assert np.all((rows[:, :3] >= lo) & (rows[:, :3] <= hi))
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize("name", PROBLEMS)
 def test_reference_path_is_free_against_the_imported_solids(scenarios, name):
     """Every state of OMPL.app's solution, as solids: no surface contact (FCL), no robot
@@ -190,6 +197,7 @@ def test_reference_path_is_free_against_the_imported_solids(scenarios, name):
     assert min(clearances) > 0.5  # cubicles' tightest state clears by ~0.9
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize("name", PROBLEMS)
 def test_translational_start_and_goal_are_free(scenarios, name):
     scenario = scenarios[name]
@@ -203,6 +211,7 @@ def test_translational_start_and_goal_are_free(scenarios, name):
             assert not body.mesh.contains(placed.vertices[:1])[0]
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize("name", PROBLEMS)
 def test_reference_path_is_free_against_the_raw_surfaces_only_in_the_app_frame(name):
     assert surface_check(name, APP_FROM_ZUP) == (0, 0)
@@ -232,11 +241,13 @@ def line_of(path: Path, prefix: str) -> int:
     raise AssertionError(prefix)
 
 
+@pytest.mark.assets
 def test_copied_problem_loads(tmp_path):
     scenario = load_omplapp(copy_problem(tmp_path, "Easy"))
     assert len(scenario.obstacles) == 4
 
 
+@pytest.mark.assets
 @pytest.mark.parametrize(("edit", "field", "line_prefix", "expected"), [
     (lambda t: t.replace("goal.z = -400.0\n", ""), "problem.goal.z", None,
      "missing required field"),
@@ -266,6 +277,7 @@ def test_cfg_errors_name_key_and_line(tmp_path, edit, field, line_prefix, expect
     assert expected in str(error)
 
 
+@pytest.mark.assets
 def test_unusable_robot_mesh_is_reported(tmp_path):
     path = copy_problem(tmp_path, "Easy")
     (tmp_path / "Easy_robot.dae").write_text("<COLLADA></COLLADA>")

@@ -13,8 +13,8 @@ from scipy.spatial import ConvexHull
 
 from planner._minkowski_core import CSpace, Primitives
 from planner.decompose import decompose
-from planner.planning import FOUND, NO_PATH, NOT_FOUND, OctreeParams, plan
 from planner.io import load_scenario
+from planner.planning import FOUND, NO_PATH, NOT_FOUND, OctreeParams, plan
 from planner.validation import FclChecker
 
 try:  # tests/ as a package or as a plain directory on sys.path

@@ -12,9 +12,9 @@ import pytest
 import trimesh
 
 from planner.errors import InvalidParameterError, ScenarioError
-from planner.primitives import make_primitive
 from planner.io import load_scenario, parse_scenario
 from planner.io.fields import parse_orientation, settings_from_mapping
+from planner.primitives import make_primitive
 from planner.problem import PlannerSettings as Settings
 from planner.problem import Pose, default_bounds
 

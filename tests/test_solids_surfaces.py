@@ -114,8 +114,6 @@ def test_a_path_around_a_surface_box_is_found_and_valid():
 def floor_and_post() -> Scenario:
     """The problem of the regression: Easy's imported frame, one 20×70×20 box post, the
     robot resting just above the floor (bounds y in [5, 8])."""
-    if not EASY.is_file():
-        pytest.skip(f"needs the shared assets ({EASY} is absent in this clone)")
     easy = planner.load_scenario(EASY)
     frame = next(b for b in easy.obstacles if len(b.mesh.faces) == 52)
     post = trimesh.creation.box(extents=[20, 70, 20])
@@ -128,6 +126,7 @@ def floor_and_post() -> Scenario:
                     settings=PlannerSettings(time_limit=20, seed=1))
 
 
+@pytest.mark.assets
 def test_easy_frame_is_a_surface_and_the_floor_problem_is_solved(floor_and_post):
     frame = floor_and_post.obstacles[0]
     assert not frame.solid and "winding number -1" in frame.kind_reason

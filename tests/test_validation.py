@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from planner.meshes import winding_numbers
 from planner.validation import (
     FclChecker,
     MotionValidator,
@@ -17,7 +18,6 @@ from planner.validation import (
     ompl_check_path,
     resolution_for_clearance,
 )
-from planner.meshes import winding_numbers
 from planner.validation.ompl_check import DEFAULT_RESOLUTION, MIN_RESOLUTION
 
 BOUNDS = [[-5.0, -5.0, -5.0], [5.0, 5.0, 5.0]]

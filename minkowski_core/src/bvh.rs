@@ -44,11 +44,15 @@ impl Bvh {
                 Aabb::new(b.min.min(c), b.max.max(c))
             });
             let e = cb.extent();
-            let axis = if e.x >= e.y && e.x >= e.z { 0 } else if e.y >= e.z { 1 } else { 2 };
+            let axis = if e.x >= e.y && e.x >= e.z {
+                0
+            } else if e.y >= e.z {
+                1
+            } else {
+                2
+            };
             let mid = (lo + hi) / 2;
-            order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
-                boxes[a as usize].center()[axis].total_cmp(&boxes[b as usize].center()[axis])
-            });
+            order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| boxes[a as usize].center()[axis].total_cmp(&boxes[b as usize].center()[axis]));
             let left = nodes.len();
             nodes.push(Node { aabb: Aabb::empty(), start: 0, count: 0, left: 0 });
             nodes.push(Node { aabb: Aabb::empty(), start: 0, count: 0, left: 0 });

@@ -23,6 +23,7 @@ pub mod polytope;
 pub mod roadmap;
 pub mod surface;
 mod union;
+pub mod util;
 
 pub use bvh::Bvh;
 pub use error::{CoreError, CoreResult};

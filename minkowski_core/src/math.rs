@@ -42,23 +42,13 @@ impl Aabb {
     /// Closed-box overlap test.
     #[inline]
     pub fn overlaps(&self, o: &Aabb) -> bool {
-        self.min.x <= o.max.x
-            && o.min.x <= self.max.x
-            && self.min.y <= o.max.y
-            && o.min.y <= self.max.y
-            && self.min.z <= o.max.z
-            && o.min.z <= self.max.z
+        self.min.x <= o.max.x && o.min.x <= self.max.x && self.min.y <= o.max.y && o.min.y <= self.max.y && self.min.z <= o.max.z && o.min.z <= self.max.z
     }
 
     /// Whether `p` lies in the closed box.
     #[inline]
     pub fn contains_point(&self, p: Vec3) -> bool {
-        p.x >= self.min.x
-            && p.x <= self.max.x
-            && p.y >= self.min.y
-            && p.y <= self.max.y
-            && p.z >= self.min.z
-            && p.z <= self.max.z
+        p.x >= self.min.x && p.x <= self.max.x && p.y >= self.min.y && p.y <= self.max.y && p.z >= self.min.z && p.z <= self.max.z
     }
 
     /// Centre.

@@ -2,11 +2,11 @@
 //! [`CoreError`] to the exception classes of `planner.errors` in one place.
 
 use crate::error::CoreError;
+use crate::exact::{ExactSource, TriMesh};
 use crate::math::{Aabb, Vec3};
 use crate::minkowski::{pairwise_sums, PolytopeSet, SumKind};
 use crate::octree::Octree;
 use crate::polytope::ConvexPolytope;
-use crate::exact::{ExactSource, TriMesh};
 use crate::union::{approximate_solid, approximate_union, UnionParams, UnionResult};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -82,12 +82,7 @@ impl Primitives {
         if pts.is_empty() {
             return Err(CoreError::Empty { what: "pieces".into() }.into());
         }
-        let polys = py.detach(move || {
-            pts.par_iter()
-                .enumerate()
-                .map(|(i, p)| ConvexPolytope::try_from_points(p, &format!("piece {i}")))
-                .collect::<Result<Vec<_>, _>>()
-        })?;
+        let polys = py.detach(move || pts.par_iter().enumerate().map(|(i, p)| ConvexPolytope::try_from_points(p, &format!("piece {i}"))).collect::<Result<Vec<_>, _>>())?;
         Ok(Primitives { inner: Arc::new(PolytopeSet::new(polys)) })
     }
 
@@ -108,7 +103,7 @@ impl Primitives {
     }
 
     /// Vertices, (n, 3), and boundary triangles, (m, 3), of primitive `i`.
-    fn polytope<'py>(&self, py: Python<'py>, i: usize) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>)> {
+    fn polytope<'py>(&self, py: Python<'py>, i: usize) -> PyResult<MeshArrays<'py>> {
         let p = self.inner.polys.get(i).ok_or_else(|| InvalidParameterError::new_err(format!("primitive index {i} out of range")))?;
         let v = to_array2(p.vertices.iter().map(|v| v.to_array())).into_pyarray(py);
         let flat: Vec<i64> = p.triangles.iter().flat_map(|t| t.iter().map(|&x| x as i64)).collect();
@@ -263,7 +258,12 @@ fn crossing_windings<'py>(py: Python<'py>, vertices: PyReadonlyArray2<'py, f64>,
 /// The winding numbers of `points` (k, 3) for the closed mesh (vertices (n, 3), faces
 /// (m, 3)): (k,) int64, the smallest int64 for points on the surface. Parallel.
 #[pyfunction]
-fn winding_numbers<'py>(py: Python<'py>, vertices: PyReadonlyArray2<'py, f64>, faces: PyReadonlyArray2<'py, i64>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+fn winding_numbers<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    points: PyReadonlyArray2<'py, f64>,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
     let mesh = closed_mesh(&vertices, &faces)?;
     let pts = points_of(&points, "points")?;
     let out: Vec<i64> = py.detach(|| pts.par_iter().map(|p| mesh.winding(*p).unwrap_or(i64::MIN)).collect());
@@ -407,6 +407,9 @@ impl PyCSpace {
         }
     }
 }
+
+/// Vertices (n, 3) and triangles (m, 3) of a mesh.
+type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
 
 /// Facet normals (k, 3) and offsets (k,) of a primitive.
 type Planes<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>);

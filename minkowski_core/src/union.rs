@@ -95,7 +95,7 @@ pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<
 /// # Errors
 /// As [`approximate_union`].
 pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionParams) -> CoreResult<UnionResult> {
-    if !(params.eps > 0.0) || !params.eps.is_finite() {
+    if params.eps <= 0.0 || !params.eps.is_finite() {
         return Err(CoreError::InvalidParameter { name: "eps".into(), value: params.eps, detail: "must be positive and finite".into() });
     }
     let mut h = cell_size_for_eps(params.eps);

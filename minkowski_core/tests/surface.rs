@@ -5,15 +5,7 @@ use minkowski_core::*;
 use std::collections::HashMap;
 
 fn boxp(min: [f64; 3], max: [f64; 3]) -> Vec<Vec3> {
-    (0..8)
-        .map(|k| {
-            Vec3::new(
-                if k & 1 == 1 { max[0] } else { min[0] },
-                if k & 2 == 2 { max[1] } else { min[1] },
-                if k & 4 == 4 { max[2] } else { min[2] },
-            )
-        })
-        .collect()
+    (0..8).map(|k| Vec3::new(if k & 1 == 1 { max[0] } else { min[0] }, if k & 2 == 2 { max[1] } else { min[1] }, if k & 4 == 4 { max[2] } else { min[2] })).collect()
 }
 
 fn set_of(boxes: &[([f64; 3], [f64; 3])]) -> PolytopeSet {
@@ -84,12 +76,7 @@ fn cube_surface_is_closed_and_within_the_bound() {
 #[test]
 fn square_ring_keeps_its_hole() {
     // four bars around a 1×1 hole: genus 1
-    let set = set_of(&[
-        ([0.0, 0.0, 0.0], [3.0, 1.0, 1.0]),
-        ([0.0, 2.0, 0.0], [3.0, 3.0, 1.0]),
-        ([0.0, 0.0, 0.0], [1.0, 3.0, 1.0]),
-        ([2.0, 0.0, 0.0], [3.0, 3.0, 1.0]),
-    ]);
+    let set = set_of(&[([0.0, 0.0, 0.0], [3.0, 1.0, 1.0]), ([0.0, 2.0, 0.0], [3.0, 3.0, 1.0]), ([0.0, 0.0, 0.0], [1.0, 3.0, 1.0]), ([2.0, 0.0, 0.0], [3.0, 3.0, 1.0])]);
     let r = run(&set, 0.1);
     check_closed_oriented(&r.surface);
     assert_eq!(euler(&r.surface), 0, "genus 1");
@@ -150,7 +137,6 @@ fn set_queries() {
     let iv = set.segment_intervals(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(4.0, 0.5, 0.5));
     assert_eq!(iv.len(), 2);
 }
-
 
 #[test]
 fn simplification_keeps_the_surface_and_drops_flat_interiors() {

@@ -216,8 +216,9 @@ class _Search:
                               "message": str(error),
                               "seconds": time.perf_counter() - t_side})
                 continue
-            side = {"direction": dname, "status": outcome.status, "reason": outcome.reason,
-                    "message": outcome.message, "seconds": time.perf_counter() - t_side}
+            side: dict[str, Any] = {
+                "direction": dname, "status": outcome.status, "reason": outcome.reason,
+                "message": outcome.message, "seconds": time.perf_counter() - t_side}
             sides.append(side)
             if outcome.status == FOUND:
                 path = np.asarray(outcome.waypoints, dtype=np.float64)

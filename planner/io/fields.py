@@ -277,7 +277,7 @@ def settings_from_mapping(mapping: Mapping[str, Any] | None, *,
     if mapping is None:
         return PlannerSettings()
     values = check_mapping(mapping, field, PlannerSettings.keys())
-    kwargs = {}
+    kwargs: dict[str, Any] = {}
     for name, value in values.items():
         if value is None:
             continue

@@ -171,9 +171,9 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> S
     robot = Robot(names[0], robot_mesh, robot_source, checked=True)
 
     obstacles = []
-    for spec, body_name in zip(obstacle_specs, names[1:]):
-        mesh, source = build_mesh(spec, cache)
-        mesh.apply_transform(spec.pose.matrix)
+    for obstacle_spec, body_name in zip(obstacle_specs, names[1:], strict=True):
+        mesh, source = build_mesh(obstacle_spec, cache)
+        mesh.apply_transform(obstacle_spec.pose.matrix)
         obstacles.append(Body(body_name, mesh, source, checked=True))
 
     if explicit_bounds is None:

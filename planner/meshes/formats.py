@@ -216,20 +216,28 @@ def _first_line(exc: BaseException) -> str:
     return text
 
 
+def _concatenated(meshes: list[trimesh.Trimesh]) -> trimesh.Trimesh:
+    """One mesh of several, as ``trimesh.util.concatenate`` makes it."""
+    mesh = trimesh.util.concatenate(meshes)
+    assert isinstance(mesh, trimesh.Trimesh)
+    return mesh
+
+
 def _as_single_mesh(loaded, label: str) -> trimesh.Trimesh:
     """Turn what ``trimesh.load(force="mesh")`` returned into one Trimesh."""
+    mesh: trimesh.Trimesh
     if isinstance(loaded, trimesh.Trimesh):
         mesh = loaded
     elif isinstance(loaded, trimesh.Scene):
         meshes = [g for g in loaded.dump() if isinstance(g, trimesh.Trimesh)]
         if not meshes:
             raise InvalidMeshError(f"{label}: no triangle meshes in file")
-        mesh = trimesh.util.concatenate(meshes)
+        mesh = _concatenated(meshes)
     elif isinstance(loaded, (list, tuple)):
         meshes = [g for g in loaded if isinstance(g, trimesh.Trimesh)]
         if not meshes:
             raise InvalidMeshError(f"{label}: no triangle meshes in file")
-        mesh = trimesh.util.concatenate(meshes)
+        mesh = _concatenated(meshes)
     else:
         raise InvalidMeshError(
             f"{label}: file holds {type(loaded).__name__}, not a triangle mesh"

@@ -87,6 +87,7 @@ def repair_mesh(mesh, *, name: str = "mesh"):
             best = result
         if result[3] == 0:
             break
+    assert best is not None  # attempts is never empty
     vertices, faces, attempt, bad, shells = best
     report.update(attempt)
     if bad:
@@ -155,13 +156,14 @@ def _boundary_loops(faces: np.ndarray):
     for start in sorted(nxt):
         if start in visited or start in tangled:
             continue
-        loop = [start]
+        loop: list[int] | None = [start]
         visited.add(start)
         current = nxt[start]
         while current != start:
             if current in visited or current in tangled or current not in nxt:
                 loop = None
                 break
+            assert loop is not None
             loop.append(current)
             visited.add(current)
             current = nxt[current]

@@ -143,6 +143,7 @@ def closed_candidate(faces, degenerate, opposite):
         score = stats[0] + stats[1]
         if best is None or score < best[0]:
             best = (score, candidate, n_deg, n_opp, stats)
+    assert best is not None  # the last option drops nothing and always scores
     _, candidate, n_deg, n_opp, stats = best
     return candidate, n_deg, n_opp, stats
 

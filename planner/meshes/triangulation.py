@@ -118,7 +118,7 @@ def ear_clip(points: np.ndarray):
                 )
                 if inside.any():
                     continue
-            chosen = pos
+            chosen = int(pos)
             break
         if chosen < 0:  # no proper ear: self-touching or numerically degenerate polygon
             ok = False

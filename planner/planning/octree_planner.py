@@ -40,7 +40,7 @@ from .certificates import certificate_document
 from .endpoints import Ends, attach_ends
 from .outcome import PlanOutcome
 from .report import Clock, Progress, cell_report, smallest_mixed_cell
-from .search import SearchResult, search, search_without_margin
+from .search import SearchResult, SearchRun, search, search_without_margin
 from .validate import validate_path
 
 __all__ = ["WALL", "OctreeParams", "OctreePlanner", "default_contact_tolerance"]
@@ -143,10 +143,10 @@ class OctreePlanner:
             self.source = choose([sc.robot, *sc.obstacles], SourceSettings(
                 exact=s.exact, threshold=s.decomposition_threshold, seed=s.seed,
                 cache_dir=self.cache_dir, progress=self.bar.enabled), field="planner.exact")
-        if self.source.kind == "decomposition":
+        if self._src.kind == "decomposition":
             self.bar.show("minkplan: decomposing")
             with self.clock.stage("decompose"):
-                self.margin = sc.settings.clearance + self.source.margin_deficit(self._parts)
+                self.margin = sc.settings.clearance + self._src.margin_deficit(self._parts)
         else:
             self.margin = sc.settings.clearance
         lo, hi = sc.bounds
@@ -158,8 +158,13 @@ class OctreePlanner:
         self.diagonal = diagonal
         self.bar.show("minkplan: building the C-space")
         self.cspace = self._build(self.margin)
-        self.owner = self.source.owners(sc.obstacles, sc.robot)
+        self.owner = self._src.owners(sc.obstacles, sc.robot)
         self._report_head()
+
+    @property
+    def _src(self) -> Source:
+        assert self.source is not None, "setup() chooses the source"
+        return self.source
 
     @property
     def _parts(self) -> list:
@@ -167,13 +172,13 @@ class OctreePlanner:
 
     def _build(self, margin: float):
         with self.clock.stage("octree"):
-            return self.source.cspace(self.scenario.obstacles, self.scenario.robot,
+            return self._src.cspace(self.scenario.obstacles, self.scenario.robot,
                                       self.bounds, self.floor_asked, self.coarse,
                                       margin=margin, max_leaves=self.params.max_leaves)
 
     def _report_head(self) -> None:
         cs, sc = self.cspace, self.scenario
-        described = self.source.describe(sc.obstacles, sc.robot)
+        described = self._src.describe(sc.obstacles, sc.robot)
         decomposition = described.pop("decomposition")
         self.report.update({
             "scenario": sc.describe(),
@@ -212,11 +217,9 @@ class OctreePlanner:
         for which, escape in ends.escapes.items():
             self.report[f"{which}_escape"] = escape
         self.bar.show("minkplan: searching")
-        kwargs = dict(params=self.params, clock=self.clock, rounds=self.rounds,
-                      deadline=deadline, progress=self.bar)
-        first = search(self.cspace, ends.points["start"], ends.points["goal"], **kwargs)
-        result, space = search_without_margin(self._build, first, self.margin, ends.points,
-                                              **kwargs)
+        run = SearchRun(self.params, self.clock, self.rounds, deadline, self.bar)
+        first = search(self.cspace, ends.points["start"], ends.points["goal"], run)
+        result, space = search_without_margin(self._build, first, self.margin, ends.points, run)
         space = space if space is not None else self.cspace
         if result.status == NO_PATH:
             return self._no_path(result, space, ends)
@@ -241,7 +244,7 @@ class OctreePlanner:
 
     def _no_path(self, result: SearchResult, space, ends: Ends) -> PlanOutcome:
         assert result.certificate is not None
-        source = self.source
+        source = self._src
         exact = source.exact and space.margin == 0
         certificate = certificate_document(
             space, result.certificate, ends.points, exact=exact, source_kind=source.kind,

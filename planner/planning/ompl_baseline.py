@@ -8,6 +8,7 @@ shows the collision), everything else that is not a solution is ``not_found``.
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
@@ -69,7 +70,7 @@ def plan_ompl(scenario: Scenario, name: str, *, validate: bool = True) -> PlanOu
                     f"{planner.name}: {result.status} ({result.reason}) "
                     f"{result.message}".strip())
     waypoints = np.asarray(result.waypoints, dtype=np.float64)
-    validation = {"fcl": {}, "ompl": {}}
+    validation: dict[str, Any] = {"fcl": {}, "ompl": {}}
     clearance = float("nan")
     if validate:
         t1 = time.perf_counter()

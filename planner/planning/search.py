@@ -25,7 +25,7 @@ from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
 
 from .report import Clock, Progress
 
-__all__ = ["SearchResult", "search"]
+__all__ = ["SearchResult", "SearchRun", "search", "search_without_margin"]
 
 log = logging.getLogger(__name__)
 
@@ -49,11 +49,28 @@ class SearchResult:
     certificate: dict[str, Any] | None = None
 
 
-def search(cs, start: np.ndarray, goal: np.ndarray, params, clock: Clock, rounds: list[dict],
-           deadline: float, progress: Progress) -> SearchResult:
-    """Refinement rounds on the native C-space ``cs`` (``params``: an
-    :class:`~planner.planning.octree_planner.OctreeParams`); each refinement is recorded
-    in ``rounds``."""
+@dataclass
+class SearchRun:
+    """What the rounds of one plan share.
+
+    Attributes:
+        params: the :class:`~planner.planning.octree_planner.OctreeParams`.
+        clock: seconds per stage.
+        rounds: each refinement is recorded here.
+        deadline: ``time.perf_counter()`` value at which the rounds stop.
+        progress: the status line.
+    """
+
+    params: Any
+    clock: Clock
+    rounds: list[dict]
+    deadline: float
+    progress: Progress
+
+
+def search(cs, start: np.ndarray, goal: np.ndarray, run: SearchRun) -> SearchResult:
+    """Refinement rounds on the native C-space ``cs``."""
+    params, clock = run.params, run.clock
     s, g = start.tolist(), goal.tolist()
     if cs.segment_is_free(s, g):
         return SearchResult(FOUND, "path", "the straight segment is free",
@@ -71,21 +88,21 @@ def search(cs, start: np.ndarray, goal: np.ndarray, params, clock: Clock, rounds
             return _at_the_floor(cs, s, g, clock)
         if index == params.max_rounds:
             break
-        if time.perf_counter() > deadline:
+        if time.perf_counter() > run.deadline:
             return SearchResult(NOT_FOUND, "time_limit",
                                 f"time limit reached after {index} refinement rounds")
-        stopped = _refine(cs, channel, params, clock, rounds, index, progress)
+        stopped = _refine(cs, channel, run, index)
         if stopped is not None:
             return stopped
     return SearchResult(NOT_FOUND, "rounds", f"{params.max_rounds} refinement rounds used up")
 
 
-def _refine(cs, channel: dict, params, clock: Clock, rounds: list[dict], index: int,
-            progress: Progress) -> SearchResult | None:
+def _refine(cs, channel: dict, run: SearchRun, index: int) -> SearchResult | None:
     """Split the channel's MIXED leaves; a result when that cannot go on."""
     try:
-        with clock.stage("refine"):
-            stats = cs.refine(channel["leaves"], ring=params.ring, levels=params.refine_levels)
+        with run.clock.stage("refine"):
+            stats = cs.refine(channel["leaves"], ring=run.params.ring,
+                              levels=run.params.refine_levels)
     except ResourceLimitError as exc:
         return SearchResult(NOT_FOUND, "budget", f"octree budget exhausted: {exc}")
     if stats["refined"] == 0:
@@ -93,7 +110,7 @@ def _refine(cs, channel: dict, params, clock: Clock, rounds: list[dict], index: 
             NOT_FOUND, "floor",
             f"no path found down to the floor cell size {cs.floor:.3g}: the start or goal "
             f"cannot be attached to the roadmap")
-    rounds.append({
+    run.rounds.append({
         "round": index + 1,
         "channel_leaves": len(channel["leaves"]),
         "channel_min_cell": channel["min_leaf_size"],
@@ -101,7 +118,7 @@ def _refine(cs, channel: dict, params, clock: Clock, rounds: list[dict], index: 
         "created": stats["created"],
         "leaves": len(cs),
     })
-    progress.show(f"minkplan: round {index + 1}: {len(cs)} cells, channel of "
+    run.progress.show(f"minkplan: round {index + 1}: {len(cs)} cells, channel of "
                   f"{len(channel['leaves'])} cells down to {channel['min_leaf_size']:.3g}")
     return None
 
@@ -130,7 +147,8 @@ def _at_the_floor(cs, s: list[float], g: list[float], clock: Clock) -> SearchRes
 
 
 def search_without_margin(build: Callable[[float], Any], first: SearchResult, margin: float,
-                          ends: dict[str, np.ndarray], **kwargs) -> tuple[SearchResult, Any]:
+                          ends: dict[str, np.ndarray], run: SearchRun
+                          ) -> tuple[SearchResult, Any]:
     """A no-path found with the clearance margin must speak of the obstacles themselves:
     search again on the C-space without it (``build(0.0)``). Returns the result and the
     C-space it is about (``None``: the first one)."""
@@ -138,7 +156,7 @@ def search_without_margin(build: Callable[[float], Any], first: SearchResult, ma
         return first, None
     log.info("no path with margin %.3g; checking without the margin", margin)
     space = build(0.0)
-    second = search(space, ends["start"], ends["goal"], **kwargs)
+    second = search(space, ends["start"], ends["goal"], run)
     if second.status == FOUND:
         return SearchResult(
             NOT_FOUND, "clearance",

@@ -30,8 +30,8 @@ def validate_path(waypoints: np.ndarray, checker: FclChecker, bounds: np.ndarray
     if not fcl.valid:
         fcl_doc["first_bad_segment"] = fcl.first_bad_segment
         fcl_doc["obstacle"] = fcl.obstacle
-        fcl_doc["detail"] = (f"segment {fcl.first_bad_segment} hits {fcl.obstacle} at "
-                             f"{np.round(fcl.first_invalid, 6).tolist()}")
+        where = [] if fcl.first_invalid is None else np.round(fcl.first_invalid, 6).tolist()
+        fcl_doc["detail"] = f"segment {fcl.first_bad_segment} hits {fcl.obstacle} at {where}"
     ompl = ompl_check_path(waypoints, checker, bounds,
                            clearance=fcl.min_clearance if fcl.valid else 0.0)
     ompl_doc = {

@@ -14,7 +14,8 @@ imported lazily (only when an OMPL function runs).
 
 from planner.roles import MotionValidator, Planner, PlanResult, PlanStatus, StateValidityChecker
 
-from .fcl_checker import CheckerTolerances, FclChecker, PathCheck, SegmentCheck
+from .checks import CheckerTolerances, PathCheck, SegmentCheck
+from .fcl_checker import FclChecker
 from .ompl_check import OmplPathCheck, ompl_check_path, resolution_for_clearance
 from .ompl_planners import OmplPlanner, available_planners
 

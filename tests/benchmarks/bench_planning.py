@@ -41,8 +41,8 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 sys.path.insert(0, str(ROOT))
 
-from planner.planning import FOUND, NO_PATH, plan  # noqa: E402
 from planner.io import load_scenario  # noqa: E402
+from planner.planning import FOUND, NO_PATH, plan  # noqa: E402
 
 EXPECTED = {
     "peg_in_hole": FOUND,

@@ -37,7 +37,7 @@ use super::gauss::{arc_distance, DirGrid};
 use super::mesh::TriMesh;
 use crate::math::{Aabb, Vec3};
 use crate::polytope::clip_planes;
-use crate::roadmap::UnionFind;
+use crate::util::UnionFind;
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 
@@ -106,8 +106,8 @@ impl Facet {
             }
         };
         let mut e = [Vec3::ZERO; 4];
-        for i in 0..k {
-            e[i] = self.p[(i + 1) % k] - self.p[i];
+        for (i, ei) in e[..k].iter_mut().enumerate() {
+            *ei = self.p[(i + 1) % k] - self.p[i];
         }
         let l2 = [e[0].length_squared(), e[1].length_squared(), e[2].length_squared()];
         let normal = e[0].cross(e[1]);
@@ -135,8 +135,8 @@ impl Facet {
         let k = self.n as usize;
         let c = b.center();
         let mut q = [Vec3::ZERO; 4];
-        for i in 0..k {
-            q[i] = self.p[i] - c;
+        for (qi, &p) in q[..k].iter_mut().zip(&self.p[..k]) {
+            *qi = p - c;
         }
         let q = &q[..k];
         let h = b.half() + Vec3::splat(m + self.slack());
@@ -174,6 +174,7 @@ impl Facet {
         let (e0, e1) = (self.p[1] - self.p[0], self.p[2] - self.p[1]);
         let n = e0.cross(e1);
         let nl = n.length();
+        #[allow(clippy::neg_cmp_op_on_partial_ord)] // a NaN length must fail (degenerate facet)
         if !(nl > 1e-12 * e0.length() * e1.length()) {
             return None;
         }
@@ -427,14 +428,14 @@ impl Parts {
         let mut shell_of_root: HashMap<usize, usize> = HashMap::new();
         let mut shells: Vec<Vec<usize>> = Vec::new();
         let mut shell_of = vec![0usize; faces.len()];
-        for i in 0..faces.len() {
+        for (i, slot) in shell_of.iter_mut().enumerate() {
             let r = joined.find(i);
             let k = *shell_of_root.entry(r).or_insert_with(|| {
                 shells.push(Vec::new());
                 shells.len() - 1
             });
             shells[k].push(i);
-            shell_of[i] = k;
+            *slot = k;
         }
         if shells.len() < 2 {
             return parts; // one shell: it is the solid, whose features the tests already see
@@ -492,10 +493,7 @@ impl Parts {
     fn shadowed(&self, vs: &[u32], verts: &[Vec3], d: Vec3) -> bool {
         let Some((&first, rest)) = vs.split_first() else { return false };
         let h = d.dot(verts[first as usize]) + self.inner;
-        self.at[first as usize]
-            .iter()
-            .filter(|k| rest.iter().all(|&v| self.at[v as usize].contains(k)))
-            .any(|&k| self.corners[k as usize].iter().any(|c| d.dot(*c) > h))
+        self.at[first as usize].iter().filter(|k| rest.iter().all(|&v| self.at[v as usize].contains(k))).any(|&k| self.corners[k as usize].iter().any(|c| d.dot(*c) > h))
     }
 }
 
@@ -564,7 +562,7 @@ fn convex_border(verts: &[Vec3], faces: &[[u32; 3]], m: &TriMesh, members: &[u32
         let cross = e1.0 * e2.1 - e1.1 * e2.0;
         let dot = e1.0 * e2.0 + e1.1 * e2.1;
         let l = (e1.0.hypot(e1.1)) * (e2.0.hypot(e2.1));
-        if !(l > 0.0) || cross < -1e-12 * l {
+        if l.is_nan() || l <= 0.0 || cross < -1e-12 * l {
             return None; // a repeated corner, or a right turn: not convex
         }
         turning += cross.atan2(dot);
@@ -582,17 +580,14 @@ fn convex_border(verts: &[Vec3], faces: &[[u32; 3]], m: &TriMesh, members: &[u32
 fn polygon_sum(p: &[Vec3], q: &[Vec3], n: Vec3, k: u32, out: &mut Vec<Facet>) {
     let (u, w) = plane_basis(n);
     // `+ 0.0` turns -0 into +0: the sort must be numeric for the chain to be a hull
-    let mut pts: Vec<(f64, f64, Vec3)> =
-        p.iter().flat_map(|&a| q.iter().map(move |&b| a + b)).map(|x| (x.dot(u) + 0.0, x.dot(w) + 0.0, x)).collect();
+    let mut pts: Vec<(f64, f64, Vec3)> = p.iter().flat_map(|&a| q.iter().map(move |&b| a + b)).map(|x| (x.dot(u) + 0.0, x.dot(w) + 0.0, x)).collect();
     pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
     pts.dedup_by(|a, b| a.0 == b.0 && a.1 == b.1);
     if pts.len() < 3 {
         return;
     }
     // Andrew's monotone chain, collinear points dropped
-    let turn = |o: &(f64, f64, Vec3), a: &(f64, f64, Vec3), b: &(f64, f64, Vec3)| {
-        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
-    };
+    let turn = |o: &(f64, f64, Vec3), a: &(f64, f64, Vec3), b: &(f64, f64, Vec3)| (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0);
     let mut hull: Vec<(f64, f64, Vec3)> = Vec::with_capacity(2 * pts.len());
     for pass in 0..2 {
         let base = hull.len();
@@ -662,10 +657,7 @@ fn arcs_meet(n1: Vec3, n2: Vec3, m1: Vec3, m2: Vec3) -> Meet {
         }
         // on the circle, between the ends (loosely for short arcs), and on the arc's side
         // of the sphere (the end tests alone also pass the points opposite a short arc)
-        x.dot(p).abs() <= 1e-6 * p.length()
-            && a.cross(x).dot(p) >= -TOL
-            && x.cross(b).dot(p) >= -TOL
-            && x.dot(a + b) >= -TOL
+        x.dot(p).abs() <= 1e-6 * p.length() && a.cross(x).dot(p) >= -TOL && x.cross(b).dot(p) >= -TOL && x.dot(a + b) >= -TOL
     };
     let (pa, pb) = (n1.cross(n2), m1.cross(m2));
     if pa.length() <= TOL {
@@ -761,13 +753,11 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
             let tb = &tb;
             let ra = ta.convex_region(i as u32);
             let n = if ta.shadowed[i] { Vec3::ZERO } else { t.n }; // no face contact
-            candidates(&vb, n, tb.verts.len()).into_iter().filter(move |&v| tb.contact(v, t.n)).map(move |v| {
-                match ra.zip(tb.convex_region_at(v, t.n)) {
-                    Some((ra, rb)) => Part::Regions(ra, rb),
-                    None => {
-                        let q = tb.verts[v as usize];
-                        Part::Facet(Facet { p: [t.p[0] + q, t.p[1] + q, t.p[2] + q, Vec3::ZERO], n: 3, k })
-                    }
+            candidates(&vb, n, tb.verts.len()).into_iter().filter(move |&v| tb.contact(v, t.n)).map(move |v| match ra.zip(tb.convex_region_at(v, t.n)) {
+                Some((ra, rb)) => Part::Regions(ra, rb),
+                None => {
+                    let q = tb.verts[v as usize];
+                    Part::Facet(Facet { p: [t.p[0] + q, t.p[1] + q, t.p[2] + q, Vec3::ZERO], n: 3, k })
                 }
             })
         })
@@ -777,13 +767,11 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
         let ta = &ta;
         let rb = tb.convex_region(j as u32);
         let n = if tb.shadowed[j] { Vec3::ZERO } else { s.n };
-        candidates(&va, n, ta.verts.len()).into_iter().filter(move |&u| ta.contact(u, s.n)).map(move |u| {
-            match ta.convex_region_at(u, s.n).zip(rb) {
-                Some((ra, rb)) => Part::Regions(ra, rb),
-                None => {
-                    let q = ta.verts[u as usize];
-                    Part::Facet(Facet { p: [s.p[0] + q, s.p[1] + q, s.p[2] + q, Vec3::ZERO], n: 3, k })
-                }
+        candidates(&va, n, ta.verts.len()).into_iter().filter(move |&u| ta.contact(u, s.n)).map(move |u| match ta.convex_region_at(u, s.n).zip(rb) {
+            Some((ra, rb)) => Part::Regions(ra, rb),
+            None => {
+                let q = ta.verts[u as usize];
+                Part::Facet(Facet { p: [s.p[0] + q, s.p[1] + q, s.p[2] + q, Vec3::ZERO], n: 3, k })
             }
         })
     }));

@@ -299,10 +299,15 @@ fn surface_of_exact_sum_is_closed_and_within_bound() {
         assert!(polys.iter().all(|p| p.plane_distance(*v) > -1e-9), "{v:?} inside");
     }
     // volume: 3 boxes summed with a 0.4 cube, union volume by inclusion–exclusion on a grid
-    let vol: f64 = r.surface.faces.iter().map(|f| {
-        let (a, b, c) = (r.surface.vertices[f[0] as usize], r.surface.vertices[f[1] as usize], r.surface.vertices[f[2] as usize]);
-        a.dot(b.cross(c)) / 6.0
-    }).sum();
+    let vol: f64 = r
+        .surface
+        .faces
+        .iter()
+        .map(|f| {
+            let (a, b, c) = (r.surface.vertices[f[0] as usize], r.surface.vertices[f[1] as usize], r.surface.vertices[f[2] as usize]);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum();
     // true volume: outer 3.4 × 1.4 × 2.4 minus the notch (1 − 0.4) × 1.4 × (1 − 0.2)
     let truth = 3.4 * 1.4 * 2.4 - 0.6 * 1.4 * 0.8;
     assert!((vol - truth).abs() < 0.05 * truth, "{vol} vs {truth}");
@@ -536,7 +541,11 @@ fn turned_box_top_sums_to_the_mixed_area() {
         .filter(|f| f.p[..f.n as usize].iter().all(|q| (q.z - top).abs() < 1e-12))
         .map(|f| {
             let tri = |p: Vec3, q: Vec3, r: Vec3| 0.5 * (q - p).cross(r - p).length();
-            if f.n == 3 { tri(f.p[0], f.p[1], f.p[2]) } else { tri(f.p[0], f.p[1], f.p[2]) + tri(f.p[0], f.p[2], f.p[3]) }
+            if f.n == 3 {
+                tri(f.p[0], f.p[1], f.p[2])
+            } else {
+                tri(f.p[0], f.p[1], f.p[2]) + tri(f.p[0], f.p[2], f.p[3])
+            }
         })
         .sum();
     let (s, c) = (theta.sin().abs(), theta.cos().abs());

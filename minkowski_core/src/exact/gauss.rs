@@ -30,7 +30,7 @@ pub struct Cap {
 fn on_face(f: usize, u: f64, v: f64) -> Vec3 {
     let a = f / 2;
     let mut p = [0.0; 3];
-    p[a] = if f % 2 == 0 { 1.0 } else { -1.0 };
+    p[a] = if f.is_multiple_of(2) { 1.0 } else { -1.0 };
     p[(a + 1) % 3] = u;
     p[(a + 2) % 3] = v;
     Vec3::from_array(p).normalize()
@@ -39,10 +39,7 @@ fn on_face(f: usize, u: f64, v: f64) -> Vec3 {
 /// The cap of the square `[u0, u1] × [v0, v1]` of face `f`.
 fn cap(f: usize, u0: f64, u1: f64, v0: f64, v1: f64) -> Cap {
     let c = on_face(f, 0.5 * (u0 + u1), 0.5 * (v0 + v1));
-    let rho = [(u0, v0), (u1, v0), (u0, v1), (u1, v1)]
-        .iter()
-        .map(|&(u, v)| angle(c, on_face(f, u, v)))
-        .fold(0.0f64, f64::max);
+    let rho = [(u0, v0), (u1, v0), (u0, v1), (u1, v1)].iter().map(|&(u, v)| angle(c, on_face(f, u, v))).fold(0.0f64, f64::max);
     Cap { c, rho: rho + PAD }
 }
 
@@ -117,7 +114,13 @@ impl DirGrid {
     /// The fine cell holding direction `d` (non-zero).
     pub fn locate(d: Vec3) -> u32 {
         let ad = d.abs();
-        let a = if ad.x >= ad.y && ad.x >= ad.z { 0 } else if ad.y >= ad.z { 1 } else { 2 };
+        let a = if ad.x >= ad.y && ad.x >= ad.z {
+            0
+        } else if ad.y >= ad.z {
+            1
+        } else {
+            2
+        };
         let f = 2 * a + usize::from(d[a] < 0.0);
         let idx = |x: f64| (((x / ad[a] + 1.0) * 0.5 * SIDE as f64) as usize).min(SIDE - 1);
         (f * SIDE * SIDE + idx(d[(a + 1) % 3]) * SIDE + idx(d[(a + 2) % 3])) as u32

@@ -4,7 +4,7 @@
 
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
-use crate::roadmap::UnionFind;
+use crate::util::UnionFind;
 use std::collections::HashMap;
 
 /// A BVH node: leaf when `tri != u32::MAX`, else children `left` and `left + 1`.
@@ -164,8 +164,7 @@ impl TriMesh {
     pub fn surface(vertices: Vec<Vec3>, faces: &[[u32; 3]], what: &str) -> CoreResult<TriMesh> {
         check_arrays(&vertices, faces, what)?;
         let nv = vertices.len();
-        let tris: Vec<Tri> =
-            faces.iter().map(|f| Tri::new([vertices[f[0] as usize], vertices[f[1] as usize], vertices[f[2] as usize]])).collect();
+        let tris: Vec<Tri> = faces.iter().map(|f| Tri::new([vertices[f[0] as usize], vertices[f[1] as usize], vertices[f[2] as usize]])).collect();
         let aabb = Aabb::from_points(&vertices);
         let nodes = build_nodes(&tris);
         // one vertex per connected shell (union-find over the triangles' corners)
@@ -256,7 +255,13 @@ fn build_nodes(tris: &[Tri]) -> Vec<MeshNode> {
             continue;
         }
         let e = aabb.extent();
-        let axis = if e.x >= e.y && e.x >= e.z { 0 } else if e.y >= e.z { 1 } else { 2 };
+        let axis = if e.x >= e.y && e.x >= e.z {
+            0
+        } else if e.y >= e.z {
+            1
+        } else {
+            2
+        };
         let mid = (lo + hi) / 2;
         order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| boxes[a as usize].center()[axis].total_cmp(&boxes[b as usize].center()[axis]));
         let left = nodes.len();

@@ -32,15 +32,15 @@
 
 mod convolution;
 pub mod crossing;
+#[cfg(test)]
+mod exact_tests;
 mod gauss;
 mod mesh;
 mod piece;
-mod verify;
-pub mod winding;
-#[cfg(test)]
-mod exact_tests;
 #[cfg(test)]
 mod surface_pair_tests;
+mod verify;
+pub mod winding;
 #[cfg(test)]
 mod winding_tests;
 
@@ -145,19 +145,12 @@ pub enum Witness {
 impl ExactSource {
     /// The sums `A_k ⊕ B`, grown by `margin`, with optional `walls`.
     pub fn new(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>) -> ExactSource {
-        let aabb = obstacles.iter().fold(Aabb::empty(), |acc, a| {
-            acc.union(&Aabb::new(a.aabb.min + b.aabb.min, a.aabb.max + b.aabb.max).inflated(margin))
-        });
+        let aabb = obstacles.iter().fold(Aabb::empty(), |acc, a| acc.union(&Aabb::new(a.aabb.min + b.aabb.min, a.aabb.max + b.aabb.max).inflated(margin)));
         let tri_ext = |m: &TriMesh| m.tris.iter().map(|t| Aabb::from_points(&t.p).extent().max_element()).fold(0.0f64, f64::max);
         let max_a = obstacles.iter().map(tri_ext).fold(0.0f64, f64::max);
         let max_piece = (max_a + tri_ext(&b) + 2.0 * margin) * 1.000_001;
         let surface_pairs: Vec<usize> = (0..obstacles.len()).filter(|&k| !(obstacles[k].solid && b.solid)).collect();
-        let facets: Vec<Facet> = obstacles
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| !surface_pairs.contains(k))
-            .flat_map(|(k, a)| convolution(a, &b, k as u32))
-            .collect();
+        let facets: Vec<Facet> = obstacles.iter().enumerate().filter(|(k, _)| !surface_pairs.contains(k)).flat_map(|(k, a)| convolution(a, &b, k as u32)).collect();
         assert!(facets.len() < PAIR as usize, "too many facets for the record encoding");
         let boxes: Vec<Aabb> = facets.iter().map(|f| f.aabb(margin)).collect();
         let fbvh = Bvh::build(&boxes);
@@ -222,7 +215,7 @@ impl ExactSource {
     pub fn wall_gap(&self, side: usize, p: Vec3) -> f64 {
         let w = self.walls.expect("wall record without walls");
         let axis = side / 2;
-        if side % 2 == 0 {
+        if side.is_multiple_of(2) {
             p[axis] - w.min[axis]
         } else {
             w.max[axis] - p[axis]
@@ -238,7 +231,7 @@ impl ExactSource {
     /// `(inside, meets)`: whether the closed box lies in / meets the slab beyond `side`.
     #[inline]
     fn wall_box(&self, side: usize, cell: &Aabb) -> (bool, bool) {
-        let (near, far) = if side % 2 == 0 { (cell.min, cell.max) } else { (cell.max, cell.min) };
+        let (near, far) = if side.is_multiple_of(2) { (cell.min, cell.max) } else { (cell.max, cell.min) };
         (self.wall_gap(side, far) <= 0.0, self.wall_gap(side, near) <= 0.0)
     }
 
@@ -318,13 +311,18 @@ impl ExactSource {
         for k in 0..self.obstacles.len() {
             let mut hit = None;
             let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
-            self.any_pair(k, self.margin, |bx| bx.contains_point(p), |i, j| {
-                let inside = pair_contains_point(&ta[i], &tb[j], self.margin, p);
-                if inside {
-                    hit = Some(Witness::Piece { k, i, j });
-                }
-                inside
-            });
+            self.any_pair(
+                k,
+                self.margin,
+                |bx| bx.contains_point(p),
+                |i, j| {
+                    let inside = pair_contains_point(&ta[i], &tb[j], self.margin, p);
+                    if inside {
+                        hit = Some(Witness::Piece { k, i, j });
+                    }
+                    inside
+                },
+            );
             if hit.is_some() {
                 return hit;
             }
@@ -352,9 +350,7 @@ impl ExactSource {
 
     /// The obstacles whose (grown) sum contains `p`.
     pub fn containing(&self, p: Vec3) -> Vec<usize> {
-        let mut out: Vec<usize> = (0..self.obstacles.len())
-            .filter(|&k| self.touches(k, self.margin, p) || self.nested_k(k, p))
-            .collect();
+        let mut out: Vec<usize> = (0..self.obstacles.len()).filter(|&k| self.touches(k, self.margin, p) || self.nested_k(k, p)).collect();
         if self.margin > 0.0 {
             self.fbvh.for_each_at_point(p, |i| {
                 let k = self.facets[i].k as usize;
@@ -383,10 +379,16 @@ impl ExactSource {
         if self.contains_point(p) {
             let mut depth = 0.0f64;
             for k in 0..self.obstacles.len() {
-                self.any_piece(k, self.margin, false, |bx| bx.contains_point(p), |piece, _, _| {
-                    depth = depth.max(-piece.separation(p));
-                    false
-                });
+                self.any_piece(
+                    k,
+                    self.margin,
+                    false,
+                    |bx| bx.contains_point(p),
+                    |piece, _, _| {
+                        depth = depth.max(-piece.separation(p));
+                        false
+                    },
+                );
             }
             return -depth;
         }
@@ -644,12 +646,18 @@ impl CellSource for ExactSource {
                 Rec::Pair(k, na, nb) => {
                     let seg = Aabb::new(a.min(b), a.max(b));
                     let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
-                    self.any_pair_under(k, [na, nb], self.margin, |bx| bx.overlaps(&seg), |i, j| {
-                        if let Some(t) = Piece::new(&ta[i], &tb[j], self.margin, false).clip(a, b) {
-                            out.push(t);
-                        }
-                        false
-                    });
+                    self.any_pair_under(
+                        k,
+                        [na, nb],
+                        self.margin,
+                        |bx| bx.overlaps(&seg),
+                        |i, j| {
+                            if let Some(t) = Piece::new(&ta[i], &tb[j], self.margin, false).clip(a, b) {
+                                out.push(t);
+                            }
+                            false
+                        },
+                    );
                 }
             }
         }
@@ -672,7 +680,8 @@ impl CellSource for ExactSource {
         let mut prev = 0.0f64;
         let n = out.len();
         for idx in 0..=n {
-            let next = if idx < n { out[idx].0 } else { 1.0 };
+            let cur = out.get(idx).copied();
+            let next = cur.map_or(1.0, |iv| iv.0);
             if next > prev + tiny {
                 let inside = if prev <= tiny && idx == 0 {
                     sa
@@ -685,8 +694,8 @@ impl CellSource for ExactSource {
                     gaps.push((prev, next));
                 }
             }
-            if idx < n {
-                prev = prev.max(out[idx].1);
+            if let Some(iv) = cur {
+                prev = prev.max(iv.1);
             }
         }
         if !gaps.is_empty() {

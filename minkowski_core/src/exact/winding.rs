@@ -32,13 +32,7 @@ const RAY_DIRS: [[f64; 3]; 6] = [
 
 /// Barycentric sample points of a face for [`TriMesh::front_windings`], tried in order
 /// until one lies on no other face.
-const FACE_SAMPLES: [[f64; 3]; 5] = [
-    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
-    [0.6, 0.25, 0.15],
-    [0.15, 0.6, 0.25],
-    [0.25, 0.15, 0.6],
-    [0.45, 0.1, 0.45],
-];
+const FACE_SAMPLES: [[f64; 3]; 5] = [[1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], [0.6, 0.25, 0.15], [0.15, 0.6, 0.25], [0.25, 0.15, 0.6], [0.45, 0.1, 0.45]];
 
 /// Heights above a face's centre, in mesh diagonals, at which its front winding number is
 /// asked when every sample point on it lies on another face (coincident faces of bodies

@@ -120,7 +120,7 @@ impl PolytopeSet {
 }
 
 /// Sort and merge overlapping or touching parameter intervals.
-pub fn merge_intervals(iv: &mut Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+pub fn merge_intervals(iv: &mut [(f64, f64)]) -> Vec<(f64, f64)> {
     iv.sort_by(|x, y| x.0.total_cmp(&y.0));
     let mut out: Vec<(f64, f64)> = Vec::with_capacity(iv.len());
     for &(s, e) in iv.iter() {

@@ -185,7 +185,7 @@ impl Octree {
     /// [`CoreError::InvalidParameter`] for a non-positive or non-finite `h`,
     /// [`CoreError::ResourceLimit`] when the lattice or the leaf count would exceed the limits.
     pub fn build<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize) -> CoreResult<Octree> {
-        if !(h > 0.0) || !h.is_finite() {
+        if h <= 0.0 || !h.is_finite() {
             return Err(CoreError::InvalidParameter { name: "cell size".into(), value: h, detail: "must be positive and finite".into() });
         }
         let origin = region.min - Vec3::splat((2.0 + LATTICE_SHIFT) * h);
@@ -199,22 +199,11 @@ impl Octree {
                 detail: format!("the region is {n:.0} cells wide; the lattice addresses at most 2^{MAX_DEPTH}"),
             });
         }
-        let ctx = Ctx {
-            src: source,
-            origin,
-            h,
-            budget: max_cells,
-            count: AtomicUsize::new(0),
-            abort: AtomicBool::new(false),
-        };
+        let ctx = Ctx { src: source, origin, h, budget: max_cells, count: AtomicUsize::new(0), abort: AtomicBool::new(false) };
         let root = source.root_records();
         let (leaves, cands) = ctx.node([0, 0, 0], depth as u8, &root, None);
         if ctx.abort.load(Ordering::Relaxed) {
-            return Err(CoreError::ResourceLimit {
-                budget: max_cells,
-                cell_size: h,
-                detail: "octree leaves".into(),
-            });
+            return Err(CoreError::ResourceLimit { budget: max_cells, cell_size: h, detail: "octree leaves".into() });
         }
         Ok(Octree { origin, h, depth: depth as u8, leaves, cands })
     }
@@ -295,12 +284,7 @@ pub fn cell_contains(polys: &[ConvexPolytope], cands: CandIter<'_>, p: Vec3) -> 
 /// goes when one of its planes separates the cell; a plane that no longer cuts the cell is
 /// dropped; a primitive with no plane left contains the cell, which is then FULL; a cell no
 /// primitive meets is EMPTY.
-pub(crate) fn classify_cell(
-    polys: &[ConvexPolytope],
-    cell: &Aabb,
-    cand: &[u32],
-    out: &mut Vec<u32>,
-) -> Label {
+pub(crate) fn classify_cell(polys: &[ConvexPolytope], cell: &Aabb, cand: &[u32], out: &mut Vec<u32>) -> Label {
     let (c, hh) = (cell.center(), cell.half());
     let mut i = 0;
     while i < cand.len() {

@@ -2,9 +2,7 @@ use super::*;
 use crate::minkowski::PolytopeSet;
 
 fn unit_cube_set() -> PolytopeSet {
-    let pts: Vec<Vec3> = (0..8)
-        .map(|k| Vec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64))
-        .collect();
+    let pts: Vec<Vec3> = (0..8).map(|k| Vec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64)).collect();
     PolytopeSet::new(vec![ConvexPolytope::from_points(&pts)])
 }
 

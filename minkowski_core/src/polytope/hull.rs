@@ -2,7 +2,7 @@
 
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
-use crate::roadmap::UnionFind;
+use crate::util::UnionFind;
 use std::collections::HashMap;
 
 /// A closed convex polytope `{x : n_k · x <= d_k for all k}`.
@@ -37,26 +37,19 @@ impl ConvexPolytope {
             return Err(CoreError::NonFinite { what: what.to_string() });
         }
         if points.len() < 4 {
-            return Err(CoreError::Degenerate {
-                what: what.to_string(),
-                detail: format!("{} points", points.len()),
-            });
+            return Err(CoreError::Degenerate { what: what.to_string(), detail: format!("{} points", points.len()) });
         }
         let bbox = Aabb::from_points(points);
         let scale = bbox.diagonal();
-        if !(scale > 0.0) {
+        if scale.is_nan() || scale <= 0.0 {
             return Err(CoreError::Degenerate { what: what.to_string(), detail: "all points coincide".into() });
         }
         // parry's quickhull may panic on degenerate input: contain that here.
         let hull = std::panic::catch_unwind(|| parry3d_f64::transformation::try_convex_hull(points));
         let (verts, tris) = match hull {
             Ok(Ok(h)) => h,
-            Ok(Err(e)) => {
-                return Err(CoreError::Degenerate { what: what.to_string(), detail: format!("hull failed: {e}") })
-            }
-            Err(_) => {
-                return Err(CoreError::Degenerate { what: what.to_string(), detail: "hull failed (flat or degenerate points)".into() })
-            }
+            Ok(Err(e)) => return Err(CoreError::Degenerate { what: what.to_string(), detail: format!("hull failed: {e}") }),
+            Err(_) => return Err(CoreError::Degenerate { what: what.to_string(), detail: "hull failed (flat or degenerate points)".into() }),
         };
         Self::from_hull(verts, tris, scale, what)
     }
@@ -89,6 +82,7 @@ impl ConvexPolytope {
             volume += n.dot(a - centre) / 6.0;
             tri_n.push(n);
         }
+        #[allow(clippy::neg_cmp_op_on_partial_ord)] // a NaN volume must fail (degenerate hull)
         if !(volume > 1e-12 * scale * scale * scale) {
             return Err(degenerate("zero volume (all points in a plane)"));
         }
@@ -115,9 +109,7 @@ impl ConvexPolytope {
         let deg: Vec<bool> = tri_n.iter().map(|n| n.length() <= 1e-12 * scale * scale).collect();
         let coplanar = |i: usize, j: usize| -> bool {
             // same plane when each triangle's vertices lie on the other's plane
-            !deg[i] && !deg[j]
-                && unit[i].dot(unit[j]) > 1.0 - 1e-10
-                && tris[j].iter().all(|&v| (unit[i].dot(vertices[v as usize]) - off[i]).abs() <= plane_tol)
+            !deg[i] && !deg[j] && unit[i].dot(unit[j]) > 1.0 - 1e-10 && tris[j].iter().all(|&v| (unit[i].dot(vertices[v as usize]) - off[i]).abs() <= plane_tol)
         };
         for &(i, j) in &adjacent {
             if coplanar(i, j) {
@@ -162,7 +154,7 @@ impl ConvexPolytope {
         for n in normals.iter_mut() {
             *n = n.normalize_or_zero();
         }
-        if normals.iter().any(|n| *n == Vec3::ZERO) {
+        if normals.contains(&Vec3::ZERO) {
             return Err(degenerate("zero-area facet"));
         }
         // Offsets: the support over all hull vertices, so every plane is a supporting plane

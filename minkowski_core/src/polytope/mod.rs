@@ -6,9 +6,9 @@
 //! [`ConvexPolytope::contains_box`], [`ConvexPolytope::clip_segment`].
 
 mod hull;
-mod queries;
 #[cfg(test)]
 mod polytope_tests;
+mod queries;
 
 pub use hull::ConvexPolytope;
 pub use queries::{clip_planes, point_triangle_distance2};

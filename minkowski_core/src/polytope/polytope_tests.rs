@@ -5,11 +5,7 @@ use crate::math::{Aabb, Vec3};
 fn cube(c: Vec3, r: f64) -> ConvexPolytope {
     let mut pts = Vec::new();
     for k in 0..8 {
-        let s = Vec3::new(
-            if k & 1 == 1 { r } else { -r },
-            if k & 2 == 2 { r } else { -r },
-            if k & 4 == 4 { r } else { -r },
-        );
+        let s = Vec3::new(if k & 1 == 1 { r } else { -r }, if k & 2 == 2 { r } else { -r }, if k & 4 == 4 { r } else { -r });
         pts.push(c + s);
     }
     ConvexPolytope::from_points(&pts)
@@ -49,9 +45,7 @@ fn box_queries() {
     assert!(p.overlaps_box(&Aabb::new(Vec3::splat(0.5), Vec3::splat(1.5))));
     assert!(!p.overlaps_box(&Aabb::new(Vec3::splat(1.1), Vec3::splat(1.5))));
     // a tilted polytope: octahedron |x|+|y|+|z| <= 1 and a box near its face, outside it
-    let oct = ConvexPolytope::from_points(&[
-        Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z,
-    ]);
+    let oct = ConvexPolytope::from_points(&[Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z]);
     assert_eq!(oct.normals.len(), 8);
     assert!(!oct.overlaps_box(&Aabb::new(Vec3::splat(0.4), Vec3::splat(0.6))));
     assert!(oct.overlaps_box(&Aabb::new(Vec3::splat(0.2), Vec3::splat(0.4))));

@@ -35,12 +35,7 @@ impl ConvexPolytope {
             if self.normals[f].dot(p) - self.offsets[f] <= 0.0 {
                 continue; // the nearest point lies on a facet that faces p
             }
-            let d2 = point_triangle_distance2(
-                p,
-                self.vertices[t[0] as usize],
-                self.vertices[t[1] as usize],
-                self.vertices[t[2] as usize],
-            );
+            let d2 = point_triangle_distance2(p, self.vertices[t[0] as usize], self.vertices[t[1] as usize], self.vertices[t[2] as usize]);
             best = best.min(d2);
         }
         best.sqrt().max(s)

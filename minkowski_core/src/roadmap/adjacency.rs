@@ -41,7 +41,16 @@ pub(crate) fn face_center(oct: &Octree, level: u8, corner: [u32; 3], axis: usize
     let s = (1u64 << level) as f64;
     let mut c = [0.0f64; 3];
     for k in 0..3 {
-        c[k] = corner[k] as f64 + if k == axis { if upper { s } else { 0.0 } } else { 0.5 * s };
+        c[k] = corner[k] as f64
+            + if k == axis {
+                if upper {
+                    s
+                } else {
+                    0.0
+                }
+            } else {
+                0.5 * s
+            };
     }
     oct.origin + Vec3::new(c[0], c[1], c[2]) * oct.h
 }

@@ -11,8 +11,8 @@ use super::index::LeafIndex;
 use super::refine::{refine, rescale, RefineStats};
 use super::search::{astar, SearchResult};
 use crate::error::{CoreError, CoreResult};
-use crate::math::{Aabb, Vec3};
 use crate::exact::{ExactSource, TriMesh, Witness};
+use crate::math::{Aabb, Vec3};
 use crate::minkowski::PolytopeSet;
 use crate::octree::{CellSource, Label, LevelCounts, Octree, MAX_DEPTH};
 use crate::polytope::{clip_planes, ConvexPolytope};
@@ -64,7 +64,7 @@ pub enum Obstacles {
     Union(PolytopeSet),
     /// The exact boundary-convolution source over the obstacle meshes and the reflected
     /// robot, grown by the margin, with walls.
-    Exact(ExactSource),
+    Exact(Box<ExactSource>),
 }
 
 impl CellSource for Obstacles {
@@ -253,7 +253,7 @@ impl CSpace {
         let h0 = h_floor * (1u64 << k) as f64;
         let n_obstacle = meshes.len();
         let src = ExactSource::new(meshes, robot.negated(), margin, Some(bounds));
-        Self::finish(Obstacles::Exact(src), n_obstacle, bounds, margin, h0, k, max_leaves)
+        Self::finish(Obstacles::Exact(Box::new(src)), n_obstacle, bounds, margin, h0, k, max_leaves)
     }
 
     fn finish(obstacles: Obstacles, n_obstacle: usize, bounds: Aabb, margin: f64, h0: f64, k: u32, max_leaves: usize) -> CoreResult<CSpace> {
@@ -518,7 +518,13 @@ impl CSpace {
             return None;
         }
         let n_components = labels.iter().filter(|&&c| c != u32::MAX).max().map_or(0, |&m| m as usize + 1);
-        let members = |c: u32| -> Vec<usize> { if c == u32::MAX { Vec::new() } else { (0..leaves.len()).filter(|&i| labels[i] == c).collect() } };
+        let members = |c: u32| -> Vec<usize> {
+            if c == u32::MAX {
+                Vec::new()
+            } else {
+                (0..leaves.len()).filter(|&i| labels[i] == c).collect()
+            }
+        };
         let (ms, mg) = (members(cs), members(cg));
         let around_start = ms.len() <= mg.len();
         let walled = if around_start { &ms } else { &mg };

@@ -32,7 +32,7 @@ mod search;
 mod roadmap_tests;
 
 pub use adjacency::{face_adjacency, neighbors, shared_face, Adjacency, Neighbor};
-pub use components::{components, UnionFind};
+pub use components::components;
 pub use cspace::{Attachment, CSpace, Certificate, Obstacles};
 pub use index::{cell_key, LeafIndex};
 pub use refine::{refine, rescale, RefineStats};

@@ -89,19 +89,8 @@ impl Classifier<'_> {
 /// # Errors
 /// [`CoreError::ResourceLimit`] when the octree would exceed `max_leaves` leaves (nothing
 /// is changed then).
-pub fn refine<S: CellSource>(
-    source: &S,
-    oct: &mut Octree,
-    index: &mut LeafIndex,
-    targets: &[usize],
-    levels: u8,
-    max_leaves: usize,
-) -> CoreResult<RefineStats> {
-    let mut todo: Vec<usize> = targets
-        .iter()
-        .copied()
-        .filter(|&t| t < oct.leaves.len() && oct.leaves[t].label == Label::Mixed && oct.leaves[t].level > 0)
-        .collect();
+pub fn refine<S: CellSource>(source: &S, oct: &mut Octree, index: &mut LeafIndex, targets: &[usize], levels: u8, max_leaves: usize) -> CoreResult<RefineStats> {
+    let mut todo: Vec<usize> = targets.iter().copied().filter(|&t| t < oct.leaves.len() && oct.leaves[t].label == Label::Mixed && oct.leaves[t].level > 0).collect();
     todo.sort_unstable();
     todo.dedup();
     let cls = Classifier { src: source, origin: oct.origin, h: oct.h };

@@ -51,14 +51,7 @@ impl PartialOrd for Item {
 /// `targets` (leaf, cost from its centre to the goal), moving only through leaves whose
 /// `weight` is `Some(w)` with `w >= 1` (sources and targets must pass too). `goal` is the
 /// point the targets lead to (for the heuristic). `None` when no target is reachable.
-pub fn astar(
-    oct: &Octree,
-    index: &LeafIndex,
-    sources: &[(usize, f64)],
-    targets: &[(usize, f64)],
-    goal: Vec3,
-    weight: impl Fn(usize) -> Option<f64>,
-) -> Option<SearchResult> {
+pub fn astar(oct: &Octree, index: &LeafIndex, sources: &[(usize, f64)], targets: &[(usize, f64)], goal: Vec3, weight: impl Fn(usize) -> Option<f64>) -> Option<SearchResult> {
     let n = oct.leaves.len();
     let virtual_goal = n;
     let center = |i: usize| oct.cell_box(&oct.leaves[i]).center();
@@ -98,10 +91,8 @@ pub fn astar(
                 x = parent[x] as usize;
             }
             leaves.reverse();
-            let portals = leaves
-                .windows(2)
-                .map(|w| super::adjacency::shared_face(oct, w[0], w[1]).map(|f| f.center()).unwrap_or_else(|| 0.5 * (center(w[0]) + center(w[1]))))
-                .collect();
+            let portals =
+                leaves.windows(2).map(|w| super::adjacency::shared_face(oct, w[0], w[1]).map(|f| f.center()).unwrap_or_else(|| 0.5 * (center(w[0]) + center(w[1])))).collect();
             return Some(SearchResult { leaves, portals, cost: gu, expanded });
         }
         expanded += 1;

@@ -21,7 +21,7 @@ pub use simplify::merge_coplanar;
 
 use crate::math::Vec3;
 use crate::octree::{CellSource, Label, Octree};
-use crate::roadmap::UnionFind;
+use crate::util::UnionFind;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -172,9 +172,7 @@ fn case_table() -> &'static Vec<Vec<Vec<TriEdges>>> {
 /// Extract the surface of the solid of `src` over the finest MIXED cells of `oct` (built
 /// over `src`).
 pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
-    let band: Vec<usize> = (0..oct.leaves.len())
-        .filter(|&i| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level == 0)
-        .collect();
+    let band: Vec<usize> = (0..oct.leaves.len()).filter(|&i| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level == 0).collect();
     let mut s = Surface { band_cells: band.len(), ..Default::default() };
     if band.is_empty() {
         return s;
@@ -186,10 +184,7 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
     };
 
     // 1. distinct lattice points with an owning leaf, and their signs
-    let mut pts: Vec<(u64, u32)> = band
-        .par_iter()
-        .flat_map_iter(|&li| (0..8).map(move |c| (leaf_corner_key(li, c), li as u32)))
-        .collect();
+    let mut pts: Vec<(u64, u32)> = band.par_iter().flat_map_iter(|&li| (0..8).map(move |c| (leaf_corner_key(li, c), li as u32))).collect();
     pts.par_sort_unstable();
     pts.dedup_by_key(|p| p.0);
     let point_of = |q: u64| {
@@ -234,12 +229,8 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
             owner[edge_slot(idx, a, b)] = (band[n] as u32, idx[b]);
         }
     }
-    let edges: Vec<(u64, u64, u32, usize, u32)> = owner
-        .iter()
-        .enumerate()
-        .filter(|(_, o)| o.0 != u32::MAX)
-        .map(|(slot, &(o, pb))| (pts[slot / 7].0, pts[pb as usize].0, o, slot, pb))
-        .collect();
+    let edges: Vec<(u64, u64, u32, usize, u32)> =
+        owner.iter().enumerate().filter(|(_, o)| o.0 != u32::MAX).map(|(slot, &(o, pb))| (pts[slot / 7].0, pts[pb as usize].0, o, slot, pb)).collect();
     s.edges = edges.len();
 
     // where the boundary may cross each edge; an edge it cannot cross joins its ends' signs
@@ -255,7 +246,7 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
     let mut joined = UnionFind::new(pts.len());
     for (e, iv) in edges.iter().zip(&bnd) {
         if iv.is_empty() {
-            joined.union((e.3 / 7) as usize, e.4 as usize);
+            joined.union(e.3 / 7, e.4 as usize);
         }
     }
     let roots: Vec<u32> = (0..pts.len()).map(|i| joined.find(i) as u32).collect();
@@ -358,12 +349,7 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
     s.faces = faces;
     // an unresolved cell is complex unless a 26-neighbour has a sign change: then the
     // surface passes within the two cells' joint diagonal (2 sqrt(3) h) of its points
-    let mut resolved: Vec<u64> = band
-        .iter()
-        .zip(&flags)
-        .filter(|(_, c)| c.0)
-        .map(|(&li, _)| leaf_corner_key(li, 0))
-        .collect();
+    let mut resolved: Vec<u64> = band.iter().zip(&flags).filter(|(_, c)| c.0).map(|(&li, _)| leaf_corner_key(li, 0)).collect();
     resolved.sort_unstable();
     for (&li, &(_, unresolved)) in band.iter().zip(&flags) {
         if !unresolved {

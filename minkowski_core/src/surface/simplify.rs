@@ -44,7 +44,7 @@ pub fn merge_coplanar(s: &mut Surface, plane_tol: f64, min_area: f64) -> usize {
                 continue;
             }
             stamp += 1;
-            if let Some(u) = try_collapse(v, &s.vertices, &mut faces, &mut alive, &mut inc, plane_tol, min_area, (&mut mark, &mut counted, stamp)) {
+            if let Some(u) = try_collapse(v, &s.vertices, &mut faces, &mut alive, &mut inc, (plane_tol, min_area), (&mut mark, &mut counted, stamp)) {
                 removed_v[v] = true;
                 let _ = u;
                 changed += 1;
@@ -64,12 +64,7 @@ pub fn merge_coplanar(s: &mut Surface, plane_tol: f64, min_area: f64) -> usize {
             verts.push(*v);
         }
     }
-    s.faces = faces
-        .iter()
-        .zip(&alive)
-        .filter(|(_, &a)| a)
-        .map(|(f, _)| [remap[f[0] as usize], remap[f[1] as usize], remap[f[2] as usize]])
-        .collect();
+    s.faces = faces.iter().zip(&alive).filter(|(_, &a)| a).map(|(f, _)| [remap[f[0] as usize], remap[f[1] as usize], remap[f[2] as usize]]).collect();
     s.vertices = verts;
     removed
 }
@@ -80,10 +75,10 @@ fn try_collapse(
     faces: &mut [[u32; 3]],
     alive: &mut [bool],
     inc: &mut [Vec<u32>],
-    plane_tol: f64,
-    min_area: f64,
+    tol: (f64, f64),
     scratch: (&mut [u64], &mut [u64], u64),
 ) -> Option<usize> {
+    let (plane_tol, min_area) = tol;
     let (mark, counted, stamp) = scratch;
     if inc[v].len() > STAR_CAP {
         return None;

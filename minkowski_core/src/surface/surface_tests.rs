@@ -1,7 +1,7 @@
-use crate::polytope::ConvexPolytope;
 use super::*;
 use crate::minkowski::PolytopeSet;
 use crate::octree::Octree;
+use crate::polytope::ConvexPolytope;
 
 #[test]
 fn kuhn_split_has_19_edges_and_fills_the_cube() {

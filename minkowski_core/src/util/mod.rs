@@ -1,0 +1,8 @@
+//! Small data structures the modules above share (kept below all of them, so no module
+//! reaches up for one).
+//!
+//! Entry points: [`UnionFind`].
+
+mod union_find;
+
+pub use union_find::UnionFind;
