@@ -38,7 +38,6 @@ from .values import check_bool, check_optional, check_real, check_seed
 __all__ = [
     "DEFAULT_BOUNDS_MARGIN",
     "DEFAULT_CONTACT_REL",
-    "ORIENTATION_TOLERANCE_DEG",
     "Assembly",
     "Body",
     "Part",
@@ -49,10 +48,6 @@ __all__ = [
     "Scenario",
     "default_bounds",
 ]
-
-
-ORIENTATION_TOLERANCE_DEG = 1e-4
-"""Start and goal orientations may differ by at most this angle (degrees)."""
 
 
 DEFAULT_BOUNDS_MARGIN = 0.1

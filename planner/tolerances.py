@@ -51,6 +51,17 @@ class Tolerances:
             excess (hull surfaces) and its deficit (solid surface).
         sample_seed: seed of the random generator used for those samples, so that the
             estimates are reproducible.
+        touch_rel: faces of one shell closer than ``touch_rel * scale`` across their
+            shared plane only touch (the self-overlap test of
+            :func:`~planner.meshes.validate_solid` does not count them).
+        orientation_deg: start and goal orientations that differ by at most this angle
+            (degrees) are equal (scenario YAML and OMPL.app files alike).
+        quaternion_norm: a quaternion ``[w, x, y, z]`` whose norm is within this of 1 is
+            accepted and normalised; anything else is a typo or a wrong component order.
+        flat_rel: a piece of an imported world thinner than ``flat_rel`` times the
+            world's size is flat (it has no interior).
+        planar_rel: a boundary loop whose points leave their best-fit plane by at most
+            ``planar_rel`` times the loop's size is planar.
     """
 
     eps_rel: float = 0.005
@@ -64,6 +75,11 @@ class Tolerances:
     coacd_threshold: float = 0.05
     excess_samples: int = 20_000
     sample_seed: int = 0
+    touch_rel: float = 1e-7
+    orientation_deg: float = 1e-4
+    quaternion_norm: float = 1e-3
+    flat_rel: float = 1e-9
+    planar_rel: float = 1e-6
 
     def __post_init__(self) -> None:
         for field in (
@@ -75,6 +91,11 @@ class Tolerances:
             "fold_angle",
             "coplanar_rel",
             "coacd_threshold",
+            "touch_rel",
+            "orientation_deg",
+            "quaternion_norm",
+            "flat_rel",
+            "planar_rel",
         ):
             value = getattr(self, field)
             if not (np.isfinite(value) and value > 0):

@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 
-from planner.errors import ScenarioError
 from planner.problem import DEFAULT_CONTACT_REL, Assembly, Part
 from planner.validation import FclChecker
 
@@ -26,8 +25,9 @@ from .fields import (
     Document,
     check_mapping,
     field_error,
-    load_yaml,
     name_of,
+    parse_document,
+    read_text,
     real,
     settings_from_mapping,
 )
@@ -46,30 +46,16 @@ def read_assembly(path: str | os.PathLike[str]) -> Assembly:
         ScenarioError: one line, ``"<file>:<line>: <field>: <problem>"``.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(f"{path}: assembly file not found "
-                            f"(looked in {path.parent.resolve()})") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise ScenarioError(f"{path}: cannot read the assembly file: {error}") from None
-    return _parse(text, Document(str(path)), path.parent, path.resolve(), path.stem)
+    return parse_document(read_text(path, "assembly"), Document(str(path)),
+                          lambda data: _build(data, path.parent, path.resolve(), path.stem))
 
 
 def parse_assembly(source: str | Mapping[str, Any], base_dir: str | os.PathLike[str] | None = None,
                    *, filename: str | None = None) -> Assembly:
     """An :class:`Assembly` from YAML text or a mapping (see :func:`read_assembly`)."""
     base = Path(base_dir) if base_dir is not None else Path.cwd()
-    return _parse(source, Document(filename or "<assembly>"), base, None, "assembly")
-
-
-def _parse(source, document: Document, base_dir: Path, path: Path | None,
-           default_name: str) -> Assembly:
-    data = load_yaml(source, document) if isinstance(source, str) else source
-    try:
-        return _build(data, base_dir, path, default_name)
-    except ScenarioError as error:
-        raise document.locate(error) from None
+    return parse_document(source, Document(filename or "<assembly>"),
+                          lambda data: _build(data, base, None, "assembly"))
 
 
 def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> Assembly:

@@ -16,8 +16,9 @@ from __future__ import annotations
 import difflib
 import math
 import re
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, TypeVar
 
 import numpy as np
 import yaml
@@ -25,7 +26,10 @@ from trimesh import transformations as tf
 
 from planner.errors import ScenarioError
 from planner.problem import SETTING_CHECKS, PlannerSettings
+from planner.tolerances import tol
 from planner.values import describe_value
+
+T = TypeVar("T")
 
 __all__ = [
     "Document",
@@ -34,17 +38,14 @@ __all__ = [
     "join",
     "load_yaml",
     "name_of",
+    "parse_document",
     "parse_orientation",
+    "read_text",
     "real",
     "rotation_angle_deg",
     "settings_from_mapping",
     "vector",
 ]
-
-
-QUATERNION_NORM_TOLERANCE = 1e-3
-"""A quaternion ``[w, x, y, z]`` is accepted (and normalised) when ``|norm - 1|`` is at
-most this; anything else is almost surely a typo or a wrong component order."""
 
 
 ORIENTATION_KEYS = ("quaternion", "rpy", "axis", "angle_deg")
@@ -107,7 +108,7 @@ def parse_orientation(value: Any, *, field: str = "orientation") -> np.ndarray:
     Accepted forms:
 
     - ``[w, x, y, z]`` or ``{quaternion: [w, x, y, z]}``: a unit quaternion, scalar first;
-      normalised when its norm is within :data:`QUATERNION_NORM_TOLERANCE` of 1.
+      normalised when its norm is within ``tol.quaternion_norm`` of 1.
     - ``{rpy: [r, p, y]}``: degrees about the fixed x, y, z axes, applied in that order:
       ``R = Rz(y) @ Ry(p) @ Rx(r)``.
     - ``{axis: [x, y, z], angle_deg: a}``: ``a`` degrees about ``axis`` (right-hand rule).
@@ -154,7 +155,7 @@ def parse_orientation(value: Any, *, field: str = "orientation") -> np.ndarray:
 def _quaternion(value: Any, field: str) -> np.ndarray:
     q = vector(value, field, 4, "[w, x, y, z]")
     norm = float(np.linalg.norm(q))
-    if abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE:
+    if abs(norm - 1.0) > tol.quaternion_norm:
         raise field_error(field, f"quaternion [w, x, y, z] must have unit length, its norm is "
                             f"{norm:.6g}")
     return tf.quaternion_matrix(q / norm)[:3, :3]
@@ -262,6 +263,29 @@ def load_yaml(text: str, document: Document) -> Any:
     finally:
         loader.dispose()
 
+
+
+def read_text(path: Path, what: str) -> str:
+    """The UTF-8 text of a problem file, or a one-line error naming it (``what``: "scenario",
+    "assembly")."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ScenarioError(f"{path}: {what} file not found "
+                            f"(looked in {path.parent.resolve()})") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise ScenarioError(f"{path}: cannot read the {what} file: {error}") from None
+
+
+def parse_document(source: str | Mapping[str, Any], document: Document,
+                   build: Callable[[Any], T]) -> T:
+    """``build`` the problem from YAML text or a mapping; its errors get the document's
+    file and line in front (:meth:`Document.locate`)."""
+    data = load_yaml(source, document) if isinstance(source, str) else source
+    try:
+        return build(data)
+    except ScenarioError as error:
+        raise document.locate(error) from None
 
 
 def settings_from_mapping(mapping: Mapping[str, Any] | None, *,

@@ -53,7 +53,7 @@ from trimesh import transformations as tf
 from planner.errors import InvalidMeshError, ScenarioError
 from planner.meshes import load_mesh, validate_solid
 from planner.problem import Body, PlannerSettings, Robot, Scenario, default_bounds
-from planner.tolerances import scale_of
+from planner.tolerances import scale_of, tol
 
 __all__ = [
     "APP_FROM_ZUP",
@@ -68,8 +68,6 @@ APP_FROM_ZUP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 """Rotation from a Z-up COLLADA file's frame to OMPL.app's (assimp's Y-up) frame:
 ``app = APP_FROM_ZUP @ file``, i.e. ``(x, y, z) -> (x, z, -y)``."""
 
-_ORIENTATION_TOLERANCE_RAD = 1e-9
-_FLAT_REL = 1e-9  # a piece is flat when its thickness is below this times its size
 
 
 # ------------------------------------------------------------------------------ meshes
@@ -233,7 +231,7 @@ def _bridge_openings(piece: trimesh.Trimesh) -> tuple[trimesh.Trimesh, int] | No
         return None
     planes = [_loop_plane(vertices[loop]) for loop in loops]
     sizes = [float(np.ptp(vertices[loop], axis=0).max()) for loop in loops]
-    if any(spread > 1e-6 * size for (_, _, spread), size in zip(planes, sizes)):
+    if any(spread > tol.planar_rel * size for (_, _, spread), size in zip(planes, sizes)):
         return None  # a loop that is not planar
 
     def overlap(i: int, j: int) -> float:
@@ -292,7 +290,7 @@ def _world_parts(raw: trimesh.Trimesh, label: str,
             continue
         except InvalidMeshError as error:
             problem = _reason(error)
-        if _thickness(np.asarray(piece.vertices)) > _FLAT_REL * size:
+        if _thickness(np.asarray(piece.vertices)) > tol.flat_rel * size:
             bridged = _bridge_openings(piece)
             if bridged is not None:
                 closed, pairs = bridged
@@ -428,7 +426,7 @@ def load_omplapp(cfg_path: str | os.PathLike[str]) -> Scenario:
     goal_rotation = cfg.rotation("goal")
     difference = math.acos(min(1.0, max(-1.0, (np.trace(orientation.T @ goal_rotation) - 1)
                                         / 2)))
-    if difference > _ORIENTATION_TOLERANCE_RAD:
+    if math.degrees(difference) > tol.orientation_deg:
         raise cfg.error("goal.theta", f"goal orientation differs from the start's by "
                                       f"{math.degrees(difference):.4g} degrees; minkplan only "
                                       "translates the robot")

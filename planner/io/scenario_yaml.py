@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from planner.errors import ScenarioError
-from planner.problem import ORIENTATION_TOLERANCE_DEG, Body, Robot, Scenario, default_bounds
+from planner.problem import Body, Robot, Scenario, default_bounds
+from planner.tolerances import tol
 from planner.values import describe_value
 
 from .fields import (
@@ -30,9 +30,10 @@ from .fields import (
     check_mapping,
     field_error,
     join,
-    load_yaml,
     name_of,
+    parse_document,
     parse_orientation,
+    read_text,
     rotation_angle_deg,
     settings_from_mapping,
     vector,
@@ -74,15 +75,8 @@ def read_scenario(path: str | os.PathLike[str]) -> Scenario:
             ``"<path>:<line>: <field>: <problem>"``.
     """
     path = Path(path)
-    label = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(f"{label}: scenario file not found "
-                            f"(looked in {path.parent.resolve()})") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise ScenarioError(f"{label}: cannot read the scenario file: {error}") from None
-    return _parse(text, Document(label), path.parent, path.resolve(), path.stem)
+    return parse_document(read_text(path, "scenario"), Document(str(path)),
+                          lambda data: _build(data, path.parent, path.resolve(), path.stem))
 
 
 def parse_scenario(
@@ -105,18 +99,9 @@ def parse_scenario(
     if isinstance(source, os.PathLike):
         raise TypeError("parse_scenario takes YAML text or a mapping; use "
                         "planner.load_scenario for a file")
-    document = Document(filename or "<scenario>")
     base = Path(base_dir) if base_dir is not None else Path.cwd()
-    return _parse(source, document, base, None, "scenario")
-
-
-def _parse(source: str | Mapping[str, Any], document: Document, base_dir: Path,
-           path: Path | None, default_name: str) -> Scenario:
-    data = load_yaml(source, document) if isinstance(source, str) else source
-    try:
-        return _build(data, base_dir, path, default_name)
-    except ScenarioError as error:
-        raise document.locate(error) from None
+    return parse_document(source, Document(filename or "<scenario>"),
+                          lambda data: _build(data, base, None, "scenario"))
 
 
 def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> Scenario:
@@ -133,7 +118,7 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> S
     goal, goal_rotation = _endpoint(top["goal"], "goal")
     if start_rotation is not None and goal_rotation is not None:
         angle = rotation_angle_deg(start_rotation, goal_rotation)
-        if angle > ORIENTATION_TOLERANCE_DEG:
+        if angle > tol.orientation_deg:
             raise field_error("goal.orientation",
                          f"differs from start.orientation by {angle:.4g} degrees; the part "
                          "only translates, so start and goal orientations must be equal")

@@ -303,7 +303,7 @@ def _self_overlaps(vertices: np.ndarray, faces: np.ndarray, scale: float) -> int
     v = np.cross(normals[i], u)
     pi = np.stack([np.einsum("kcj,kj->kc", tri[i], u), np.einsum("kcj,kj->kc", tri[i], v)], -1)
     pj = np.stack([np.einsum("kcj,kj->kc", tri[j], u), np.einsum("kcj,kj->kc", tri[j], v)], -1)
-    margin = 1e-7 * scale
+    margin = tol.touch_rel * scale
     separated = np.zeros(len(i), dtype=bool)
     for poly in (pi, pj):
         for e in range(3):
