@@ -106,6 +106,9 @@ def _parser() -> argparse.ArgumentParser:
                     help="seed (default: the scenario's planner.seed)")
     pl.add_argument("--cache-dir", default=None, help="decomposition cache directory")
     pl.add_argument("--no-progress", action="store_true", help="no progress line")
+    pl.add_argument("--hold-orientation", choices=("start", "goal"), default=None,
+                    help="when start and goal orientations differ (a 6-DOF problem), plan "
+                    "translation-only with this one throughout (said in report.json)")
     pl.add_argument(
         "--exact",
         choices=("auto", "true", "false"),
@@ -229,7 +232,7 @@ def _cmd_plan(args) -> int:
     from planner.output import write_json
     from planner.planning import plan
 
-    scenario = load_scenario(scenario_path)
+    scenario = load_scenario(scenario_path, hold_orientation=args.hold_orientation)
     overrides = {}
     if args.time_limit is not None:
         overrides["time_limit"] = args.time_limit

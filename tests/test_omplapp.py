@@ -304,3 +304,35 @@ def test_path_state_transform_is_scalar_last():
     transform = path_state_transform([1, 2, 3, 0, 0, half, half])  # 90 degrees about z
     np.testing.assert_allclose(transform[:3, :3] @ [1, 0, 0], [0, 1, 0], atol=1e-12)
     np.testing.assert_allclose(transform[:3, 3], [1, 2, 3])
+
+
+@pytest.mark.assets
+def test_repeated_keys_are_read_as_omplapp_reads_them():
+    # cubicles_opt.cfg lists "aps=" twice under [planner], as OMPL.app's own files do
+    scenario = load_omplapp(ASSETS / "cubicles_opt.cfg")
+    assert scenario.path.name == "cubicles_opt.cfg"
+    assert len(scenario.obstacles) == len(load_omplapp(ASSETS / "cubicles.cfg").obstacles)
+
+
+@pytest.mark.assets
+@pytest.mark.parametrize("hold", ["start", "goal"])
+def test_a_turning_problem_is_read_translation_only_when_asked(hold):
+    with pytest.raises(ScenarioError, match=r"differs from the start's by 90 degrees.*"
+                                            r"--hold-orientation start \(or goal\)"):
+        load_omplapp(ASSETS / "Abstract.cfg")
+    scenario = load_omplapp(ASSETS / "Abstract.cfg", hold_orientation=hold)
+    turned = np.allclose(scenario.orientation, np.eye(3))
+    assert turned == (hold == "start")  # the start's theta is 0, the goal's 90 degrees
+    assert any(f"keeps the {hold} orientation throughout" in n for n in scenario.notes)
+    assert load_scenario(ASSETS / "Abstract.cfg", hold_orientation=hold).start.tolist() == \
+        scenario.start.tolist()
+
+
+@pytest.mark.assets
+def test_orientations_within_the_tolerance_are_equal(tmp_path):
+    # OMPL.app's Apartment differs by 1.2e-6 degrees: the same orientation
+    path = copy_problem(tmp_path, "Easy",
+                        lambda t: t.replace("goal.theta = 0", "goal.theta = 2.1e-8"))
+    scenario = load_omplapp(path)
+    assert not any("translation-only" in n for n in scenario.notes)
+    np.testing.assert_array_equal(scenario.orientation, np.eye(3))

@@ -608,3 +608,17 @@ def test_missing_mesh_suggests_only_mesh_files(folder):
     with pytest.raises(ScenarioError) as info:
         load_scenario(path)
     assert "not found" in str(info.value) and "did you mean" not in str(info.value)
+
+
+def test_differing_orientations_are_held_when_asked(folder):
+    text = scenario_text(
+        start="start:\n  position: [0, 0, 60]\n  orientation: {rpy: [0, 0, 90]}",
+        goal="goal:\n  position: [0, 0, 30]\n  orientation: {rpy: [0, 0, 0]}")
+    (folder / "turn.yaml").write_text(text)
+    with pytest.raises(ScenarioError, match="--hold-orientation start or goal"):
+        load_scenario(folder / "turn.yaml")
+    held = load_scenario(folder / "turn.yaml", hold_orientation="goal")
+    np.testing.assert_allclose(held.orientation, np.eye(3), atol=1e-12)
+    assert any("keeps the goal orientation throughout" in n for n in held.notes)
+    np.testing.assert_allclose(load_scenario(folder / "turn.yaml", hold_orientation="start")
+                               .orientation, rz(90), atol=1e-12)

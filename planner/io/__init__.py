@@ -51,9 +51,12 @@ def _is_assembly_yaml(path: Path) -> bool:
     return any(line.startswith("parts:") for line in text.splitlines())
 
 
-def load_problem(path: str | os.PathLike[str]) -> Scenario | Assembly:
+def load_problem(path: str | os.PathLike[str], *,
+                 hold_orientation: str | None = None) -> Scenario | Assembly:
     """Read a problem file: an OMPL.app ``.cfg``, a scenario YAML or an assembly YAML
-    (one with top-level ``parts:``).
+    (one with top-level ``parts:``). ``hold_orientation`` (``"start"`` or ``"goal"``):
+    a planning problem whose start and goal orientations differ is read with that one
+    throughout (see :func:`load_scenario`).
 
     Raises:
         ScenarioError: unknown suffix, or whatever the reader finds (one line naming the
@@ -61,24 +64,31 @@ def load_problem(path: str | os.PathLike[str]) -> Scenario | Assembly:
     """
     path = Path(path)
     suffix = path.suffix.lower()
-    if suffix == ".cfg":
-        return load_omplapp(path)
-    if suffix in (".yaml", ".yml"):
-        return read_assembly(path) if _is_assembly_yaml(path) else read_scenario(path)
+    if suffix in (".yaml", ".yml") and _is_assembly_yaml(path):
+        return read_assembly(path)
+    if suffix in (".cfg", ".yaml", ".yml"):
+        return load_scenario(path, hold_orientation=hold_orientation)
     raise ScenarioError(f"{path}: unknown problem file type {suffix or '(no suffix)'!r}; "
                         f"use one of {', '.join(PROBLEM_SUFFIXES)}")
 
 
-def load_scenario(path: str | os.PathLike[str]) -> Scenario:
+def load_scenario(path: str | os.PathLike[str], *,
+                  hold_orientation: str | None = None) -> Scenario:
     """A planning problem: a scenario YAML, or an OMPL.app ``.cfg`` (translation only).
+
+    Args:
+        path: the file.
+        hold_orientation: ``"start"`` or ``"goal"``: when the start and goal orientations
+            differ (a 6-DOF problem), read it translation-only with that orientation
+            throughout (noted in ``Scenario.notes``); ``None``: that is an error.
 
     Raises:
         ScenarioError: as :func:`load_problem`, or the file is an assembly.
     """
     path = Path(path)
     if path.suffix.lower() == ".cfg":
-        return load_omplapp(path)
-    return read_scenario(path)
+        return load_omplapp(path, hold_orientation=hold_orientation)
+    return read_scenario(path, hold_orientation=hold_orientation)
 
 
 def load_assembly(path: str | os.PathLike[str]) -> Assembly:

@@ -60,12 +60,16 @@ ENDPOINT_KEYS = ("position", "orientation")
 BOUNDS_KEYS = ("min", "max")
 
 
-def read_scenario(path: str | os.PathLike[str]) -> Scenario:
+def read_scenario(path: str | os.PathLike[str], *,
+                  hold_orientation: str | None = None) -> Scenario:
     """Read and validate a scenario YAML file.
 
     Args:
         path: a scenario ``.yaml``/``.yml`` file; mesh paths inside it are relative to
             its folder.
+        hold_orientation: ``"start"`` or ``"goal"``: when start and goal orientations
+            differ, the robot keeps that one throughout (a translation-only reading,
+            noted in ``Scenario.notes``); ``None``: that is an error.
 
     Returns:
         The validated :class:`Scenario` (``name`` defaults to the file's stem).
@@ -76,7 +80,8 @@ def read_scenario(path: str | os.PathLike[str]) -> Scenario:
     """
     path = Path(path)
     return parse_document(read_text(path, "scenario"), Document(str(path)),
-                          lambda data: _build(data, path.parent, path.resolve(), path.stem))
+                          lambda data: _build(data, path.parent, path.resolve(), path.stem,
+                                              hold_orientation))
 
 
 def parse_scenario(
@@ -104,7 +109,27 @@ def parse_scenario(
                           lambda data: _build(data, base, None, "scenario"))
 
 
-def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> Scenario:
+def _held_orientation(start: np.ndarray | None, goal: np.ndarray | None, hold: str | None,
+                      notes: list[str]) -> np.ndarray:
+    """The robot's one orientation: the start's (or the goal's, or the identity) when they
+    agree within ``tol.orientation_deg``; else the one ``hold`` names, noted."""
+    if start is not None and goal is not None:
+        angle = rotation_angle_deg(start, goal)
+        if angle > tol.orientation_deg:
+            if hold is None:
+                raise field_error("goal.orientation",
+                                  f"differs from start.orientation by {angle:.4g} degrees; "
+                                  "the part only translates, so start and goal orientations "
+                                  "must be equal (or plan with one of them throughout: "
+                                  "--hold-orientation start or goal)")
+            notes.append(f"translation-only reading: the robot keeps the {hold} orientation "
+                         f"throughout (the other differs by {angle:.4g} degrees)")
+            return goal if hold == "goal" else start
+    return next((r for r in (start, goal) if r is not None), np.eye(3))
+
+
+def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
+           hold_orientation: str | None = None) -> Scenario:
     if data is None:
         raise field_error("", "the scenario is empty; it needs at least robot, start and goal")
     top = check_mapping(data, "", TOP_LEVEL_KEYS, ("robot", "start", "goal"))
@@ -116,14 +141,8 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> S
     # Start, goal and the fixed orientation.
     start, start_rotation = _endpoint(top["start"], "start")
     goal, goal_rotation = _endpoint(top["goal"], "goal")
-    if start_rotation is not None and goal_rotation is not None:
-        angle = rotation_angle_deg(start_rotation, goal_rotation)
-        if angle > tol.orientation_deg:
-            raise field_error("goal.orientation",
-                         f"differs from start.orientation by {angle:.4g} degrees; the part "
-                         "only translates, so start and goal orientations must be equal")
-    orientation = next((r for r in (start_rotation, goal_rotation) if r is not None),
-                       np.eye(3))
+    notes: list[str] = []
+    orientation = _held_orientation(start_rotation, goal_rotation, hold_orientation, notes)
 
     explicit_bounds = None
     if top.get("bounds") is not None:
@@ -175,7 +194,7 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> S
 
     return Scenario(name=name, units=units, robot=robot, obstacles=obstacles, start=start,
                     goal=goal, orientation=orientation, bounds=bounds, settings=settings,
-                    path=path)
+                    path=path, notes=tuple(notes))
 
 
 def _endpoint(value: Any, field: str) -> tuple[np.ndarray, np.ndarray | None]:

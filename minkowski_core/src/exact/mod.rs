@@ -473,13 +473,14 @@ impl ExactSource {
     }
 
     /// Split the node pair `start` of obstacle `k` (a surface pair) against `cell`: push
-    /// `[PAIR, k, a, b]` records of the pairs whose pieces may meet it — leaf pairs whose
-    /// piece does, and inner pairs no larger than about the cell (all the way to leaves
-    /// when `finest`). Whether one piece contains the whole cell (then it is FULL).
-    fn refine_pair(&self, k: usize, start: [u32; 2], cell: &Aabb, finest: bool, out: &mut Vec<u32>) -> bool {
+    /// `[PAIR, k, a, b]` records of the pairs whose pieces meet it — split while their box
+    /// is much larger than the cell, then kept as one record (a leaf pair, or a small
+    /// inner pair) when one piece below them meets the cell, tested exactly and stopping
+    /// at the first; so a cell's list stays about as long as the pairs of its size, not
+    /// all pieces. Whether one piece contains the whole cell (then it is FULL).
+    fn refine_pair(&self, k: usize, start: [u32; 2], cell: &Aabb, out: &mut Vec<u32>) -> bool {
         let m = self.margin;
         let big = 2.0 * cell.extent().max_element();
-        let (ma, mb) = (&self.obstacles[k].nodes, &self.b.nodes);
         let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
         let mut stack = vec![start];
         while let Some([a, b]) = stack.pop() {
@@ -487,18 +488,27 @@ impl ExactSource {
             if !bx.overlaps(cell) {
                 continue;
             }
-            let (na, nb) = (&ma[a as usize], &mb[b as usize]);
-            if na.is_leaf() && nb.is_leaf() {
-                let piece = Piece::new(&ta[na.tri as usize], &tb[nb.tri as usize], m, true);
-                if piece.contains_box(cell) {
-                    return true;
-                }
-                if piece.overlaps_box(cell) {
-                    out.extend([PAIR, k as u32, a, b]);
-                }
-            } else if finest || bx.extent().max_element() > big {
+            let leaf = self.obstacles[k].nodes[a as usize].is_leaf() && self.b.nodes[b as usize].is_leaf();
+            if !leaf && bx.extent().max_element() > big {
                 stack.extend(self.split(k, a, b).map(|[_, ca, cb]| [ca, cb]));
-            } else {
+                continue;
+            }
+            let mut full = false;
+            let meets = self.any_pair_under(
+                k,
+                [a, b],
+                m,
+                |q| q.overlaps(cell),
+                |i, j| {
+                    let piece = Piece::new(&ta[i], &tb[j], m, true);
+                    full = piece.contains_box(cell);
+                    full || piece.overlaps_box(cell)
+                },
+            );
+            if full {
+                return true;
+            }
+            if meets {
                 out.extend([PAIR, k as u32, a, b]);
             }
         }
@@ -566,7 +576,7 @@ impl CellSource for ExactSource {
         Some(known.and_then(|(q, s)| self.carry(cand, q, s, c)).unwrap_or_else(|| self.cell_contains(own, c)))
     }
 
-    fn classify_near(&self, cell: &Aabb, cand: &[u32], finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
+    fn classify_near(&self, cell: &Aabb, cand: &[u32], _finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
         for rec in records(cand) {
             match rec {
                 Rec::Wall(side) => {
@@ -585,7 +595,7 @@ impl CellSource for ExactSource {
                     }
                 }
                 Rec::Pair(k, a, b) => {
-                    if self.refine_pair(k, [a, b], cell, finest, out) {
+                    if self.refine_pair(k, [a, b], cell, out) {
                         out.clear();
                         return Label::Full;
                     }
