@@ -110,6 +110,8 @@ class Part:
         kind_reason: why it is a solid or a surface (for reports).
         checked: the mesh has been through :func:`planner.meshes.validate_solid` (the
             readers do it once); otherwise whoever needs a checked solid does.
+        repairs: what was changed to make the mesh a solid (``{"t_junctions_split": 36}``,
+            repair counts); empty when nothing was.
     """
 
     name: str
@@ -118,11 +120,14 @@ class Part:
     solid: bool = True
     kind_reason: str = "closed and its winding number never negative"
     checked: bool = False
+    repairs: dict[str, Any] = dataclasses.field(default_factory=dict)
 
     def describe(self) -> dict[str, Any]:
-        """Name, source, kind (``"solid"`` / ``"surface"``) and why, for reports."""
+        """Name, source, kind (``"solid"`` / ``"surface"``), why, and what was repaired,
+        for reports."""
         return {"name": self.name, "source": self.source,
-                "kind": "solid" if self.solid else "surface", "kind_reason": self.kind_reason}
+                "kind": "solid" if self.solid else "surface", "kind_reason": self.kind_reason,
+                "repairs": self.repairs}
 
 
 Body = Part

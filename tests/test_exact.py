@@ -711,13 +711,14 @@ def open_box() -> trimesh.Trimesh:
 
 @pytest.mark.parametrize("part", ["obstacle", "robot"])
 def test_cli_open_mesh_exact_true_one_line_exit_2(tmp_path, capsys, part):
+    """An open mesh asked to be a solid (kind: solid; by default it is a surface)."""
     open_box().export(tmp_path / "lid.stl")
     shapes.box((1.0, 1.0, 1.0)).export(tmp_path / "cube.stl")
     robot, obstacle = ("lid", "cube") if part == "robot" else ("cube", "lid")
     path = write_scenario(tmp_path, "bad", f"""
-        robot: {{name: {robot}, mesh: {robot}.stl}}
+        robot: {{name: {robot}, mesh: {robot}.stl, kind: solid}}
         obstacles:
-          - {{name: {obstacle}, mesh: {obstacle}.stl}}
+          - {{name: {obstacle}, mesh: {obstacle}.stl, kind: solid}}
         start: [4, 0, 0]
         goal: [-4, 0, 0]
         planner: {{exact: true}}

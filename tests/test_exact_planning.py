@@ -130,10 +130,18 @@ def test_cli_exact_flag_is_reported(tmp_path, flag):
 
 
 def test_cli_exact_with_an_open_mesh_is_one_line(tmp_path):
+    """An open plate asked to be a solid (kind: solid) is one line of error; by default
+    (kind: auto) it is a surface, planned as FCL sees it."""
     write_scenario(tmp_path, 12.0)
     open_plate = plate_with_hole(12.0)
     open_plate.faces = open_plate.faces[:-1]
     open_plate.export(tmp_path / "plate.stl")
+    as_surface = plan(load_scenario(tmp_path / "s.yaml"), progress=False)
+    assert as_surface.found and not as_surface.report["scenario"]["obstacles"][0]["kind"] \
+        == "solid"
+    text = (tmp_path / "s.yaml").read_text()
+    (tmp_path / "s.yaml").write_text(text.replace("mesh: plate.stl}",
+                                                  "mesh: plate.stl, kind: solid}"))
     r = subprocess.run([sys.executable, "-m", "planner", "plan", str(tmp_path / "s.yaml"),
                         "--out", str(tmp_path / "o"), "--exact", "true"],
                        capture_output=True, text=True, timeout=300)

@@ -236,14 +236,18 @@ obstacles:
 start: [0, 0, 5]
 goal: [0, 0, 6]
 """
+    # kind: auto (the default): an open mesh is a surface, and the report says why
+    surface = parse_scenario(text % "", folder).obstacles[0]
+    assert not surface.solid and "not watertight" in surface.kind_reason
+    assert surface.describe()["kind"] == "surface"
     with pytest.raises(ScenarioError) as info:
-        parse_scenario(text % "", folder, filename="s.yaml")
+        parse_scenario(text % ", kind: solid", folder, filename="s.yaml")
     assert str(info.value).startswith("s.yaml:3: obstacles[0].mesh: ")
     assert "not watertight" in str(info.value) and "repair: true" in str(info.value)
     scenario = parse_scenario(text % ", repair: true", folder)
     mesh = scenario.obstacles[0].mesh
     assert mesh.is_watertight and math.isclose(mesh.volume, 1.0)
-    assert "repaired" in scenario.obstacles[0].source
+    assert scenario.obstacles[0].solid and scenario.obstacles[0].repairs["filled_holes"] == 1
 
 
 def test_scientific_notation_is_a_number(folder):

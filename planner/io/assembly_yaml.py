@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.problem import DEFAULT_CONTACT_REL, Assembly, Part
+from planner.problem import DEFAULT_CONTACT_REL, Assembly
 from planner.validation import FclChecker
 
 from .fields import (
@@ -31,7 +31,7 @@ from .fields import (
     real,
     settings_from_mapping,
 )
-from .parts import OBSTACLE_KEYS, assign_names, build_mesh, object_spec
+from .parts import OBSTACLE_KEYS, assign_names, build_part, object_spec
 
 __all__ = ["parse_assembly", "read_assembly"]
 
@@ -91,11 +91,8 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> A
                          f"{delta:g}; give it once")
         delta = settings.contact_tolerance
     cache: dict = {}
-    parts = []
-    for spec, part_name in zip(specs, names):
-        mesh, source = build_mesh(spec, cache)
-        mesh.apply_transform(spec.pose.matrix)
-        parts.append(Part(part_name, mesh, source, checked=True))
+    parts = [build_part(spec, part_name, cache, spec.pose.matrix)
+             for spec, part_name in zip(specs, names, strict=True)]
     if delta is None:
         bounds = np.array([p.mesh.bounds for p in parts])
         delta = DEFAULT_CONTACT_REL * float(np.linalg.norm(bounds[:, 1].max(axis=0)

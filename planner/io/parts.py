@@ -1,9 +1,9 @@
 """The parts of a problem file: the mapping of one object (a mesh file or a primitive,
-with name, pose, scale, ``repair``) to a checked :class:`~planner.problem.Part`.
+with name, pose, scale, ``kind``, ``repair``) to a checked :class:`~planner.problem.Part`.
 
 Entry points: :func:`object_spec` (cheap checks of one object, file existence),
-:func:`build_mesh` (the mesh in its own frame, read once per file and checked with
-:func:`planner.meshes.validate_solid` or repaired), :func:`assign_names`.
+:func:`build_part` (the part, its mesh read once per file and made a solid or a surface
+by :func:`planner.meshes.kinds.classify`), :func:`assign_names`.
 """
 
 from __future__ import annotations
@@ -16,23 +16,24 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import trimesh
 
 from planner.meshes import MESH_SUFFIXES
+from planner.meshes.kinds import KINDS, Classified, classify
 from planner.primitives import PRIMITIVE_KINDS, make_primitive
-from planner.problem import Pose
+from planner.problem import Part, Pose
 from planner.values import describe_value
 
 from .fields import check_mapping, field_error, join, name_of, parse_orientation, real, vector
 
 __all__ = ["OBSTACLE_KEYS", "ROBOT_KEYS", "MeshCache", "ObjectSpec", "assign_names",
-           "build_mesh", "object_spec", "rotation4"]
+           "build_part", "object_spec", "rotation4"]
 
 
-ROBOT_KEYS = ("name", "mesh", *PRIMITIVE_KINDS, "scale", "repair")
+ROBOT_KEYS = ("name", "mesh", *PRIMITIVE_KINDS, "scale", "repair", "kind")
 
 
-OBSTACLE_KEYS = ("name", "mesh", *PRIMITIVE_KINDS, "position", "orientation", "scale", "repair")
+OBSTACLE_KEYS = ("name", "mesh", *PRIMITIVE_KINDS, "position", "orientation", "scale", "repair",
+                 "kind")
 
 
 @dataclass
@@ -44,6 +45,7 @@ class ObjectSpec:
     scale: np.ndarray
     pose: Pose
     repair: bool = False
+    kind: str = "auto"
 
 
 def object_spec(value: Any, field: str, allowed: Sequence[str], base_dir: Path) -> ObjectSpec:
@@ -94,8 +96,16 @@ def object_spec(value: Any, field: str, allowed: Sequence[str], base_dir: Path) 
         if mesh_path is None:
             raise field_error(join(field, "repair"), "only mesh files can be repaired")
         repair = spec["repair"]
+    kind = "auto"
+    if spec.get("kind") is not None:
+        kind = spec["kind"]
+        if kind not in KINDS:
+            close = difflib.get_close_matches(str(kind), KINDS, n=1, cutoff=0.5)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise field_error(join(field, "kind"), f"expected one of {', '.join(KINDS)}, got "
+                                                   f"{describe_value(kind)}{hint}")
     return ObjectSpec(field, name, mesh_path, primitive, scale, Pose(position, rotation),
-                       repair)
+                      repair, kind)
 
 
 def _resolve_mesh(value: Any, field: str, base_dir: Path) -> Path:
@@ -123,56 +133,55 @@ def _resolve_mesh(value: Any, field: str, base_dir: Path) -> Path:
     raise field_error(field, f"file '{value}' not found (looked in {folder}){hint}")
 
 
-MeshCache = dict[tuple[Path, bool], tuple[trimesh.Trimesh, str]]
+MeshCache = dict[tuple[Path, bool, str], tuple[Classified, str]]
 
 
-def build_mesh(spec: ObjectSpec, cache: MeshCache) -> tuple[trimesh.Trimesh, str]:
-    """The object's mesh in its own frame with the scale applied, and its source. The
-    mesh is a checked solid (:func:`planner.meshes.validate_solid` or repair), read once
-    per file and ``repair`` setting."""
+def build_part(spec: ObjectSpec, name: str, cache: MeshCache,
+               transform: np.ndarray | None = None) -> Part:
+    """The object as a :class:`~planner.problem.Part`: its mesh in its own frame with the
+    scale applied (then ``transform``, ``(4, 4)``, if given), solid or surface as its
+    ``kind`` says (:func:`planner.meshes.kinds.classify`), read once per file, kind and
+    ``repair`` setting."""
     if spec.mesh_path is not None:
-        key = (spec.mesh_path.resolve(), spec.repair)
+        key = (spec.mesh_path.resolve(), spec.repair, spec.kind)
         if key not in cache:
             cache[key] = _load_mesh_file(key[0], spec)
-        mesh, source = cache[key]
-        mesh = mesh.copy()
+        classified, source = cache[key]
     else:
-        from planner.meshes import validate_solid  # noqa: PLC0415
-
         assert spec.primitive is not None
-        mesh = validate_solid(make_primitive(spec.primitive, field=spec.field),
-                              name=spec.name or spec.field)
+        classified = classify(make_primitive(spec.primitive, field=spec.field),
+                              name=spec.name or spec.field, kind=spec.kind)
         ((kind, value),) = spec.primitive.items()
         source = f"{kind} {value}"
+    mesh = classified.mesh.copy()
     if not np.allclose(spec.scale, 1.0):
         mesh.apply_scale(spec.scale)  # positive factors: winding is kept
         source += f" scaled {spec.scale.tolist()}"
-    return mesh, source
+    if transform is not None:
+        mesh.apply_transform(transform)
+    return Part(name, mesh, source, classified.solid, classified.reason,
+                checked=classified.solid, repairs=dict(classified.changes))
 
 
-def _load_mesh_file(path: Path, spec: ObjectSpec) -> tuple[trimesh.Trimesh, str]:
-    """Read a mesh file and check (or, with ``repair: true``, repair) that it is a solid."""
-    from planner.meshes import load_mesh, repair_mesh, validate_solid  # noqa: PLC0415
+def _load_mesh_file(path: Path, spec: ObjectSpec) -> tuple[Classified, str]:
+    """Read a mesh file and make it the part its ``kind`` asks for (with ``repair: true``,
+    a solid that repair may fill holes of)."""
+    from planner.meshes import load_mesh  # noqa: PLC0415
 
     field = join(spec.field, "mesh")
     label = spec.name or path.stem
     try:
-        mesh = load_mesh(path, name=label)
-        if spec.repair:
-            mesh, report = repair_mesh(mesh, name=label)
-            done = {k: v for k, v in report.items()
-                    if k.startswith(("removed_", "merged_", "fixed_", "filled_", "flipped_"))
-                    and k != "removed_faces" and v}
-            source = f"{path} (repaired: {done or 'nothing to do'})"
-        else:
-            mesh = validate_solid(mesh, name=label)
-            source = str(path)
+        classified = classify(load_mesh(path, name=label), name=label, kind=spec.kind,
+                              repair=spec.repair)
     except (ValueError, OSError) as error:  # InvalidMeshError is a ValueError
         hint = ""
         if not spec.repair and "repair_mesh" in str(error):
-            hint = " (in a scenario: add 'repair: true' to this object)"
+            hint = " (in a scenario: add 'repair: true' to this object, or kind: surface)"
         raise field_error(field, f"{error}{hint}") from None
-    return mesh, source
+    source = str(path)
+    if classified.changes:
+        source += f" ({classified.reason}: {classified.changes})"
+    return classified, source
 
 
 def assign_names(specs: Sequence[ObjectSpec]) -> list[str]:

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.problem import Body, Robot, Scenario, default_bounds
+from planner.problem import Scenario, default_bounds
 from planner.tolerances import tol
 from planner.values import describe_value
 
@@ -43,7 +43,7 @@ from .parts import (
     ROBOT_KEYS,
     MeshCache,
     assign_names,
-    build_mesh,
+    build_part,
     object_spec,
     rotation4,
 )
@@ -170,15 +170,9 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
     names = assign_names([robot_spec, *obstacle_specs])
     cache: MeshCache = {}
 
-    robot_mesh, robot_source = build_mesh(robot_spec, cache)
-    robot_mesh.apply_transform(rotation4(orientation))
-    robot = Robot(names[0], robot_mesh, robot_source, checked=True)
-
-    obstacles = []
-    for obstacle_spec, body_name in zip(obstacle_specs, names[1:], strict=True):
-        mesh, source = build_mesh(obstacle_spec, cache)
-        mesh.apply_transform(obstacle_spec.pose.matrix)
-        obstacles.append(Body(body_name, mesh, source, checked=True))
+    robot = build_part(robot_spec, names[0], cache, rotation4(orientation))
+    obstacles = [build_part(spec, name, cache, spec.pose.matrix)
+                 for spec, name in zip(obstacle_specs, names[1:], strict=True)]
 
     if explicit_bounds is None:
         bounds = default_bounds(robot.mesh, [b.mesh for b in obstacles], start, goal)
