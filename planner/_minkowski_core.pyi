@@ -84,6 +84,7 @@ class ExactSum:
         b: tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]],
         a_solid: bool = True,
         b_solid: bool = True,
+        max_facets: int = 8000000,
     ) -> ExactSum: ...
     @property
     def bounds(self) -> npt.NDArray[np.float64]: ...
@@ -126,6 +127,7 @@ class CSpace:
         max_leaves: int = 20000000,
         solid: Sequence[bool] | None = None,
         robot_solid: bool = True,
+        max_facets: int = 8000000,
     ) -> CSpace:
         """C-space of the exact source: C-obstacles of solids or surfaces, no
         decomposition."""

@@ -44,9 +44,13 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("-v", "--verbose", action="count", default=0, help="more logging (-vv: debug)")
     p.add_argument("--version", action="version", version=f"minkplan {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
+    # the global options are accepted after the subcommand too (minkplan plan ... -v)
+    common = _Parser(add_help=False)
+    common.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
+                        help="more logging (-vv: debug)")
 
     m = sub.add_parser(
-        "minkowski",
+        "minkowski", parents=[common],
         help="Minkowski sum A ⊕ B (or C-obstacle A ⊕ −B) of two closed meshes",
         description="Compute A ⊕ B of two closed meshes and write it as a mesh file. "
         "With --mirror-b, compute A ⊕ (−B): the C-obstacle of obstacle A for robot B.",
@@ -84,7 +88,7 @@ def _parser() -> argparse.ArgumentParser:
     m.add_argument("--no-progress", action="store_true", help="no progress bar")
 
     pl = sub.add_parser(
-        "plan",
+        "plan", parents=[common],
         help="plan a translational path for a scenario (YAML or OMPL.app .cfg)",
         description="Plan a collision-free translation of the robot from start to goal. "
         "Writes DIR/path.json (status, waypoints, length, clearance, timings, validation) "
@@ -123,9 +127,9 @@ def _parser() -> argparse.ArgumentParser:
         help="also write DIR/scene.html: the scene, C-obstacles, cells, roadmap and path "
         "(self-contained, opens offline)",
     )
-    _add_viz_parsers(sub)
+    _add_viz_parsers(sub, common)
     asm = sub.add_parser(
-        "assemble",
+        "assemble", parents=[common],
         help="find an assembly sequence (and insertion paths) for an assembly YAML",
         description="Take the assembly apart one part at a time (straight removals "
         "first, then the planner) and reverse it. Writes DIR/sequence.json (parts in "
@@ -339,9 +343,9 @@ def _cmd_view(args) -> int:
     return 0
 
 
-def _add_viz_parsers(sub) -> None:
+def _add_viz_parsers(sub, common: _Parser) -> None:
     v = sub.add_parser(
-        "view",
+        "view", parents=[common],
         help="show a scenario (and a planned path) live in meshcat on localhost",
         description="Serve the scenario's scene (obstacles, robot at start and goal, "
         "C-obstacles, and the path of --path with the robot moving along it) with meshcat "

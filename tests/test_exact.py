@@ -819,3 +819,15 @@ def test_cli_minkowski_bad_paths_and_options_are_one_line_errors(tmp_path, capsy
     code = main(["minkowski", str(tmp_path), str(cube), "-o", str(tmp_path / "s.stl")])
     lines = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and "is a directory, not a mesh file" in lines[0]
+
+
+def test_a_facet_budget_stops_the_exact_source_with_a_clear_error():
+    """Before the boundary convolution can take more memory than allowed, the core stops
+    and says so (a ResourceLimitError, not a crash or a MemoryError)."""
+    from planner.errors import ResourceLimitError
+
+    torus, ball = shapes.torus(2.0, 0.6, 24, 12), shapes.icosphere(2, 0.5)
+    a, b = mesh_arrays(torus, "torus"), mesh_arrays(mirror(ball), "-ball")
+    assert ExactSum(a, b).facets > 100
+    with pytest.raises(ResourceLimitError, match=r"more than 100 facets.*exact: false"):
+        ExactSum(a, b, max_facets=100)

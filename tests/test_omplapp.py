@@ -336,3 +336,35 @@ def test_orientations_within_the_tolerance_are_equal(tmp_path):
     scenario = load_omplapp(path)
     assert not any("translation-only" in n for n in scenario.notes)
     np.testing.assert_array_equal(scenario.orientation, np.eye(3))
+
+
+@pytest.mark.assets
+def test_easy_frame_is_the_only_closed_piece_that_is_no_solid():
+    """The search over the OMPL.app set: every connected piece of every robot and world
+    that is closed and consistently wound, and whether its winding number goes negative
+    (in front of a face, or where faces cross). Only Easy's frame does."""
+    from planner._minkowski_core import crossing_windings, front_windings
+    from planner.errors import InvalidMeshError
+    from planner.io.omplapp_meshes import single_sided
+    from planner.meshes.solids import clean, orient_shells
+    from planner.meshes.topology import checked_arrays, compact
+
+    found = []
+    for dae in sorted(ASSETS.glob("*.dae")):
+        mesh, _ = single_sided(read_app_mesh(dae))
+        labels = trimesh.graph.connected_component_labels(mesh.face_adjacency,
+                                                          node_count=len(mesh.faces))
+        for k in np.unique(labels):
+            piece = trimesh.Trimesh(mesh.vertices, mesh.faces[labels == k], process=False)
+            v, f = compact(*checked_arrays(piece, "piece"))
+            try:
+                (v, f), report = clean(v, f, "piece")
+                if report["edge_stats"] != (0, 0):
+                    continue  # open: a surface anyway
+                f = orient_shells(v, f, "piece", report["scale"], report)
+            except InvalidMeshError:
+                continue
+            windings = np.concatenate([front_windings(v, f), crossing_windings(v, f)])
+            if (windings < 0).any():
+                found.append((dae.name, len(f)))
+    assert found == [("Easy_env.dae", 52)]

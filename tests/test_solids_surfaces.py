@@ -20,7 +20,7 @@ from planner._minkowski_core import CSpace
 from planner.errors import InvalidMeshError
 from planner.meshes import validate_solid
 from planner.planning.ompl_baseline import plan_ompl
-from planner.problem import Body, PlannerSettings, Robot, Scenario
+from planner.problem import Body, Part, PlannerSettings, Robot, Scenario
 from planner.validation import FclChecker
 
 EASY = Path(__file__).resolve().parents[2] / "shared" / "assets" / "omplapp" / "Easy.cfg"
@@ -136,3 +136,93 @@ def test_easy_frame_is_a_surface_and_the_floor_problem_is_solved(floor_and_post)
     # OMPL's planner on the same FCL checker agrees that a path exists
     baseline = plan_ompl(floor_and_post, "RRTConnect")
     assert baseline.status == "found"
+
+
+def t_junction_box() -> trimesh.Trimesh:
+    """A unit cube whose top is split at the middle of one top edge (a vertex there),
+    while the side face below keeps that edge whole: a T-junction, open as it stands."""
+    v = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1],
+         [0, 1, 1], [0.5, 0, 1]]
+    f = [[0, 2, 1], [0, 3, 2],                      # bottom
+         [4, 8, 7], [8, 6, 7], [8, 5, 6],           # top, split at vertex 8 on edge 4-5
+         [0, 1, 5], [0, 5, 4],                      # front (y = 0): edge 4-5 whole
+         [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]]
+    return trimesh.Trimesh(np.array(v, float), np.array(f), process=False)
+
+
+def test_t_junctions_are_split_and_the_part_is_a_solid():
+    from planner.meshes.kinds import classify
+
+    mesh = t_junction_box()
+    with pytest.raises(InvalidMeshError, match="not watertight"):
+        validate_solid(mesh, name="t")
+    part = classify(mesh, name="t")
+    assert part.solid and part.changes == {"t_junctions_split": 1}
+    assert part.mesh.is_watertight and part.mesh.volume == pytest.approx(1.0)
+    np.testing.assert_array_equal(np.sort(part.mesh.vertices, axis=0),
+                                  np.sort(mesh.vertices, axis=0))  # no vertex moved
+
+
+def test_kinds_force_a_solid_or_a_surface():
+    from planner.meshes.kinds import classify
+
+    box = trimesh.creation.box(extents=[1, 1, 1])
+    open_box = trimesh.Trimesh(box.vertices, box.faces[:-2], process=False)
+    surface = classify(open_box, name="lid")
+    assert not surface.solid and "not watertight" in surface.reason
+    assert len(surface.mesh.faces) == 10
+    with pytest.raises(InvalidMeshError, match="not watertight"):
+        classify(open_box, name="lid", kind="solid")
+    asked = classify(box, name="box", kind="surface")
+    assert not asked.solid and asked.reason == "asked (kind: surface)"
+    repaired = classify(open_box, name="lid", kind="solid", repair=True)
+    assert repaired.solid and repaired.changes["filled_holes"] == 1
+    with pytest.raises(InvalidMeshError, match="kind 'hollow'"):
+        classify(box, name="box", kind="hollow")
+
+
+@pytest.mark.assets
+@pytest.mark.parametrize("name", ["factory_round_peg_8mm", "factory_rect_peg_8mm"])
+def test_factory_peg_assemblies_load_and_plan(name):
+    """NVIDIA's Factory holes are open only at T-junctions: split, they are solids, and the
+    pegs come out; every removal validated by FCL at the contact tolerance."""
+    from conftest import SHARED_ASSETS
+
+    assembly = planner.load_assembly(SHARED_ASSETS / "assemblies" / name / f"{name}.yaml")
+    hole = next(p for p in assembly.parts if p.name == "hole")
+    assert hole.solid and hole.repairs.get("t_junctions_split", 0) > 0
+    result = planner.plan_assembly(assembly)
+    assert result.found, result.message
+    for step in result.removal:
+        assert step.validation["valid"], step
+
+
+def surface_membership_disagreements(obstacle: Part, robot: Part, n: int, seed: int) -> int:
+    """Random translations over the C-obstacle's box where the exact source and FCL (on
+    the meshes as given, each part a solid or a surface) disagree."""
+    from planner.sources import ExactSource, SourceSettings
+
+    pair = ExactSource(SourceSettings(exact=True), "test").pair(obstacle, robot)
+    lo = obstacle.mesh.bounds[0] - robot.mesh.bounds[1]
+    hi = obstacle.mesh.bounds[1] - robot.mesh.bounds[0]
+    points = np.random.default_rng(seed).uniform(lo, hi, size=(n, 3))
+    ours = pair.contains(points)
+    checker = FclChecker(robot.mesh, [obstacle.mesh], solid=[obstacle.solid],
+                         robot_solid=robot.solid)
+    theirs = np.array([checker.collides(p) for p in points])
+    assert 0.05 < ours.mean() < 0.95  # both answers occur
+    return int((ours != theirs).sum())
+
+
+@pytest.mark.assets
+def test_surface_c_obstacle_membership_agrees_with_fcl_on_real_soups():
+    """OMPL.app triangle soups as FCL sees them: Easy's frame (a surface) for Easy's robot
+    (a solid), and spirelli's open world piece for its open robot (both surfaces);
+    10,000 random translations each."""
+    easy = planner.load_scenario(EASY)
+    frame = next(b for b in easy.obstacles if len(b.mesh.faces) == 52)
+    assert surface_membership_disagreements(frame, easy.robot, 10_000, 1) == 0
+    spirelli = planner.load_scenario(EASY.with_name("spirelli.cfg"), hold_orientation="start")
+    soup = next(b for b in spirelli.obstacles if not b.solid)
+    assert not spirelli.robot.solid
+    assert surface_membership_disagreements(soup, spirelli.robot, 10_000, 2) == 0

@@ -50,6 +50,20 @@ pub enum CoreError {
         /// Why.
         detail: String,
     },
+    /// The exact source would hold more boundary candidates (reduced-convolution facets)
+    /// than its budget allows, so more memory than allowed. Fix: the decomposition
+    /// source, simpler meshes, or a larger budget if the memory is there.
+    #[error("{what}: the exact source's boundary convolution has more than {budget} facets (found {found} before stopping, about {bytes_per_facet} bytes each); use the decomposition source (exact: false) or simpler meshes, or raise the facet budget")]
+    FacetLimit {
+        /// Which pair.
+        what: String,
+        /// Facets found when it stopped.
+        found: usize,
+        /// The budget.
+        budget: usize,
+        /// Memory per facet.
+        bytes_per_facet: usize,
+    },
     /// There are no primitives to work on. Fix: give at least one convex piece per operand.
     #[error("{what}: no convex pieces given")]
     Empty {

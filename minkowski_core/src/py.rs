@@ -27,7 +27,7 @@ impl From<CoreError> for PyErr {
         match e {
             CoreError::NonFinite { .. } | CoreError::Degenerate { .. } | CoreError::Empty { .. } | CoreError::InvalidGeometry { .. } => InvalidMeshError::new_err(msg),
             CoreError::InvalidParameter { .. } => InvalidParameterError::new_err(msg),
-            CoreError::ResourceLimit { .. } => ResourceLimitError::new_err(msg),
+            CoreError::ResourceLimit { .. } | CoreError::FacetLimit { .. } => ResourceLimitError::new_err(msg),
         }
     }
 }
@@ -291,11 +291,21 @@ impl ExactSum {
     /// outward, winding number never negative; checked) unless `a_solid` / `b_solid` is
     /// false (a surface: any triangles, containment does not count).
     #[new]
-    #[pyo3(signature = (a, b, a_solid=true, b_solid=true))]
-    fn new(a: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>), b: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>), a_solid: bool, b_solid: bool) -> PyResult<Self> {
+    // max_facets: boundary candidates held at most (8 M: about 2 GB at FACET_BYTES each);
+    // beyond it the construction stops with a ResourceLimitError, not out of memory
+    #[pyo3(signature = (a, b, a_solid=true, b_solid=true, max_facets=8_000_000))]
+    fn new(
+        py: Python<'_>,
+        a: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>),
+        b: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>),
+        a_solid: bool,
+        b_solid: bool,
+        max_facets: usize,
+    ) -> PyResult<Self> {
         let ma = mesh_of(&a.0, &a.1, "a", a_solid)?;
         let mb = mesh_of(&b.0, &b.1, "b", b_solid)?;
-        Ok(ExactSum { inner: Arc::new(ExactSource::new(vec![ma], mb, 0.0, None)) })
+        let inner = py.detach(move || ExactSource::try_new(vec![ma], mb, 0.0, None, max_facets))?;
+        Ok(ExactSum { inner: Arc::new(inner) })
     }
 
     /// Box around the sum, (2, 3).
@@ -447,7 +457,7 @@ impl PyCSpace {
     /// obstacle) or `robot_solid` says they are surfaces. Obstacle `k` is primitive `k`;
     /// the six walls follow.
     #[staticmethod]
-    #[pyo3(signature = (obstacles, robot, bounds, h_floor, h_coarse, margin=0.0, max_leaves=20_000_000, solid=None, robot_solid=true))]
+    #[pyo3(signature = (obstacles, robot, bounds, h_floor, h_coarse, margin=0.0, max_leaves=20_000_000, solid=None, robot_solid=true, max_facets=8_000_000))]
     #[allow(clippy::too_many_arguments)]
     fn exact(
         py: Python<'_>,
@@ -460,6 +470,7 @@ impl PyCSpace {
         max_leaves: usize,
         solid: Option<Vec<bool>>,
         robot_solid: bool,
+        max_facets: usize,
     ) -> PyResult<Self> {
         let b = points_of(&bounds, "bounds")?;
         if b.len() != 2 {
@@ -475,7 +486,7 @@ impl PyCSpace {
             meshes.push(mesh_of(v, f, &format!("obstacle {k}"), solid[k])?);
         }
         let r = mesh_of(&robot.0, &robot.1, "robot", robot_solid)?;
-        let inner = py.detach(move || crate::roadmap::CSpace::build_exact(meshes, &r, region, h_floor, h_coarse, margin, max_leaves))?;
+        let inner = py.detach(move || crate::roadmap::CSpace::build_exact(meshes, &r, region, h_floor, h_coarse, margin, max_leaves, max_facets))?;
         Ok(PyCSpace { inner, max_leaves })
     }
 

@@ -40,6 +40,7 @@ use crate::polytope::clip_planes;
 use crate::util::UnionFind;
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Angular tolerance of the compatibility tests.
 const TOL: f64 = 1e-9;
@@ -732,12 +733,23 @@ enum Part {
 /// facets are replaced by the polygon (a fan of triangles), once per region pair. On
 /// parts made of boxes this replaces every facet: a box pair then has its six faces.
 pub fn convolution(a: &TriMesh, b: &TriMesh, k: u32) -> Vec<Facet> {
-    convolution_by(a, b, k, true)
+    convolution_by(a, b, k, true, usize::MAX).expect("no facet budget")
 }
 
-/// [`convolution`] with the candidates looked up on direction grids (`grid`), or every
-/// feature against every other (a reference for the tests).
-fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
+/// [`convolution`], giving up once more than `budget` facets were found (they are
+/// estimated to need more memory than allowed): `Err(facets found so far)`.
+pub fn convolution_within(a: &TriMesh, b: &TriMesh, k: u32, budget: usize) -> Result<Vec<Facet>, usize> {
+    convolution_by(a, b, k, true, budget)
+}
+
+/// [`convolution_within`] with the candidates looked up on direction grids (`grid`), or
+/// every feature against every other (a reference for the tests).
+fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -> Result<Vec<Facet>, usize> {
+    let found = AtomicUsize::new(0);
+    let room = || found.load(Ordering::Relaxed) <= budget;
+    let bump = |_: &Part| {
+        found.fetch_add(1, Ordering::Relaxed);
+    };
     let (ta, tb) = (topo(a), topo(b));
     let (va, vb, eb) = (vertex_grid(&ta), vertex_grid(&tb), edge_grid(&tb));
     let tri = |t: &TriMesh, i: usize| t.tris[i];
@@ -748,6 +760,7 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
     };
     let mut parts: Vec<Part> = (0..ta.faces.len())
         .into_par_iter()
+        .take_any_while(|_| room())
         .flat_map_iter(|i| {
             let t = tri(a, i);
             let tb = &tb;
@@ -761,56 +774,72 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
                 }
             })
         })
+        .inspect(bump)
         .collect();
-    parts.par_extend((0..tb.faces.len()).into_par_iter().flat_map_iter(|j| {
-        let s = tri(b, j);
-        let ta = &ta;
-        let rb = tb.convex_region(j as u32);
-        let n = if tb.shadowed[j] { Vec3::ZERO } else { s.n };
-        candidates(&va, n, ta.verts.len()).into_iter().filter(move |&u| ta.contact(u, s.n)).map(move |u| match ta.convex_region_at(u, s.n).zip(rb) {
-            Some((ra, rb)) => Part::Regions(ra, rb),
-            None => {
-                let q = ta.verts[u as usize];
-                Part::Facet(Facet { p: [s.p[0] + q, s.p[1] + q, s.p[2] + q, Vec3::ZERO], n: 3, k })
-            }
-        })
-    }));
-    parts.par_extend(ta.edges.par_iter().flat_map_iter(|&(a0, a1, n1, n2, f1, f2)| {
-        let (tb, ta) = (&tb, &ta);
-        let (p0, p1) = (ta.verts[a0 as usize], ta.verts[a1 as usize]);
-        let e = p1 - p0;
-        let near: Vec<u32> = if !grid || unknown_arc(n1, n2) {
-            (0..tb.edges.len() as u32).collect()
-        } else {
-            let slack = arc_slack(n1, n2);
-            eb.gather(&eb.cells(|cap| arc_distance(cap.c, n1, n2) <= cap.rho + slack))
-        };
-        near.into_iter().filter_map(move |j| {
-            let (b0, b1, m1, m2, g1, g2) = tb.edges[j as usize];
-            let (q0, q1) = (tb.verts[b0 as usize], tb.verts[b1 as usize]);
-            let g = q1 - q0;
-            if e.cross(g).length() <= 1e-9 * e.length() * g.length() {
-                return None; // parallel edges sum to a segment on other facets' borders
-            }
-            // both edges on the border of convex regions of one normal: in their sum
-            for (n, f) in [(n1, f1), (n2, f2)] {
-                for (m, g) in [(m1, g1), (m2, g2)] {
-                    if same_normal(n, m) && !ta.shadowed[f as usize] && !tb.shadowed[g as usize] {
-                        if let Some(r) = ta.convex_region(f).zip(tb.convex_region(g)) {
-                            return Some(Part::Regions(r.0, r.1));
+    parts.par_extend(
+        (0..tb.faces.len())
+            .into_par_iter()
+            .take_any_while(|_| room())
+            .flat_map_iter(|j| {
+                let s = tri(b, j);
+                let ta = &ta;
+                let rb = tb.convex_region(j as u32);
+                let n = if tb.shadowed[j] { Vec3::ZERO } else { s.n };
+                candidates(&va, n, ta.verts.len()).into_iter().filter(move |&u| ta.contact(u, s.n)).map(move |u| match ta.convex_region_at(u, s.n).zip(rb) {
+                    Some((ra, rb)) => Part::Regions(ra, rb),
+                    None => {
+                        let q = ta.verts[u as usize];
+                        Part::Facet(Facet { p: [s.p[0] + q, s.p[1] + q, s.p[2] + q, Vec3::ZERO], n: 3, k })
+                    }
+                })
+            })
+            .inspect(bump),
+    );
+    parts.par_extend(
+        ta.edges
+            .par_iter()
+            .take_any_while(|_| room())
+            .flat_map_iter(|&(a0, a1, n1, n2, f1, f2)| {
+                let (tb, ta) = (&tb, &ta);
+                let (p0, p1) = (ta.verts[a0 as usize], ta.verts[a1 as usize]);
+                let e = p1 - p0;
+                let near: Vec<u32> = if !grid || unknown_arc(n1, n2) {
+                    (0..tb.edges.len() as u32).collect()
+                } else {
+                    let slack = arc_slack(n1, n2);
+                    eb.gather(&eb.cells(|cap| arc_distance(cap.c, n1, n2) <= cap.rho + slack))
+                };
+                near.into_iter().filter_map(move |j| {
+                    let (b0, b1, m1, m2, g1, g2) = tb.edges[j as usize];
+                    let (q0, q1) = (tb.verts[b0 as usize], tb.verts[b1 as usize]);
+                    let g = q1 - q0;
+                    if e.cross(g).length() <= 1e-9 * e.length() * g.length() {
+                        return None; // parallel edges sum to a segment on other facets' borders
+                    }
+                    // both edges on the border of convex regions of one normal: in their sum
+                    for (n, f) in [(n1, f1), (n2, f2)] {
+                        for (m, g) in [(m1, g1), (m2, g2)] {
+                            if same_normal(n, m) && !ta.shadowed[f as usize] && !tb.shadowed[g as usize] {
+                                if let Some(r) = ta.convex_region(f).zip(tb.convex_region(g)) {
+                                    return Some(Part::Regions(r.0, r.1));
+                                }
+                            }
                         }
                     }
-                }
-            }
-            let facet = Part::Facet(Facet { p: [p0 + q0, p1 + q0, p1 + q1, p0 + q1], n: 4, k });
-            match arcs_meet(n1, n2, m1, m2) {
-                Meet::No => None,
-                // one contact direction: none when a convex part reaches beyond either edge
-                Meet::At(x) if ta.parts.shadowed(&[a0, a1], &ta.verts, x) || tb.parts.shadowed(&[b0, b1], &tb.verts, x) => None,
-                _ => Some(facet),
-            }
-        })
-    }));
+                    let facet = Part::Facet(Facet { p: [p0 + q0, p1 + q0, p1 + q1, p0 + q1], n: 4, k });
+                    match arcs_meet(n1, n2, m1, m2) {
+                        Meet::No => None,
+                        // one contact direction: none when a convex part reaches beyond either edge
+                        Meet::At(x) if ta.parts.shadowed(&[a0, a1], &ta.verts, x) || tb.parts.shadowed(&[b0, b1], &tb.verts, x) => None,
+                        _ => Some(facet),
+                    }
+                })
+            })
+            .inspect(bump),
+    );
+    if found.load(Ordering::Relaxed) > budget {
+        return Err(found.load(Ordering::Relaxed));
+    }
     let mut out = Vec::with_capacity(parts.len());
     let mut pairs = Vec::new();
     for part in parts {
@@ -825,14 +854,17 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool) -> Vec<Facet> {
         if let (Some(p), Some(q)) = (&ta.convex[ra as usize], &tb.convex[rb as usize]) {
             polygon_sum(p, q, ta.normal[ra as usize], k, &mut out);
         }
+        if out.len() > budget {
+            return Err(out.len());
+        }
     }
-    out
+    Ok(out)
 }
 
 /// The reduced convolution found by testing every feature pair (no direction grids).
 #[cfg(test)]
 pub(crate) fn convolution_scan(a: &TriMesh, b: &TriMesh) -> Vec<Facet> {
-    convolution_by(a, b, 0, false)
+    convolution_by(a, b, 0, false, usize::MAX).expect("no facet budget")
 }
 
 /// Per planar region of `m`: its number of border corners when it is a convex polygon.

@@ -44,13 +44,14 @@ pub mod winding;
 #[cfg(test)]
 mod winding_tests;
 
-pub use convolution::{convolution, Facet};
+pub use convolution::{convolution, convolution_within, Facet};
 #[cfg(test)]
 use convolution::{convolution_scan, planar_regions};
 pub use mesh::{MeshNode, Tri, TriMesh};
 pub use piece::{pair_contains_point, Piece};
 
 use crate::bvh::Bvh;
+use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
 use crate::octree::{merge_sorted, CellSource, Label};
 
@@ -87,6 +88,9 @@ fn records(cand: &[u32]) -> impl Iterator<Item = Rec> + '_ {
         }
     })
 }
+
+/// Memory of one facet with its box and its share of the BVH (bytes), for budgets.
+pub const FACET_BYTES: usize = 256;
 
 /// Longest record list [`ExactSource::carry`] scans; beyond it a point query is cheaper.
 const CARRY_MAX: usize = 256;
@@ -144,17 +148,40 @@ pub enum Witness {
 
 impl ExactSource {
     /// The sums `A_k ⊕ B`, grown by `margin`, with optional `walls`.
+    ///
+    /// # Panics
+    /// Never for a lack of memory budget (there is none); see [`ExactSource::try_new`].
     pub fn new(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>) -> ExactSource {
+        ExactSource::try_new(obstacles, b, margin, walls, usize::MAX).expect("no facet budget")
+    }
+
+    /// [`ExactSource::new`] with at most `max_facets` reduced-convolution facets over all
+    /// pairs (each about [`FACET_BYTES`] of memory with its box and BVH node).
+    ///
+    /// # Errors
+    /// [`CoreError::FacetLimit`] when the facets would exceed the budget; the search
+    /// stops soon after, so little of that memory is taken.
+    pub fn try_new(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize) -> CoreResult<ExactSource> {
         let aabb = obstacles.iter().fold(Aabb::empty(), |acc, a| acc.union(&Aabb::new(a.aabb.min + b.aabb.min, a.aabb.max + b.aabb.max).inflated(margin)));
         let tri_ext = |m: &TriMesh| m.tris.iter().map(|t| Aabb::from_points(&t.p).extent().max_element()).fold(0.0f64, f64::max);
         let max_a = obstacles.iter().map(tri_ext).fold(0.0f64, f64::max);
         let max_piece = (max_a + tri_ext(&b) + 2.0 * margin) * 1.000_001;
         let surface_pairs: Vec<usize> = (0..obstacles.len()).filter(|&k| !(obstacles[k].solid && b.solid)).collect();
-        let facets: Vec<Facet> = obstacles.iter().enumerate().filter(|(k, _)| !surface_pairs.contains(k)).flat_map(|(k, a)| convolution(a, &b, k as u32)).collect();
-        assert!(facets.len() < PAIR as usize, "too many facets for the record encoding");
+        let budget = max_facets.min(PAIR as usize - 1);
+        let mut facets: Vec<Facet> = Vec::new();
+        for (k, a) in obstacles.iter().enumerate().filter(|(k, _)| !surface_pairs.contains(k)) {
+            let left = budget - facets.len();
+            let found = convolution_within(a, &b, k as u32, left).map_err(|n| CoreError::FacetLimit {
+                what: format!("obstacle {k}"),
+                found: facets.len() + n,
+                budget,
+                bytes_per_facet: FACET_BYTES,
+            })?;
+            facets.extend(found);
+        }
         let boxes: Vec<Aabb> = facets.iter().map(|f| f.aabb(margin)).collect();
         let fbvh = Bvh::build(&boxes);
-        ExactSource { full_witness: walls.is_some(), obstacles, b, surface_pairs, margin, walls, aabb, max_piece, facets, fbvh }
+        Ok(ExactSource { full_witness: walls.is_some(), obstacles, b, surface_pairs, margin, walls, aabb, max_piece, facets, fbvh })
     }
 
     /// Whether `p` lies in the exact (ungrown) solid, walls excluded.

@@ -246,13 +246,15 @@ impl CSpace {
     /// decomposition.
     ///
     /// # Errors
-    /// As [`CSpace::build`].
-    pub fn build_exact(meshes: Vec<TriMesh>, robot: &TriMesh, bounds: Aabb, h_floor: f64, h_coarse: f64, margin: f64, max_leaves: usize) -> CoreResult<CSpace> {
+    /// As [`CSpace::build`], and [`CoreError::FacetLimit`] beyond `max_facets` boundary
+    /// candidates.
+    #[allow(clippy::too_many_arguments)] // the problem's parts, the octree's sizes and its two budgets
+    pub fn build_exact(meshes: Vec<TriMesh>, robot: &TriMesh, bounds: Aabb, h_floor: f64, h_coarse: f64, margin: f64, max_leaves: usize, max_facets: usize) -> CoreResult<CSpace> {
         check(&bounds, h_floor, h_coarse, margin)?;
         let k = (h_coarse / h_floor).log2().floor().clamp(0.0, MAX_DEPTH as f64) as u32;
         let h0 = h_floor * (1u64 << k) as f64;
         let n_obstacle = meshes.len();
-        let src = ExactSource::new(meshes, robot.negated(), margin, Some(bounds));
+        let src = ExactSource::try_new(meshes, robot.negated(), margin, Some(bounds), max_facets)?;
         Self::finish(Obstacles::Exact(Box::new(src)), n_obstacle, bounds, margin, h0, k, max_leaves)
     }
 
