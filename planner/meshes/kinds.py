@@ -80,11 +80,15 @@ def classify(mesh: trimesh.Trimesh, *, name: str, kind: str = "auto",
     if split is not None:
         return split
     if repair:
-        repaired, report = repair_mesh(mesh, name=name)
-        done = {k: v for k, v in report.items()
-                if k.startswith(("removed_", "merged_", "fixed_", "filled_", "flipped_"))
-                and k != "removed_faces" and v}
-        return Classified(repaired, True, "repaired (repair: true)", done)
+        try:
+            repaired, report = repair_mesh(mesh, name=name)
+        except InvalidMeshError as error:
+            first = error  # repair did not close it: a surface (auto) or the error
+        else:
+            done = {k: v for k, v in report.items()
+                    if k.startswith(("removed_", "merged_", "fixed_", "filled_", "flipped_"))
+                    and k != "removed_faces" and v}
+            return Classified(repaired, True, "repaired (repair: true)", done)
     if kind == "solid":
         raise first
     why = str(first).split(": ", 1)[-1].split("; ", 1)[0]

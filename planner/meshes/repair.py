@@ -15,7 +15,7 @@ import trimesh
 from planner.errors import InvalidMeshError
 from planner.tolerances import scale_of, tol
 
-from .solids import clean, orient_shells, validate_solid
+from .solids import clean, obj_hint, orient_shells, validate_solid
 from .topology import (
     checked_arrays,
     clean_faces,
@@ -94,8 +94,7 @@ def repair_mesh(mesh, *, name: str = "mesh"):
         raise InvalidMeshError(
             f"{label}: could not repair: {attempt['edge_stats'][0]} boundary edges and "
             f"{attempt['edge_stats'][1]} non-manifold edges remain after filling "
-            f"{attempt['filled_holes']} holes; fix the model (if it is an OBJ with "
-            f"n-gons, read it with planner.meshes.load_obj)"
+            f"{attempt['filled_holes']} holes; fix the model{obj_hint(mesh)}"
         )
     vertices, faces = unshare_vertices(vertices, faces, shells)
     faces = orient_shells(vertices, faces, label, scale, report)

@@ -51,7 +51,7 @@ from .topology import (
     unshare_vertices,
 )
 
-__all__ = ["clean", "mirror", "orient_shells", "split_solid", "validate_solid",
+__all__ = ["clean", "mirror", "obj_hint", "orient_shells", "split_solid", "validate_solid",
            "winding_numbers"]
 
 log = logging.getLogger(__name__)
@@ -115,7 +115,7 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
         raise InvalidMeshError(
             f"{label}: surface overlaps itself ({overlaps} pairs of coplanar faces facing "
             f"opposite ways overlap); typically polygons triangulated wrongly by the "
-            f"exporter or loader (for OBJ n-gons use planner.meshes.load_obj)"
+            f"exporter{obj_hint(mesh)}"
         )
     _check_winding(vertices, faces, label)
     result = trimesh.Trimesh(vertices, faces, process=False)
@@ -127,6 +127,17 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
             label, report["merged_vertices"], report["removed_faces"],
         )
     return result
+
+
+def obj_hint(mesh) -> str:
+    """The advice for a mesh whose polygons may have been fanned wrongly: only for an OBJ
+    file that was not read by :func:`planner.meshes.load_obj` (which triangulates n-gons
+    in their plane)."""
+    metadata = getattr(mesh, "metadata", None) or {}
+    path = str(metadata.get("file_path", ""))
+    if "polygon_problems" in metadata or (path and not path.lower().endswith(".obj")):
+        return ""
+    return " or loader (an OBJ with n-gons: read it with planner.meshes.load_obj)"
 
 
 def _check_winding(vertices: np.ndarray, faces: np.ndarray, label: str) -> None:
