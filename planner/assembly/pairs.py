@@ -135,7 +135,7 @@ class PairCache:
         if key not in self._contacts:
             checker = self.checker(moving, obstacle)
             found = []
-            for d in checker._escape_directions(checker.obstacles[0], np.zeros(3)):  # noqa: SLF001
+            for d in checker.escape_directions(np.zeros(3)):
                 if np.max(np.abs(d)) <= 1.0 - 1e-9:
                     found.append(d)
             self._contacts[key] = found

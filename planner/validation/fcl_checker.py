@@ -310,6 +310,11 @@ class FclChecker:
             self.n_invalid += 1
         return ok
 
+    def escape_directions(self, t: ArrayLike, obstacle: int = 0) -> list[np.ndarray]:
+        """Unit directions that may lead the robot at ``t`` out of contact with obstacle
+        number ``obstacle``: FCL's contact normals reversed, then the six axes."""
+        return self._escape_directions(self.obstacles[obstacle], _as_translation(t))
+
     def _escape_directions(self, part: _Part, t: np.ndarray) -> list[np.ndarray]:
         """Unit escape directions: FCL contact normals reversed, then the six axes."""
         directions: list[np.ndarray] = []
