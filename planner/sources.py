@@ -33,7 +33,7 @@ from .values import describe_value
 if TYPE_CHECKING:  # only for annotations: the problem types import this module
     from ._minkowski_core import CSpace
     from .decompose import Decomposition
-    from .problem import Part
+    from .problem import Part, PlannerSettings
 
 __all__ = [
     "DecompositionSource",
@@ -45,6 +45,7 @@ __all__ = [
     "SourceSettings",
     "check_exact",
     "choose",
+    "choose_for",
     "parse_exact",
 ]
 
@@ -92,6 +93,16 @@ class SourceSettings:
     seed: int = 0
     cache_dir: str | Path | None = None
     progress: bool | None = False
+
+
+def choose_for(parts: Sequence[Part], settings: PlannerSettings, *, cache_dir=None,
+               progress: bool | None = False) -> Source:
+    """:func:`choose` with a problem's planner settings (``planner.exact``,
+    ``planner.decomposition_threshold``, ``planner.seed``)."""
+    return choose(parts, SourceSettings(exact=settings.exact,
+                                        threshold=settings.decomposition_threshold,
+                                        seed=settings.seed, cache_dir=cache_dir,
+                                        progress=progress), field="planner.exact")
 
 
 def choose(parts: Sequence[Part], settings: SourceSettings | None = None, *,

@@ -11,7 +11,7 @@ import numpy as np
 
 from planner.errors import MinkplanError
 from planner.problem import Assembly
-from planner.sources import PairCObstacle, Source, SourceSettings, choose
+from planner.sources import PairCObstacle, Source, choose_for
 from planner.validation import FclChecker
 
 from .geometry import ESCAPE_MARGIN_REL, exit_box, exit_point
@@ -76,10 +76,8 @@ class PairCache:
         self.cache_dir = cache_dir
         self.delta = assembly.contact_tolerance
         self.margin = ESCAPE_MARGIN_REL * assembly.diagonal
-        s = assembly.settings
-        self.source = source or choose(assembly.parts, SourceSettings(
-            exact=s.exact, threshold=s.decomposition_threshold, seed=s.seed,
-            cache_dir=cache_dir, progress=False), field="planner.exact")
+        self.source = source or choose_for(assembly.parts, assembly.settings,
+                                           cache_dir=cache_dir)
         self._sums: dict[tuple[str, str], PairCObstacle | None] = {}
         self._verdicts: dict[tuple[str, str, str], RayVerdict] = {}
         self._rays: dict[tuple[str, str, str], tuple[bool, float]] = {}

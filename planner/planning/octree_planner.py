@@ -33,7 +33,7 @@ import numpy as np
 
 from planner.problem import Scenario
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
-from planner.sources import Source, SourceSettings, choose
+from planner.sources import Source, choose_for
 from planner.validation import FclChecker
 
 from .certificates import certificate_document
@@ -139,10 +139,8 @@ class OctreePlanner:
                                   solid=[b.solid for b in sc.obstacles],
                                   robot_solid=sc.robot.solid)
         if self.source is None:
-            s = sc.settings
-            self.source = choose([sc.robot, *sc.obstacles], SourceSettings(
-                exact=s.exact, threshold=s.decomposition_threshold, seed=s.seed,
-                cache_dir=self.cache_dir, progress=self.bar.enabled), field="planner.exact")
+            self.source = choose_for([sc.robot, *sc.obstacles], sc.settings,
+                                     cache_dir=self.cache_dir, progress=self.bar.enabled)
         if self._src.kind == "decomposition":
             self.bar.show("minkplan: decomposing")
             with self.clock.stage("decompose"):

@@ -134,13 +134,11 @@ def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
     source the scenario's settings choose (``eps``: default the core's relative default).
     """
     from planner.minkowski import c_obstacle
-    from planner.sources import SourceSettings, choose
+    from planner.sources import choose_for
 
     if source is None:
-        s = scenario.settings
-        source = choose([scenario.robot, *scenario.obstacles], SourceSettings(
-            exact=s.exact, threshold=s.decomposition_threshold, seed=s.seed,
-            cache_dir=cache_dir, progress=progress), field="planner.exact")
+        source = choose_for([scenario.robot, *scenario.obstacles], scenario.settings,
+                            cache_dir=cache_dir, progress=progress)
     return {body.name: c_obstacle(body, scenario.robot, eps=eps, progress=progress,
                                   source=source).mesh
             for body in scenario.obstacles}
