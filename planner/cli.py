@@ -270,6 +270,10 @@ def _cmd_plan(args) -> int:
             f": {len(outcome.waypoints)} waypoints, length {outcome.length:.6g}, "
             f"clearance {outcome.clearance:.4g}"
         )
+    surfaces = [p.name for p in [scenario.robot, *scenario.obstacles] if not p.solid]
+    if surfaces:  # an open mesh changes what collides: say so where the answer is read
+        detail += (f" [surfaces, colliding only where triangles meet: "
+                   f"{', '.join(surfaces)}; see report.json]")
     sys.stdout.write(
         f"{scenario.name}: {outcome.status}{detail} ({outcome.message}); "
         f"{outcome.timings.get('total', 0.0):.2f} s; wrote {out}/path.json, report.json"
@@ -301,7 +305,7 @@ def _cmd_assemble(args) -> int:
     write_json(out / "report.json", result.report_json())
     sys.stdout.write(f"{assembly.name}: {result.message} (contact tolerance "
                      f"{result.contact_tolerance:.3g}); {result.seconds:.2f} s; "
-                     f"wrote {out}/sequence.json\n")
+                     f"wrote {out}/sequence.json, report.json\n")
     if args.html:
         from planner.viz import scene_for_assembly, write_html
 

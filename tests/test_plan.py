@@ -274,9 +274,12 @@ def test_the_html_scene_draws_the_c_obstacle_that_was_planned():
     scene = viz.scene_for_plan(asked, outcome, c_obstacle=True)
     for body in asked.obstacles:
         drawn = scene.layers[f"cspace/c_obstacle/{viz.scene.node_name(body.name)}"]
-        planned = c_obstacle(body, asked.robot, source=outcome.source).mesh
+        planned = c_obstacle(body, asked.robot, source=outcome.source, max_refinements=0,
+                             eps=viz.layout.display_eps(asked),
+                             max_cells=viz.layout.DISPLAY_MAX_CELLS).mesh
         np.testing.assert_array_equal(drawn.vertices, planned.vertices)
         np.testing.assert_array_equal(drawn.faces, planned.faces)
-        default = c_obstacle(body.mesh, asked.robot.mesh).mesh  # auto: the decomposition
+        default = c_obstacle(body.mesh, asked.robot.mesh, eps=viz.layout.display_eps(asked),
+                             max_refinements=0).mesh  # auto: the decomposition
         assert len(default.faces) != len(planned.faces) or not np.array_equal(
             default.vertices, planned.vertices)

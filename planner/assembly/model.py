@@ -154,5 +154,6 @@ class AssemblyResult:
             "interlocked": self.interlocked, "stuck": self.stuck,
             "attempts": self.attempts, "interlocked_attempts": self.core_attempts,
             "reuse": self.reuse, "source": self.source,
+            "parts": [p.describe() for p in self.assembly.parts],
             "settings": dataclasses.asdict(self.assembly.settings),
         })

@@ -258,7 +258,8 @@ def _held_orientation(cfg: _Cfg, hold: str | None, notes: list[str]) -> np.ndarr
         raise cfg.error("goal.theta", f"goal orientation differs from the start's by "
                                       f"{degrees:.4g} degrees; minkplan only translates the "
                                       "robot: plan with one orientation throughout with "
-                                      "--hold-orientation start (or goal)")
+                                      "--hold-orientation start (or goal), a translation-only "
+                                      "reading of the problem")
     notes.append(f"translation-only reading: the robot keeps the {hold} orientation "
                  f"throughout (the other differs by {degrees:.4g} degrees)")
     return start if hold == "start" else goal

@@ -16,6 +16,7 @@ layers.
 from __future__ import annotations
 
 import json
+import logging
 import os
 from collections.abc import Mapping
 from pathlib import Path
@@ -126,12 +127,30 @@ def _cspace_arrays(cspace) -> dict[str, np.ndarray]:
         f"got {type(cspace).__name__}")
 
 
+DISPLAY_EPS_REL = 0.01
+"""Resolution of the C-obstacle surfaces drawn in a scene, as a fraction of the diagonal
+of the scenario's bounds: a picture, not the planner's geometry (which is exact), so it
+follows the scene's size, not the surface's."""
+
+DISPLAY_MAX_CELLS = 4_000_000
+"""Octree cell budget of one drawn C-obstacle surface (about 1 GB)."""
+
+
+def display_eps(scenario) -> float:
+    """The resolution the scene's C-obstacle surfaces are drawn at (see
+    :data:`DISPLAY_EPS_REL`)."""
+    lo, hi = scenario.bounds
+    return DISPLAY_EPS_REL * float(np.linalg.norm(np.asarray(hi) - np.asarray(lo)))
+
+
 def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
                         cache_dir=None, progress: bool | None = False
                         ) -> dict[str, trimesh.Trimesh]:
     """``{obstacle name: C-obstacle surface}`` from :func:`planner.c_obstacle` on
     ``source`` (a plan's ``outcome.source``: the C-obstacles it planned on), or on the
-    source the scenario's settings choose (``eps``: default the core's relative default).
+    source the scenario's settings choose; at ``eps`` (default :func:`display_eps`), not
+    refined further where features are thinner (a picture), within
+    :data:`DISPLAY_MAX_CELLS`.
     """
     from planner.minkowski import c_obstacle
     from planner.sources import choose_for
@@ -139,9 +158,17 @@ def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
     if source is None:
         source = choose_for([scenario.robot, *scenario.obstacles], scenario.settings,
                             cache_dir=cache_dir, progress=progress)
-    return {body.name: c_obstacle(body, scenario.robot, eps=eps, progress=progress,
-                                  source=source).mesh
-            for body in scenario.obstacles}
+    eps = display_eps(scenario) if eps is None else eps
+    sums = logging.getLogger("planner.minkowski")
+    level = sums.level
+    sums.setLevel(max(level, logging.ERROR))  # a picture's complex cells are no warning
+    try:
+        return {body.name: c_obstacle(body, scenario.robot, eps=eps, progress=progress,
+                                      source=source, max_refinements=0,
+                                      max_cells=DISPLAY_MAX_CELLS).mesh
+                for body in scenario.obstacles}
+    finally:
+        sums.setLevel(level)
 
 
 # ---- the plan --------------------------------------------------------------------------
