@@ -1,7 +1,9 @@
 """The ``minkplan`` command line: thin, lazy imports, one-line errors.
 
-Exit codes: 0 success, 1 no result (planning: no path / not found), 2 bad input (one line
-on stderr naming the field or file), 130 interrupted.
+Exit codes: 0 success, 1 no result (planning: no path / not found; assembly: no
+sequence), 2 bad input or a resource limit (one line on stderr naming the field or file),
+3 an internal error (one line naming the command; -vv adds the traceback), 130
+interrupted.
 """
 
 from __future__ import annotations
@@ -146,9 +148,23 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+EXIT_INTERNAL = 3
+"""Exit code of an internal error (a bug, not the input): never 0 or 1, whose meanings
+are answers."""
+
+
 def _fail(message: str) -> int:
     sys.stderr.write(f"minkplan: error: {message}\n")
     return 2
+
+
+def _unwritable_folder(out: Path) -> str | None:
+    """Why the output folder ``out`` cannot be written (checked before the work)."""
+    from planner.output import unwritable
+
+    if out.exists() and not out.is_dir():
+        return "exists and is not a directory"
+    return unwritable(out / "path.json")
 
 
 def _cmd_minkowski(args) -> int:
@@ -222,8 +238,9 @@ def _cmd_plan(args) -> int:
     import dataclasses
 
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        return _fail(f"--out {out}: exists and is not a directory")
+    problem = _unwritable_folder(out)
+    if problem:
+        return _fail(f"--out {out}: {problem}")
     if not (args.planner == "minkplan" or args.planner.startswith("ompl:")):
         return _fail(
             f"--planner {args.planner!r}: use minkplan or ompl:NAME (e.g. ompl:RRTConnect)"
@@ -290,8 +307,9 @@ def _cmd_plan(args) -> int:
 
 def _cmd_assemble(args) -> int:
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        return _fail(f"--out {out}: exists and is not a directory")
+    problem = _unwritable_folder(out)
+    if problem:
+        return _fail(f"--out {out}: {problem}")
     if not Path(args.assembly).is_file():
         return _fail(f"assembly: file {args.assembly!r} not found")
     from planner.assembly import plan_assembly
@@ -389,6 +407,20 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         sys.stderr.write("minkplan: interrupted\n")
         return 130
+    except MemoryError:
+        sys.stderr.write(f"minkplan: error: {args.command}: out of memory (an estimate before "
+                         f"the work should have refused this input; please report it)\n")
+        return EXIT_INTERNAL
+    except Exception as exc:  # noqa: BLE001 (a bug: never exit 0 or 1 for it)
+        if args.verbose >= 2:
+            import traceback
+
+            traceback.print_exc()
+        first = (str(exc).strip().splitlines() or [""])[0]
+        sys.stderr.write(f"minkplan: internal error in {args.command}: "
+                         f"{type(exc).__name__}: {first}; please report it (-vv shows the "
+                         f"traceback)\n")
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

@@ -175,3 +175,23 @@ def test_omplapp_problem_file(tmp_path, capsys, cache_dir):
     report = json.loads((out / "report.json").read_text())
     # the Easy world is not convex: auto takes the exact source, no CoACD
     assert report["source"]["used"] == "exact" and report["decomposition"]["exact"] is True
+
+
+def test_an_internal_error_is_exit_3_and_one_line(tmp_path, capsys, monkeypatch):
+    """A bug (anything but an input or resource error) never exits 0 or 1, whose meanings
+    are answers; -vv shows the traceback."""
+    import planner.planning
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("a bug\nwith two lines")
+
+    monkeypatch.setattr(planner.planning, "plan", broken)
+    scenario = Path(__file__).resolve().parents[1] / "scenarios" / "peg_in_hole.yaml"
+    code = main(["plan", str(scenario), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 3
+    assert err.splitlines() == ["minkplan: internal error in plan: RuntimeError: a bug; please "
+                                "report it (-vv shows the traceback)"]
+    assert main(["plan", str(scenario), "--out", str(tmp_path / "o"), "-vv"]) == 3
+    assert "Traceback" in capsys.readouterr().err
+    assert not (tmp_path / "o" / "path.json").exists()
