@@ -69,3 +69,25 @@ def test_load_problem_dispatches_on_the_file(tmp_path):
     (tmp_path / "p.txt").write_text("robot: {box: [1, 1, 1]}\n")
     with pytest.raises(planner.ScenarioError, match=r"p.txt: unknown problem file type '.txt'"):
         load_problem(tmp_path / "p.txt")
+
+
+def test_a_cspace_over_budget_is_refused_naming_the_problem():
+    """The core refuses an octree whose records would not fit (RecordLimit); the planner
+    says which problem, which source and at what cell size, as one ResourceLimitError."""
+    from planner.errors import ResourceLimitError
+    from planner.sources import ExactSource, SourceSettings
+
+    class OverBudget(ExactSource):  # isolates the planner's handling of the refusal
+        def cspace(self, *args, **kwargs):
+            raise ResourceLimitError("the octree's boundary cells would keep more than "
+                                     "4.0 GiB of candidate records")
+
+    path = SCENARIOS / "peg_in_hole.yaml"
+    refusing = OverBudget(SourceSettings(exact="true"), "test")
+    octree = OctreePlanner(planner.load_scenario(path), source=refusing, progress=False)
+    with pytest.raises(ResourceLimitError) as refused:
+        octree.setup()
+    message = str(refused.value)
+    assert message.startswith(str(path.resolve())) and "exact source" in message
+    assert "coarse cell size" in message and "4.0 GiB" in message
+    assert octree.cspace is None

@@ -41,6 +41,17 @@ pub enum CoreError {
         /// Context.
         detail: String,
     },
+    /// The octree's candidate records (what each boundary cell keeps of the parts) would
+    /// need more memory than allowed. Fix: a larger cell size, or the decomposition source.
+    #[error("the octree's boundary cells would keep more than {gib:.1} GiB of candidate records at cell size {cell_size:.3e} ({detail}); use a larger cell size or the decomposition source (exact: false)")]
+    RecordLimit {
+        /// The memory budget of the records, in GiB.
+        gib: f64,
+        /// Finest cell size asked for.
+        cell_size: f64,
+        /// Context.
+        detail: String,
+    },
     /// A triangle mesh cannot be used as a solid (open, inconsistently oriented, bad
     /// indices). Fix: repair the mesh (close holes, orient the triangles outward).
     #[error("{what}: {detail}")]

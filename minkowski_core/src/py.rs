@@ -27,7 +27,7 @@ impl From<CoreError> for PyErr {
         match e {
             CoreError::NonFinite { .. } | CoreError::Degenerate { .. } | CoreError::Empty { .. } | CoreError::InvalidGeometry { .. } => InvalidMeshError::new_err(msg),
             CoreError::InvalidParameter { .. } => InvalidParameterError::new_err(msg),
-            CoreError::ResourceLimit { .. } | CoreError::FacetLimit { .. } => ResourceLimitError::new_err(msg),
+            CoreError::ResourceLimit { .. } | CoreError::FacetLimit { .. } | CoreError::RecordLimit { .. } => ResourceLimitError::new_err(msg),
         }
     }
 }

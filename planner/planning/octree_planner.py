@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from planner.errors import ResourceLimitError
 from planner.problem import Scenario
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
 from planner.sources import Source, choose_for
@@ -169,10 +170,17 @@ class OctreePlanner:
         return [*self.scenario.obstacles, self.scenario.robot]
 
     def _build(self, margin: float):
-        with self.clock.stage("octree"):
-            return self._src.cspace(self.scenario.obstacles, self.scenario.robot,
-                                      self.bounds, self.floor_asked, self.coarse,
-                                      margin=margin, max_leaves=self.params.max_leaves)
+        sc = self.scenario
+        try:
+            with self.clock.stage("octree"):
+                return self._src.cspace(sc.obstacles, sc.robot, self.bounds, self.floor_asked,
+                                        self.coarse, margin=margin,
+                                        max_leaves=self.params.max_leaves)
+        except ResourceLimitError as exc:
+            where = str(sc.path) if sc.path is not None else sc.name
+            raise ResourceLimitError(
+                f"{where}: the C-space ({self._src.kind} source) does not fit at the coarse "
+                f"cell size {self.coarse:.3g}: {exc}") from exc
 
     def _report_head(self) -> None:
         cs, sc = self.cspace, self.scenario

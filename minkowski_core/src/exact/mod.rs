@@ -640,6 +640,13 @@ impl CellSource for ExactSource {
             out.clear();
             return Label::Full;
         }
+        // deep in a C-obstacle, where no single piece covers the cell: a vertex of one part
+        // inside the other, solid, part at every translation of the cell (exact, and the
+        // walls of certificates of surfaces need it: their interiors are unions of pieces)
+        if self.full_witness && (0..self.obstacles.len()).any(|k| self.vertex_nested(k, cell)) {
+            out.clear();
+            return Label::Full;
+        }
         Label::Mixed
     }
 

@@ -61,7 +61,7 @@ impl ExactSource {
     /// Whether at every `p` of the box a vertex of `p − B` lies in the solid `A_k` (the box
     /// `bx − b` inside `A_k` for a vertex `b` of `B`), or a vertex `a` of `A_k` lies in the
     /// solid `p − B` (`bx − a` inside `B`): then `A_k` and `p − B` meet.
-    fn vertex_nested(&self, k: usize, bx: &Aabb) -> bool {
+    pub(super) fn vertex_nested(&self, k: usize, bx: &Aabb) -> bool {
         let a = &self.obstacles[k];
         let shifted = |v: Vec3| Aabb::new(bx.min - v, bx.max - v);
         (a.solid && sample(&self.b.anchors, &self.b.vertices).any(|b0| a.contains_box(&shifted(b0))))

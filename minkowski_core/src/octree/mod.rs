@@ -22,6 +22,11 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 /// Deepest octree the lattice keys can address (coordinates below 2^21).
 pub const MAX_DEPTH: u32 = 20;
 
+/// Most candidate-record words (`u32`) an octree may hold: 4 GiB, and every offset into
+/// the arena stays a `u32`. Beyond it the build or refinement stops with
+/// [`CoreError::RecordLimit`] instead of running out of memory.
+pub const MAX_RECORD_WORDS: usize = 1 << 30;
+
 /// The fraction of a finest cell by which the lattice is shifted off the region's corner,
 /// so that axis-aligned facets rarely fall exactly on lattice planes.
 const LATTICE_SHIFT: f64 = 0.381_966_011_250_105_1;
@@ -171,7 +176,9 @@ struct Ctx<'a> {
     origin: Vec3,
     h: f64,
     budget: usize,
+    max_words: usize,
     count: AtomicUsize,
+    words: AtomicUsize,
     abort: AtomicBool,
 }
 
@@ -183,8 +190,14 @@ impl Octree {
     ///
     /// # Errors
     /// [`CoreError::InvalidParameter`] for a non-positive or non-finite `h`,
-    /// [`CoreError::ResourceLimit`] when the lattice or the leaf count would exceed the limits.
+    /// [`CoreError::ResourceLimit`] when the lattice or the leaf count would exceed the limits,
+    /// [`CoreError::RecordLimit`] when the candidate records would pass [`MAX_RECORD_WORDS`].
     pub fn build<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize) -> CoreResult<Octree> {
+        Self::build_within(source, region, h, max_cells, MAX_RECORD_WORDS)
+    }
+
+    /// [`Octree::build`] with at most `max_words` candidate-record words.
+    pub(crate) fn build_within<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, max_words: usize) -> CoreResult<Octree> {
         if h <= 0.0 || !h.is_finite() {
             return Err(CoreError::InvalidParameter { name: "cell size".into(), value: h, detail: "must be positive and finite".into() });
         }
@@ -199,9 +212,12 @@ impl Octree {
                 detail: format!("the region is {n:.0} cells wide; the lattice addresses at most 2^{MAX_DEPTH}"),
             });
         }
-        let ctx = Ctx { src: source, origin, h, budget: max_cells, count: AtomicUsize::new(0), abort: AtomicBool::new(false) };
+        let ctx = Ctx { src: source, origin, h, budget: max_cells, max_words, count: AtomicUsize::new(0), words: AtomicUsize::new(0), abort: AtomicBool::new(false) };
         let root = source.root_records();
         let (leaves, cands) = ctx.node([0, 0, 0], depth as u8, &root, None);
+        if ctx.words.load(Ordering::Relaxed) > max_words {
+            return Err(record_limit(max_words, h, "octree build"));
+        }
         if ctx.abort.load(Ordering::Relaxed) {
             return Err(CoreError::ResourceLimit { budget: max_cells, cell_size: h, detail: "octree leaves".into() });
         }
@@ -413,10 +429,19 @@ impl Ctx<'_> {
         let mut leaf = self.leaf(ijk, level, label, keep);
         leaf.cand_start = out.1.len() as u32;
         if keep > 0 {
+            if self.words.fetch_add(keep, Ordering::Relaxed) + keep > self.max_words {
+                self.abort.store(true, Ordering::Relaxed);
+                return;
+            }
             out.1.extend_from_slice(own);
         }
         out.0.push(leaf);
     }
+}
+
+/// The error for an octree whose candidate records would pass [`MAX_RECORD_WORDS`].
+pub(crate) fn record_limit(max_words: usize, h: f64, during: &str) -> CoreError {
+    CoreError::RecordLimit { gib: (max_words * std::mem::size_of::<u32>()) as f64 / (1u64 << 30) as f64, cell_size: h, detail: during.into() }
 }
 
 #[inline]

@@ -63,3 +63,16 @@ fn cell_budget_is_enforced() {
     assert!(Octree::build(&set, &set.aabb, 0.0, 1000).is_err());
     assert!(Octree::build(&set, &set.aabb, f64::NAN, 1000).is_err());
 }
+
+#[test]
+fn record_budget_is_enforced() {
+    let set = unit_cube_set();
+    let full = Octree::build(&set, &set.aabb, 0.05, 1_000_000).unwrap();
+    let words = full.cands.len();
+    assert!(words > 0);
+    let err = Octree::build_within(&set, &set.aabb, 0.05, 1_000_000, words - 1).unwrap_err();
+    assert!(matches!(err, CoreError::RecordLimit { .. }), "{err}");
+    assert!(err.to_string().contains("larger cell size"), "{err}");
+    let exact_fit = Octree::build_within(&set, &set.aabb, 0.05, 1_000_000, words).unwrap();
+    assert_eq!(exact_fit.cands.len(), words);
+}

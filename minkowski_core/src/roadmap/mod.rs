@@ -35,5 +35,7 @@ pub use adjacency::{face_adjacency, neighbors, shared_face, Adjacency, Neighbor}
 pub use components::components;
 pub use cspace::{Attachment, CSpace, Certificate, Obstacles};
 pub use index::{cell_key, LeafIndex};
+#[cfg(test)]
+pub(crate) use refine::refine_within;
 pub use refine::{refine, rescale, RefineStats};
 pub use search::{astar, SearchResult};

@@ -9,7 +9,7 @@
 use super::index::LeafIndex;
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
-use crate::octree::{lattice_cell, CellSource, Label, Leaf, Octree, MAX_DEPTH};
+use crate::octree::{lattice_cell, record_limit, CellSource, Label, Leaf, Octree, MAX_DEPTH, MAX_RECORD_WORDS};
 use rayon::prelude::*;
 
 /// What a [`refine`] call did.
@@ -87,9 +87,23 @@ impl Classifier<'_> {
 /// leaves stay valid; `index` is updated. Parallel over targets; deterministic.
 ///
 /// # Errors
-/// [`CoreError::ResourceLimit`] when the octree would exceed `max_leaves` leaves (nothing
-/// is changed then).
+/// [`CoreError::ResourceLimit`] when the octree would exceed `max_leaves` leaves,
+/// [`CoreError::RecordLimit`] when its candidate records would pass [`MAX_RECORD_WORDS`]
+/// (nothing is changed then).
 pub fn refine<S: CellSource>(source: &S, oct: &mut Octree, index: &mut LeafIndex, targets: &[usize], levels: u8, max_leaves: usize) -> CoreResult<RefineStats> {
+    refine_within(source, oct, index, targets, levels, max_leaves, MAX_RECORD_WORDS)
+}
+
+/// [`refine`] with at most `max_words` candidate-record words in the octree.
+pub(crate) fn refine_within<S: CellSource>(
+    source: &S,
+    oct: &mut Octree,
+    index: &mut LeafIndex,
+    targets: &[usize],
+    levels: u8,
+    max_leaves: usize,
+    max_words: usize,
+) -> CoreResult<RefineStats> {
     let mut todo: Vec<usize> = targets.iter().copied().filter(|&t| t < oct.leaves.len() && oct.leaves[t].label == Label::Mixed && oct.leaves[t].level > 0).collect();
     todo.sort_unstable();
     todo.dedup();
@@ -111,6 +125,10 @@ pub fn refine<S: CellSource>(source: &S, oct: &mut Octree, index: &mut LeafIndex
     let created: usize = parts.iter().map(|p| p.len()).sum();
     if oct.leaves.len() - todo.len() + created > max_leaves {
         return Err(CoreError::ResourceLimit { budget: max_leaves, cell_size: oct.h, detail: "roadmap leaves during refinement".into() });
+    }
+    let new_words: usize = parts.iter().flatten().map(|(_, list)| list.len()).sum();
+    if oct.cands.len() + new_words > max_words {
+        return Err(record_limit(max_words, oct.h, "roadmap refinement"));
     }
     let mut stats = RefineStats { refined: todo.len(), created, by_label: [0; 3] };
     for (&t, children) in todo.iter().zip(parts) {

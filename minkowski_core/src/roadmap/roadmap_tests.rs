@@ -181,6 +181,19 @@ fn refine_respects_the_leaf_budget() {
 }
 
 #[test]
+fn refine_respects_the_record_budget() {
+    let (set, oct) = small_octree();
+    let mut oct = rescale(oct, 2).unwrap();
+    let mut idx = LeafIndex::new(&oct);
+    let (leaves, words) = (oct.leaves.len(), oct.cands.len());
+    let targets: Vec<usize> = (0..oct.leaves.len()).collect();
+    let err = refine_within(&set, &mut oct, &mut idx, &targets, 2, 10_000_000, words + 1).unwrap_err();
+    assert!(matches!(err, crate::error::CoreError::RecordLimit { .. }), "{err}");
+    assert_eq!((oct.leaves.len(), oct.cands.len()), (leaves, words));
+    assert!(refine_within(&set, &mut oct, &mut idx, &targets, 2, 10_000_000, usize::MAX).unwrap().refined > 0);
+}
+
+#[test]
 fn astar_goes_around_an_obstacle_through_empty_leaves() {
     let set = PolytopeSet::new(vec![cuboid([-0.5, -2.0, -2.0], [0.5, 1.0, 2.0])]);
     let region = Aabb::new(Vec3::splat(-2.0), Vec3::splat(2.0));
