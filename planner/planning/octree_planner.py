@@ -179,8 +179,7 @@ class OctreePlanner:
         except ResourceLimitError as exc:
             where = str(sc.path) if sc.path is not None else sc.name
             raise ResourceLimitError(
-                f"{where}: the C-space ({self._src.kind} source) does not fit at the coarse "
-                f"cell size {self.coarse:.3g}: {exc}") from exc
+                f"{where}: the C-space ({self._src.kind} source) does not fit: {exc}") from exc
 
     def _report_head(self) -> None:
         cs, sc = self.cspace, self.scenario
