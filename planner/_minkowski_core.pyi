@@ -9,6 +9,7 @@ import numpy.typing as npt
 
 __all__ = [
     "CSpace",
+    "CheckedMesh",
     "ExactSum",
     "Primitives",
     "__version__",
@@ -75,13 +76,33 @@ def winding_numbers(
     """Exact winding numbers of points for a closed mesh (int64 min: on the surface)."""
 
 @final
+class CheckedMesh:
+    """A part's triangle mesh checked once (a solid, or with ``solid=False`` a surface),
+    with its BVH: :class:`ExactSum` and :meth:`CSpace.exact` take it unchecked."""
+
+    def __new__(
+        cls,
+        vertices: npt.NDArray[np.float64],
+        faces: npt.NDArray[np.int64],
+        solid: bool = True,
+        name: str = "mesh",
+    ) -> CheckedMesh: ...
+    @property
+    def solid(self) -> bool: ...
+    @property
+    def triangles(self) -> int: ...
+    def negated(self) -> CheckedMesh: ...
+
+_MeshArg = tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]] | CheckedMesh
+
+@final
 class ExactSum:
     """The exact Minkowski sum ``A ⊕ B`` of two closed meshes (boundary convolution)."""
 
     def __new__(
         cls,
-        a: tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]],
-        b: tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]],
+        a: _MeshArg,
+        b: _MeshArg,
         a_solid: bool = True,
         b_solid: bool = True,
         max_facets: int = 8000000,
@@ -118,8 +139,8 @@ class CSpace:
     ) -> CSpace: ...
     @staticmethod
     def exact(
-        obstacles: list[tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]],
-        robot: tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]],
+        obstacles: Sequence[_MeshArg],
+        robot: _MeshArg,
         bounds: npt.NDArray[np.float64],
         h_floor: float,
         h_coarse: float,

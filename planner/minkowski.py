@@ -163,7 +163,8 @@ def _progress_bar(show: bool | None, total: int, desc: str):
 
 def _sum(a, b, *, mirror_b: bool, eps, threshold: float, seed: int, cache_dir, progress,
          max_cells, max_refinements: int, simplify: bool, names: tuple[str, str],
-         exact="auto", source: Source | None = None) -> MinkowskiResult:
+         exact="auto", source: Source | None = None,
+         warn_complex: bool = True) -> MinkowskiResult:
     t_start = time.perf_counter()
     exact = parse_exact(exact, "exact")
     check_threshold(threshold)
@@ -176,7 +177,7 @@ def _sum(a, b, *, mirror_b: bool, eps, threshold: float, seed: int, cache_dir, p
         source = choose(parts, SourceSettings(exact=exact, threshold=threshold, seed=seed,
                                               cache_dir=cache_dir, progress=False))
     grid = dict(eps=eps, max_cells=max_cells, max_refinements=max_refinements,
-                simplify=simplify, names=names, t_start=t_start)
+                simplify=simplify, names=names, t_start=t_start, warn_complex=warn_complex)
     if source.kind == "exact":
         chosen = "asked" if exact is True else "auto"
         return _exact_sum(source, parts, mirror_b=mirror_b, chosen=chosen, **grid)
@@ -185,7 +186,8 @@ def _sum(a, b, *, mirror_b: bool, eps, threshold: float, seed: int, cache_dir, p
 
 def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
                        max_cells: int, max_refinements: int, simplify: bool,
-                       names: tuple[str, str], t_start: float, progress) -> MinkowskiResult:
+                       names: tuple[str, str], t_start: float, progress,
+                       warn_complex: bool) -> MinkowskiResult:
     bar = _progress_bar(progress, 4, "minkowski")
 
     def step(label: str) -> None:
@@ -212,7 +214,7 @@ def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bo
     finally:
         if bar is not None:
             bar.close()
-    mesh, surface_stats, surface_seconds = _surface_mesh(surf, names)
+    mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     error_bound = float(surf["error_bound"]) + pair.excess
     stats = {
         "source": "decomposition",
@@ -262,9 +264,10 @@ def mesh_arrays(mesh: trimesh.Trimesh, name: str) -> tuple[np.ndarray, np.ndarra
     return CheckedParts().arrays(Part(name, mesh, "mesh"))
 
 
-def _surface_mesh(surf: dict, names: tuple[str, str]) -> tuple[trimesh.Trimesh, dict, dict]:
+def _surface_mesh(surf: dict, names: tuple[str, str],
+                  warn_complex: bool) -> tuple[trimesh.Trimesh, dict, dict]:
     """The core's surface as a mesh, with the stats and stage seconds both sources report;
-    an empty surface is an error, complex cells left a warning."""
+    an empty surface is an error, complex cells left a warning (with ``warn_complex``)."""
     mesh = trimesh.Trimesh(vertices=surf["vertices"], faces=surf["faces"], process=False)
     # closed, manifold and outward by construction (integer-determinant orientation over
     # a crack-free tetrahedral split); the tests check it, so it is not re-checked here
@@ -273,7 +276,7 @@ def _surface_mesh(surf: dict, names: tuple[str, str]) -> tuple[trimesh.Trimesh, 
             f"{names[0]} ⊕ {names[1]}: the extracted surface is empty; please report this input"
         )
     complex_cells = int(surf["complex_cells"])
-    if complex_cells:
+    if complex_cells and warn_complex:
         log.warning(
             "%s ⊕ %s: %d complex cells remain after %d refinements: the bound is not guaranteed "
             "there (features thinner than %.3g); use a smaller eps",
@@ -301,7 +304,7 @@ def _surface_mesh(surf: dict, names: tuple[str, str]) -> tuple[trimesh.Trimesh, 
 
 def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
                max_cells: int, max_refinements: int, simplify: bool, names: tuple[str, str],
-               t_start: float, chosen: str) -> MinkowskiResult:
+               t_start: float, chosen: str, warn_complex: bool) -> MinkowskiResult:
     t0 = time.perf_counter()
     pair = source.pair(*parts, mirror_b=mirror_b)
     t_source = time.perf_counter() - t0
@@ -310,7 +313,7 @@ def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
     eps_value = _grid_eps(box, diag, eps, max_cells)
     surf = pair.native.surface(eps_value, max_cells=max_cells, max_refinements=max_refinements,
                                simplify=simplify)
-    mesh, surface_stats, surface_seconds = _surface_mesh(surf, names)
+    mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     stats = {
         "source": "exact",
         "exact_chosen": chosen,
@@ -412,12 +415,14 @@ def c_obstacle(
     simplify: bool = True,
     exact: bool | str = "auto",
     source: Source | None = None,
+    warn_complex: bool = True,
 ) -> MinkowskiResult:
     """The translational C-obstacle ``O ⊕ (−R) = {t : (R + t) ∩ O ≠ ∅}``.
 
     ``robot`` is given in its own frame (at translation ``t`` it occupies ``R + t``), with
     the orientation it keeps for the whole motion. Arguments, result and errors as in
-    :func:`minkowski_sum`.
+    :func:`minkowski_sum`; ``warn_complex=False`` logs no warning for complex cells left
+    (a picture's coarse surface; the stats still count them).
     """
     return _sum(
         obstacle,
@@ -434,4 +439,5 @@ def c_obstacle(
         names=("obstacle", "robot"),
         exact=exact,
         source=source,
+        warn_complex=warn_complex,
     )

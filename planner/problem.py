@@ -31,6 +31,7 @@ import trimesh
 from trimesh import transformations as tf
 
 from .errors import InvalidParameterError
+from .meshes.solids import SOLID_REASON
 from .sources import check_exact
 from .tolerances import tol
 from .values import check_bool, check_optional, check_real, check_seed
@@ -118,7 +119,7 @@ class Part:
     mesh: trimesh.Trimesh
     source: str
     solid: bool = True
-    kind_reason: str = "closed and its winding number never negative"
+    kind_reason: str = SOLID_REASON
     checked: bool = False
     repairs: dict[str, Any] = dataclasses.field(default_factory=dict)
 

@@ -59,7 +59,7 @@ def check_exact(value: Any) -> ExactSetting:
     """The ``exact`` setting: ``True``, ``False`` or ``"auto"``, also written as the strings
     ``"true"``, ``"false"``, ``"auto"`` (any case). ``ValueError`` otherwise."""
     word = value.strip().lower() if isinstance(value, str) else None
-    if word == "auto" or (value == "auto" and isinstance(value, str)):
+    if word == "auto":
         return "auto"
     if word in ("true", "false"):
         return word == "true"
@@ -171,10 +171,12 @@ class PairCObstacle:
 class CheckedParts:
     """Each part's checked arrays, computed once: a solid checked and cleaned by
     :func:`planner.meshes.validate_solid` (unless a reader has done it already), a
-    surface's triangles as they are; and whether a solid's bodies are all convex."""
+    surface's triangles as they are; the core's mesh of them (checked once, for every
+    pair it is in); and whether a solid's bodies are all convex."""
 
     def __init__(self) -> None:
         self._arrays: dict[int, tuple[Part, tuple[np.ndarray, np.ndarray]]] = {}
+        self._native: dict[int, Any] = {}
         self._convex: dict[int, bool] = {}
 
     def arrays(self, part: Part) -> tuple[np.ndarray, np.ndarray]:
@@ -190,6 +192,16 @@ class CheckedParts:
                       np.ascontiguousarray(mesh.faces, dtype=np.int64))
             self._arrays[key] = (part, arrays)  # the part kept alive: its id stays its own
         return self._arrays[key][1]
+
+    def native(self, part: Part):
+        """The core's :class:`CheckedMesh` of the part's arrays (built once)."""
+        key = id(part)
+        if key not in self._native:
+            from ._minkowski_core import CheckedMesh  # noqa: PLC0415
+
+            self._native[key] = CheckedMesh(*self.arrays(part), solid=part.solid,
+                                            name=part.name)
+        return self._native[key]
 
     def convex(self, part: Part) -> bool:
         """Whether every body of a solid part is convex (its decomposition is exact and
@@ -295,7 +307,8 @@ class ExactSource(Source):
                max_leaves=20_000_000):
         from ._minkowski_core import CSpace  # noqa: PLC0415
 
-        return CSpace.exact([self.arrays(o) for o in obstacles], self.arrays(robot),
+        native = self.parts.native
+        return CSpace.exact([native(o) for o in obstacles], native(robot),
                             np.asarray(bounds, dtype=np.float64), floor, coarse,
                             margin=margin, max_leaves=max_leaves,
                             solid=[o.solid for o in obstacles], robot_solid=robot.solid)
@@ -306,11 +319,10 @@ class ExactSource(Source):
     def pair(self, a, b, *, mirror_b=True):
         from . import _minkowski_core as core  # noqa: PLC0415
 
-        va, fa = self.arrays(a)
-        vb, fb = self.arrays(b)
-        if mirror_b:  # −B: negated vertices, faces reversed so that normals stay outward
-            vb, fb = np.ascontiguousarray(-vb), np.ascontiguousarray(fb[:, ::-1])
-        native = core.ExactSum((va, fa), (vb, fb), a.solid, b.solid)
+        mesh_b = self.parts.native(b)
+        if mirror_b:  # −B: negated vertices, triangles reversed so that normals stay outward
+            mesh_b = mesh_b.negated()
+        native = core.ExactSum(self.parts.native(a), mesh_b, a.solid, b.solid)
         stats = {"triangles_a": int(native.triangles[0]), "triangles_b": int(native.triangles[1]),
                  "facets": int(native.facets)}
         return PairCObstacle(native, exact=True, excess=0.0, stats=stats)
@@ -365,14 +377,16 @@ class DecompositionSource(Source):
         return all(d.exact for d in self._decompositions.values())
 
     def margin_deficit(self, parts):
-        *obstacles, robot = parts
-        return self.decomposition(robot).deficit + max(
-            (self.decomposition(o).deficit for o in obstacles), default=0.0)
+        return self._worst_pair(parts, "deficit")
 
     def excess(self, parts):
+        return self._worst_pair(parts, "excess")
+
+    def _worst_pair(self, parts, which: str) -> float:
+        """The robot's ``which`` (deficit or excess) plus the largest of the obstacles'."""
         *obstacles, robot = parts
-        return self.decomposition(robot).excess + max(
-            (self.decomposition(o).excess for o in obstacles), default=0.0)
+        return getattr(self.decomposition(robot), which) + max(
+            (getattr(self.decomposition(o), which) for o in obstacles), default=0.0)
 
     def cspace(self, obstacles, robot, bounds, floor, coarse, *, margin=0.0,
                max_leaves=20_000_000):

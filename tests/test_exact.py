@@ -831,3 +831,34 @@ def test_a_facet_budget_stops_the_exact_source_with_a_clear_error():
     assert ExactSum(a, b).facets > 100
     with pytest.raises(ResourceLimitError, match=r"more than 100 facets.*exact: false"):
         ExactSum(a, b, max_facets=100)
+
+
+def test_a_checked_mesh_is_the_arrays_checked_once():
+    """ExactSum over CheckedMeshes (checked once per part, negated natively) answers as
+    ExactSum over the arrays; a mesh checked as a surface is refused as a solid."""
+    from planner._minkowski_core import CheckedMesh
+
+    plate = plate_with_square_hole(0.3)
+    peg = trimesh.creation.box(extents=[0.25, 0.25, 1.0])
+    va, fa = mesh_arrays(plate, "plate")
+    vb, fb = mesh_arrays(peg, "peg")
+    from_arrays = ExactSum((va, fa), (-vb, np.ascontiguousarray(fb[:, ::-1])))
+    checked_peg = CheckedMesh(vb, fb, name="peg")
+    from_checked = ExactSum(CheckedMesh(va, fa, name="plate"), checked_peg.negated())
+    assert checked_peg.solid and checked_peg.triangles == len(fb)
+    np.testing.assert_allclose(from_checked.bounds, from_arrays.bounds)
+    assert from_checked.facets == from_arrays.facets
+    points = np.random.default_rng(3).uniform(from_arrays.bounds[0], from_arrays.bounds[1],
+                                              size=(2000, 3))
+    np.testing.assert_array_equal(from_checked.contains(points), from_arrays.contains(points))
+    surface = CheckedMesh(vb, fb, solid=False, name="peg")
+    with pytest.raises(planner.errors.InvalidParameterError, match="checked as a surface"):
+        ExactSum(CheckedMesh(va, fa), surface.negated())
+    # the plate as a surface: the peg wholly inside its slab meets no triangle
+    plate_surface = CheckedMesh(va, fa, solid=False, name="plate")
+    surface_pair = ExactSum(plate_surface, checked_peg.negated(), a_solid=False)
+    arrays_pair = ExactSum((va, fa), (-vb, np.ascontiguousarray(fb[:, ::-1])), a_solid=False)
+    np.testing.assert_array_equal(surface_pair.contains(points), arrays_pair.contains(points))
+    assert surface_pair.contains(points).sum() < from_checked.contains(points).sum()
+    with pytest.raises(InvalidMeshError, match="peg"):
+        CheckedMesh(vb, fb[:-1], name="peg")  # open: no solid

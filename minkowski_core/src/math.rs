@@ -45,6 +45,12 @@ impl Aabb {
         self.min.x <= o.max.x && o.min.x <= self.max.x && self.min.y <= o.max.y && o.min.y <= self.max.y && self.min.z <= o.max.z && o.min.z <= self.max.z
     }
 
+    /// Distance from `p` to the closed box (0 inside).
+    #[inline]
+    pub fn distance_to_point(&self, p: Vec3) -> f64 {
+        (self.min - p).max(p - self.max).max(Vec3::ZERO).length()
+    }
+
     /// Whether `p` lies in the closed box.
     #[inline]
     pub fn contains_point(&self, p: Vec3) -> bool {

@@ -231,6 +231,63 @@ fn mesh_of(v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>, what: &
     Ok(if solid { TriMesh::new(verts, &faces, what)? } else { TriMesh::surface(verts, &faces, what)? })
 }
 
+/// A part's triangle mesh, checked once (a solid: closed, outward, winding number never
+/// negative; a surface: any finite triangles) with its BVH, for [`ExactSum`] and
+/// `CSpace.exact` to take without checking it again.
+#[pyclass(frozen, module = "planner._minkowski_core")]
+pub struct CheckedMesh {
+    inner: Arc<TriMesh>,
+}
+
+#[pymethods]
+impl CheckedMesh {
+    /// Check vertices (n, 3) and faces (m, 3) as a solid (or, with `solid=False`, a
+    /// surface); `name` names the mesh in errors.
+    #[new]
+    #[pyo3(signature = (vertices, faces, solid=true, name="mesh"))]
+    fn new(vertices: PyReadonlyArray2<'_, f64>, faces: PyReadonlyArray2<'_, i64>, solid: bool, name: &str) -> PyResult<Self> {
+        Ok(CheckedMesh { inner: Arc::new(mesh_of(&vertices, &faces, name, solid)?) })
+    }
+
+    /// Whether it was checked as a solid.
+    #[getter]
+    fn solid(&self) -> bool {
+        self.inner.solid
+    }
+
+    /// Number of triangles.
+    #[getter]
+    fn triangles(&self) -> usize {
+        self.inner.tris.len()
+    }
+
+    /// `−M`: negated vertices, triangles reversed (a solid stays a solid).
+    fn negated(&self) -> CheckedMesh {
+        CheckedMesh { inner: Arc::new(self.inner.negated()) }
+    }
+}
+
+/// A mesh argument: a [`CheckedMesh`], or (vertices, faces) arrays checked here.
+#[derive(FromPyObject)]
+enum MeshArg<'py> {
+    Checked(PyRef<'py, CheckedMesh>),
+    Arrays((PyReadonlyArray2<'py, f64>, PyReadonlyArray2<'py, i64>)),
+}
+
+impl MeshArg<'_> {
+    /// The mesh, as a solid or a surface as `solid` asks (a [`CheckedMesh`] must agree).
+    fn mesh(&self, what: &str, solid: bool) -> PyResult<TriMesh> {
+        match self {
+            MeshArg::Arrays((v, f)) => mesh_of(v, f, what, solid),
+            MeshArg::Checked(m) if m.inner.solid == solid => Ok(m.inner.as_ref().clone()),
+            MeshArg::Checked(m) => {
+                let kind = if m.inner.solid { "a solid" } else { "a surface" };
+                Err(InvalidParameterError::new_err(format!("{what}: checked as {kind}, but solid={solid} was asked")))
+            }
+        }
+    }
+}
+
 /// The winding number just in front of every triangle of the closed mesh (vertices (n, 3),
 /// faces (m, 3)): (m,) int64, with the smallest int64 where it could not be told (the
 /// triangle lies on others). The mesh bounds a solid when none is negative. Parallel.
@@ -273,8 +330,7 @@ fn winding_numbers<'py>(
 /// A mesh checked to be closed and consistently oriented (no winding check).
 fn closed_mesh(vertices: &PyReadonlyArray2<'_, f64>, faces: &PyReadonlyArray2<'_, i64>) -> PyResult<TriMesh> {
     let surface = mesh_of(vertices, faces, "mesh", false)?;
-    let faces: Vec<[u32; 3]> = faces.as_array().rows().into_iter().map(|r| [r[0] as u32, r[1] as u32, r[2] as u32]).collect();
-    TriMesh::check_closed(&faces, "mesh")?;
+    TriMesh::check_closed(&surface.faces, "mesh")?;
     Ok(TriMesh { closed: true, ..surface })
 }
 
@@ -289,21 +345,15 @@ pub struct ExactSum {
 impl ExactSum {
     /// `A ⊕ B` for `a` and `b` given as (vertices (n, 3), faces (m, 3)): solids (closed,
     /// outward, winding number never negative; checked) unless `a_solid` / `b_solid` is
-    /// false (a surface: any triangles, containment does not count).
+    /// false (a surface: any triangles, containment does not count); or as
+    /// [`CheckedMesh`]es, not checked again.
     #[new]
     // max_facets: boundary candidates held at most (8 M: about 2 GB at FACET_BYTES each);
     // beyond it the construction stops with a ResourceLimitError, not out of memory
     #[pyo3(signature = (a, b, a_solid=true, b_solid=true, max_facets=8_000_000))]
-    fn new(
-        py: Python<'_>,
-        a: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>),
-        b: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>),
-        a_solid: bool,
-        b_solid: bool,
-        max_facets: usize,
-    ) -> PyResult<Self> {
-        let ma = mesh_of(&a.0, &a.1, "a", a_solid)?;
-        let mb = mesh_of(&b.0, &b.1, "b", b_solid)?;
+    fn new(py: Python<'_>, a: MeshArg<'_>, b: MeshArg<'_>, a_solid: bool, b_solid: bool, max_facets: usize) -> PyResult<Self> {
+        let ma = a.mesh("a", a_solid)?;
+        let mb = b.mesh("b", b_solid)?;
         let inner = py.detach(move || ExactSource::try_new(vec![ma], mb, 0.0, None, max_facets))?;
         Ok(ExactSum { inner: Arc::new(inner) })
     }
@@ -383,6 +433,7 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(winding_numbers, m)?)?;
     m.add_class::<PyCSpace>()?;
     m.add_class::<ExactSum>()?;
+    m.add_class::<CheckedMesh>()?;
     Ok(())
 }
 
@@ -461,8 +512,8 @@ impl PyCSpace {
     #[allow(clippy::too_many_arguments)]
     fn exact(
         py: Python<'_>,
-        obstacles: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>)>,
-        robot: (PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>),
+        obstacles: Vec<MeshArg<'_>>,
+        robot: MeshArg<'_>,
         bounds: PyReadonlyArray2<'_, f64>,
         h_floor: f64,
         h_coarse: f64,
@@ -482,10 +533,10 @@ impl PyCSpace {
             return Err(InvalidParameterError::new_err(format!("solid: {} flags for {} obstacles", solid.len(), obstacles.len())));
         }
         let mut meshes = Vec::with_capacity(obstacles.len());
-        for (k, (v, f)) in obstacles.iter().enumerate() {
-            meshes.push(mesh_of(v, f, &format!("obstacle {k}"), solid[k])?);
+        for (k, o) in obstacles.iter().enumerate() {
+            meshes.push(o.mesh(&format!("obstacle {k}"), solid[k])?);
         }
-        let r = mesh_of(&robot.0, &robot.1, "robot", robot_solid)?;
+        let r = robot.mesh("robot", robot_solid)?;
         let inner = py.detach(move || crate::roadmap::CSpace::build_exact(meshes, &r, region, h_floor, h_coarse, margin, max_leaves, max_facets))?;
         Ok(PyCSpace { inner, max_leaves })
     }

@@ -73,7 +73,6 @@ class PairCache:
     def __init__(self, assembly: Assembly, cache_dir=None, source: Source | None = None) -> None:
         self.assembly = assembly
         self.parts = {p.name: p for p in assembly.parts}
-        self.cache_dir = cache_dir
         self.delta = assembly.contact_tolerance
         self.margin = ESCAPE_MARGIN_REL * assembly.diagonal
         self.source = source or choose_for(assembly.parts, assembly.settings,
@@ -81,6 +80,7 @@ class PairCache:
         self._sums: dict[tuple[str, str], PairCObstacle | None] = {}
         self._verdicts: dict[tuple[str, str, str], RayVerdict] = {}
         self._rays: dict[tuple[str, str, str], tuple[bool, float]] = {}
+        self._samples: dict[tuple[str, str, str], tuple[bool, np.ndarray]] = {}
         self._detours: dict[tuple[str, str, str], float] = {}
         self._plane_cache: dict[tuple[str, str], list[tuple[np.ndarray, np.ndarray]]] = {}
         self._far: dict[tuple[str, str], np.ndarray] = {}
@@ -114,16 +114,15 @@ class PairCache:
         self.computed.append(key)
         self.stats["sums_computed"] += 1
         self.stats["primitives"] += 0 if pair is None else pair.stats.get("primitives", 0)
-        self.stats["decompositions"] = getattr(self.source, "decomposed", 0)
+        self.stats["decompositions"] = self.source.decomposed
         return pair
 
     def checker(self, moving: str, obstacle: str) -> FclChecker:
         """FCL checker of the moving part against the obstacle part alone."""
         key = (moving, obstacle)
         if key not in self._checkers:
-            self._checkers[key] = FclChecker(
-                self.parts[moving].mesh, [self.parts[obstacle].mesh],
-                contact_tolerance=self.delta, names=[obstacle])
+            self._checkers[key] = FclChecker.for_parts(
+                self.parts[moving], [self.parts[obstacle]], contact_tolerance=self.delta)
         return self._checkers[key]
 
     def contact_directions(self, moving: str, obstacle: str) -> list[np.ndarray]:
@@ -159,21 +158,31 @@ class PairCache:
         sampled penetration (inside one primitive: a lower bound of the true depth)."""
         key = (moving, obstacle, dname)
         if key not in self._rays:
-            far = self.far_point(moving, dname, vec)
             prims = self.primitives(moving, obstacle)
             if prims is None:  # no primitives: undecided (FCL)
                 self._rays[key] = (True, 0.0)
                 return self._rays[key]
+            touches, points = self._ray_samples(prims, moving, obstacle, dname, vec)
             depth = 0.0
-            intervals = [(a, b) for a, b in prims.segment_intervals(np.zeros(3), far)]
-            for a, b in intervals:
-                if b <= a:
-                    continue
-                ts = a + (b - a) * np.linspace(0.0, 1.0, RAY_SAMPLES + 2)[1:-1]
-                points = np.ascontiguousarray(ts[:, None] * far[None, :])
-                depth = max(depth, -float(np.min(prims.signed_distance(points))))
-            self._rays[key] = (bool(intervals), depth)
+            if len(points):
+                depth = max(0.0, -float(np.min(prims.signed_distance(points))))
+            self._rays[key] = (touches, depth)
         return self._rays[key]
+
+    def _ray_samples(self, prims: PairCObstacle, moving: str, obstacle: str, dname: str,
+                     vec: np.ndarray) -> tuple[bool, np.ndarray]:
+        """Whether the ray along ``vec`` meets ``CO_ij`` (its primitives ``prims``;
+        touching included) and ``RAY_SAMPLES`` points inside each of its intervals there.
+        Computed once for :meth:`ray` and :meth:`detour`."""
+        key = (moving, obstacle, dname)
+        if key not in self._samples:
+            far = self.far_point(moving, dname, vec)
+            intervals = prims.segment_intervals(np.zeros(3), far)
+            ts = [a + (b - a) * np.linspace(0.0, 1.0, RAY_SAMPLES + 2)[1:-1]
+                  for a, b in intervals if b > a]
+            points = np.concatenate(ts or [np.zeros(0)])[:, None] * far[None, :]
+            self._samples[key] = (bool(intervals), np.ascontiguousarray(points))
+        return self._samples[key]
 
     def detour(self, moving: str, obstacle: str, dname: str, vec: np.ndarray) -> float:
         """How far the part must step aside, across the ray along ``vec``, to pass
@@ -190,11 +199,7 @@ class PairCache:
         if touches and pair is not None and not hasattr(pair.native, "polytope"):
             best = depth  # no facet planes (exact source): the depth, a lower bound
         elif touches and pair is not None:
-            far = self.far_point(moving, dname, vec)
-            points = np.concatenate([
-                a + (b - a) * np.linspace(0.0, 1.0, RAY_SAMPLES + 2)[1:-1]
-                for a, b in pair.segment_intervals(np.zeros(3), far) if b > a]
-                or [np.zeros(0)])[:, None] * far[None, :]
+            _, points = self._ray_samples(pair, moving, obstacle, dname, vec)
             if len(points):
                 for normals, offsets in self._planes(moving, obstacle):
                     slack = offsets[None, :] - points @ normals.T

@@ -58,9 +58,7 @@ log = logging.getLogger(__name__)
 
 def validate_removal(part: Part, others: list[Part], path: np.ndarray, delta: float) -> dict:
     """FCL's check of a removal path with ``others`` present, at the contact tolerance."""
-    checker = FclChecker(part.mesh, [p.mesh for p in others], contact_tolerance=delta,
-                         names=[p.name for p in others], solid=[p.solid for p in others],
-                         robot_solid=part.solid)
+    checker = FclChecker.for_parts(part, others, contact_tolerance=delta)
     check = checker.check_path(path)
     return {"valid": bool(check.valid), "min_clearance": check.min_clearance,
             "n_checks": check.n_checks, "contact_tolerance": delta,

@@ -100,11 +100,10 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> A
     settings = dataclasses.replace(settings, contact_tolerance=delta)
     # The assembled pose must be valid: no part overlaps another beyond the tolerance.
     for i, part in enumerate(parts):
-        others = [p for p in parts[i + 1:]]
+        others = parts[i + 1:]
         if not others:
             continue
-        checker = FclChecker(part.mesh, [p.mesh for p in others], contact_tolerance=delta,
-                             names=[p.name for p in others])
+        checker = FclChecker.for_parts(part, others, contact_tolerance=delta)
         if not checker.is_valid(np.zeros(3)):
             hit = checker.colliding_obstacle(np.zeros(3))
             other = hit[0] if hit else "another part"

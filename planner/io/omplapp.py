@@ -41,14 +41,14 @@ import numpy as np
 from trimesh import transformations as tf
 
 from planner.errors import InvalidMeshError, ScenarioError
-from planner.meshes import validate_solid
+from planner.meshes import SOLID_REASON, not_solid_reason, validate_solid
 from planner.problem import Body, PlannerSettings, Robot, Scenario, default_bounds
 from planner.tolerances import tol
 
+from .fields import rotation_angle_deg
 from .omplapp_meshes import (
     APP_FROM_ZUP,
     read_app_mesh,
-    reason_of,
     robot_reference_point,
     single_sided,
     world_parts,
@@ -196,12 +196,12 @@ def load_omplapp(cfg_path: str | os.PathLike[str], *,
                          "(double-sided export)")
     except InvalidMeshError as error:
         raise cfg.error("robot", str(error)) from None
-    robot_solid, robot_why = True, "closed and its winding number never negative"
+    robot_solid, robot_why = True, SOLID_REASON
     try:
         robot_mesh = validate_solid(single, name=robot_file.stem)
     except InvalidMeshError as error:
         robot_mesh, robot_solid = single, False
-        robot_why = reason_of(error)
+        robot_why = not_solid_reason(error)
         notes.append(f"robot: a surface (triangles, as OMPL.app and FCL see them): {robot_why}")
     robot_mesh.apply_translation(-centre)
     robot_mesh.apply_transform(_homogeneous(orientation))
@@ -248,8 +248,7 @@ def _held_orientation(cfg: _Cfg, hold: str | None, notes: list[str]) -> np.ndarr
     ``tol.orientation_deg``), else the one ``hold`` names, noted; else an error that
     offers that reading."""
     start, goal = cfg.rotation("start"), cfg.rotation("goal")
-    cosine = (np.trace(start.T @ goal) - 1) / 2
-    degrees = math.degrees(math.acos(min(1.0, max(-1.0, cosine))))
+    degrees = rotation_angle_deg(start, goal)
     if hold not in (None, "start", "goal"):
         raise ScenarioError(f"hold_orientation = {hold!r}: use 'start' or 'goal'")
     if degrees <= tol.orientation_deg:

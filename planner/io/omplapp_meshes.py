@@ -20,7 +20,7 @@ frame) is a *surface*: its triangles as imported, colliding where triangles meet
 OMPL.app and FCL see every mesh.
 
 Entry points: :func:`read_app_mesh`, :func:`robot_reference_point`, :func:`single_sided`,
-:func:`world_parts`, :func:`reason_of`.
+:func:`world_parts`.
 """
 
 from __future__ import annotations
@@ -34,10 +34,10 @@ import numpy as np
 import trimesh
 
 from planner.errors import InvalidMeshError
-from planner.meshes import load_mesh, validate_solid
+from planner.meshes import SOLID_REASON, load_mesh, not_solid_reason, validate_solid
 from planner.tolerances import scale_of, tol
 
-__all__ = ["APP_FROM_ZUP", "read_app_mesh", "reason_of", "robot_reference_point",
+__all__ = ["APP_FROM_ZUP", "read_app_mesh", "robot_reference_point",
            "single_sided", "world_parts"]
 
 
@@ -240,11 +240,6 @@ def _bridge_openings(piece: trimesh.Trimesh) -> tuple[trimesh.Trimesh, int] | No
     return closed, len(bands)
 
 
-def reason_of(error: InvalidMeshError) -> str:
-    """Why a mesh is no solid, without its label and the advice on fixing it."""
-    return str(error).split(": ", 1)[-1].split("; ", 1)[0]
-
-
 def world_parts(raw: trimesh.Trimesh, label: str,
                  notes: list[str]) -> list[tuple[trimesh.Trimesh, bool, str]]:
     """The world mesh as ``(mesh, solid, why)``, one per connected piece (see module doc)."""
@@ -258,11 +253,10 @@ def world_parts(raw: trimesh.Trimesh, label: str,
         where = f"{label} piece {index} ({len(piece.faces)} triangles, box "\
                 f"{np.round(piece.bounds, 2).tolist()})"
         try:
-            parts.append((validate_solid(piece, name=f"{label}[{index}]"), True,
-                          "closed and its winding number never negative"))
+            parts.append((validate_solid(piece, name=f"{label}[{index}]"), True, SOLID_REASON))
             continue
         except InvalidMeshError as error:
-            problem = reason_of(error)
+            problem = not_solid_reason(error)
         if _thickness(np.asarray(piece.vertices)) > tol.flat_rel * size:
             bridged = _bridge_openings(piece)
             if bridged is not None:

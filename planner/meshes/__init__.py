@@ -10,13 +10,22 @@
 
 from .formats import MESH_SUFFIXES, load_mesh, load_obj
 from .repair import repair_mesh
-from .solids import mirror, split_solid, validate_solid, winding_numbers
+from .solids import (
+    SOLID_REASON,
+    mirror,
+    not_solid_reason,
+    split_solid,
+    validate_solid,
+    winding_numbers,
+)
 
 __all__ = [
     "MESH_SUFFIXES",
+    "SOLID_REASON",
     "load_mesh",
     "load_obj",
     "mirror",
+    "not_solid_reason",
     "repair_mesh",
     "split_solid",
     "validate_solid",

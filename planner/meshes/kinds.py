@@ -31,7 +31,7 @@ from planner.errors import InvalidMeshError
 from planner.tolerances import scale_of, tol
 
 from .repair import repair_mesh
-from .solids import validate_solid
+from .solids import SOLID_REASON, not_solid_reason, validate_solid
 from .topology import checked_arrays, group_rows
 
 __all__ = ["KINDS", "Classified", "classify", "split_t_junctions"]
@@ -72,8 +72,7 @@ def classify(mesh: trimesh.Trimesh, *, name: str, kind: str = "auto",
     if kind == "surface":
         return Classified(_surface(mesh, name), False, "asked (kind: surface)")
     try:
-        return Classified(validate_solid(mesh, name=name), True,
-                          "closed and its winding number never negative")
+        return Classified(validate_solid(mesh, name=name), True, SOLID_REASON)
     except InvalidMeshError as error:
         first = error
     split = _with_t_junctions_split(mesh, name)
@@ -91,8 +90,7 @@ def classify(mesh: trimesh.Trimesh, *, name: str, kind: str = "auto",
             return Classified(repaired, True, "repaired (repair: true)", done)
     if kind == "solid":
         raise first
-    why = str(first).split(": ", 1)[-1].split("; ", 1)[0]
-    return Classified(_surface(mesh, name), False, why)
+    return Classified(_surface(mesh, name), False, not_solid_reason(first))
 
 
 def _surface(mesh: trimesh.Trimesh, name: str) -> trimesh.Trimesh:

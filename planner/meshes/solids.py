@@ -51,10 +51,19 @@ from .topology import (
     unshare_vertices,
 )
 
-__all__ = ["clean", "mirror", "obj_hint", "orient_shells", "split_solid", "validate_solid",
-           "winding_numbers"]
+__all__ = ["SOLID_REASON", "clean", "mirror", "not_solid_reason", "obj_hint", "orient_shells",
+           "split_solid", "validate_solid", "winding_numbers"]
+
+SOLID_REASON = "closed and its winding number never negative"
+"""Why a mesh that passes :func:`validate_solid` is a solid (for reports)."""
 
 log = logging.getLogger(__name__)
+
+
+def not_solid_reason(error: InvalidMeshError) -> str:
+    """Why a mesh is no solid, from :func:`validate_solid`'s error, without its label and
+    the advice on fixing it."""
+    return str(error).split(": ", 1)[-1].split("; ", 1)[0]
 
 
 def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:

@@ -134,11 +134,7 @@ class OctreePlanner:
         sc, params = self.scenario, self.params
         self.t_start = time.perf_counter()
         self.delta = default_contact_tolerance(sc, params)
-        self.checker = FclChecker(sc.robot.mesh, [b.mesh for b in sc.obstacles],
-                                  contact_tolerance=self.delta,
-                                  names=[b.name for b in sc.obstacles],
-                                  solid=[b.solid for b in sc.obstacles],
-                                  robot_solid=sc.robot.solid)
+        self.checker = FclChecker.for_parts(sc.robot, sc.obstacles, contact_tolerance=self.delta)
         if self.source is None:
             self.source = choose_for([sc.robot, *sc.obstacles], sc.settings,
                                      cache_dir=self.cache_dir, progress=self.bar.enabled)

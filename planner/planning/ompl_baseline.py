@@ -32,10 +32,7 @@ def plan_ompl(scenario: Scenario, name: str, *, validate: bool = True) -> PlanOu
     """
     t0 = time.perf_counter()
     delta = default_contact_tolerance(scenario)
-    checker = FclChecker(scenario.robot.mesh, [b.mesh for b in scenario.obstacles],
-                         solid=[b.solid for b in scenario.obstacles],
-                         robot_solid=scenario.robot.solid,
-                         contact_tolerance=delta, names=[b.name for b in scenario.obstacles])
+    checker = FclChecker.for_parts(scenario.robot, scenario.obstacles, contact_tolerance=delta)
     bounds = np.stack(scenario.bounds)
     planner = OmplPlanner(name, checker, bounds, seed=scenario.settings.seed)
     label = f"ompl:{planner.name}"

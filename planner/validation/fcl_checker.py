@@ -186,6 +186,15 @@ class FclChecker:
         self.n_invalid_motions = 0
         self.n_queries = 0
 
+    @classmethod
+    def for_parts(cls, robot, obstacles, *, contact_tolerance: float = 0.0) -> FclChecker:
+        """The checker for problem parts (:class:`planner.problem.Part`): their meshes,
+        names and solid flags."""
+        obstacles = list(obstacles)
+        return cls(robot.mesh, [p.mesh for p in obstacles], contact_tolerance=contact_tolerance,
+                   names=[p.name for p in obstacles], solid=[p.solid for p in obstacles],
+                   robot_solid=robot.solid)
+
     # ------------------------------------------------------------------ primitives
 
     def _place(self, t: np.ndarray) -> None:

@@ -16,7 +16,6 @@ layers.
 from __future__ import annotations
 
 import json
-import logging
 import os
 from collections.abc import Mapping
 from pathlib import Path
@@ -159,16 +158,11 @@ def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
         source = choose_for([scenario.robot, *scenario.obstacles], scenario.settings,
                             cache_dir=cache_dir, progress=progress)
     eps = display_eps(scenario) if eps is None else eps
-    sums = logging.getLogger("planner.minkowski")
-    level = sums.level
-    sums.setLevel(max(level, logging.ERROR))  # a picture's complex cells are no warning
-    try:
-        return {body.name: c_obstacle(body, scenario.robot, eps=eps, progress=progress,
-                                      source=source, max_refinements=0,
-                                      max_cells=DISPLAY_MAX_CELLS).mesh
-                for body in scenario.obstacles}
-    finally:
-        sums.setLevel(level)
+    # a picture's complex cells are no warning
+    return {body.name: c_obstacle(body, scenario.robot, eps=eps, progress=progress,
+                                  source=source, max_refinements=0,
+                                  max_cells=DISPLAY_MAX_CELLS, warn_complex=False).mesh
+            for body in scenario.obstacles}
 
 
 # ---- the plan --------------------------------------------------------------------------

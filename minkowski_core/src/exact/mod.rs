@@ -421,7 +421,7 @@ impl ExactSource {
         }
         for f in &self.facets {
             let bx = f.aabb(self.margin);
-            let gap = (bx.min - p).max(p - bx.max).max(Vec3::ZERO).length();
+            let gap = bx.distance_to_point(p);
             if gap >= best {
                 continue;
             }
@@ -434,7 +434,7 @@ impl ExactSource {
             self.any_pair(
                 k,
                 self.margin,
-                |bx| (bx.min - p).max(p - bx.max).max(Vec3::ZERO).length() < bound.get(),
+                |bx| bx.distance_to_point(p) < bound.get(),
                 |i, j| {
                     bound.set(bound.get().min(Piece::new(&ta[i], &tb[j], self.margin, false).separation(p).max(0.0)));
                     false

@@ -92,7 +92,7 @@ impl PolytopeSet {
     }
 
     fn aabb_distance(&self, p: Vec3) -> f64 {
-        (self.aabb.min - p).max(p - self.aabb.max).max(Vec3::ZERO).length()
+        self.aabb.distance_to_point(p)
     }
 
     /// The parameter intervals of the segment `a + t (b − a)`, `t ∈ [0, 1]`, inside the
