@@ -91,3 +91,18 @@ def test_a_cspace_over_budget_is_refused_naming_the_problem():
     assert message.startswith(str(path.resolve())) and "exact source" in message
     assert "does not fit" in message and "4.0 GiB" in message
     assert octree.cspace is None
+
+
+def test_the_outcome_holds_the_cspace_its_answer_is_about():
+    """A no-path found with the clearance margin is searched again without it; the
+    certificate, and the C-space the outcome carries (the one the viz draws), are that
+    second one's."""
+    import dataclasses
+
+    scenario = planner.load_scenario(SCENARIOS / "sealed_chamber.yaml")
+    settings = dataclasses.replace(scenario.settings, clearance=0.5)
+    octree = OctreePlanner(dataclasses.replace(scenario, settings=settings), progress=False)
+    outcome = octree.solve()
+    assert outcome.status is PlanStatus.NO_PATH and outcome.certificate["verified"]
+    assert octree.cspace.margin > 0  # the first C-space, with the margin
+    assert outcome.cspace is not octree.cspace and outcome.cspace.margin == 0

@@ -324,4 +324,4 @@ class OctreePlanner:
             status=status, waypoints=wp, length=length, clearance=clearance, timings=timings,
             validation=validation or {"fcl": {}, "ompl": {}}, message=message, reason=reason,
             planner=self.name, certificate=certificate, collision=collision,
-            report=self.report, cspace=self.cspace, source=self.source)
+            report=self.report, cspace=space, source=self.source)
