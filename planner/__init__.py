@@ -23,26 +23,64 @@ except ImportError as _exc:  # pragma: no cover - depends on how it was installe
         "this is probably the source tree shadowing an installed minkplan (run from another "
         "directory, or install with `pip install -e .` so the module is built here)"
     ) from _exc
-from .assembly import AssemblyResult, plan_assembly
-from .decompose import Decomposition, decompose
-from .errors import (
-    GeometryError,
-    InvalidMeshError,
-    InvalidParameterError,
-    MinkplanError,
-    ResourceLimitError,
-    ScenarioError,
-)
-from .io import load_assembly, load_problem, load_scenario
-from .meshes import load_mesh, mirror, repair_mesh, validate_solid
-from .minkowski import MinkowskiResult, c_obstacle, minkowski_sum
-from .planning import PlanOutcome, PlanStatus, plan
-from .problem import Assembly, Part, PlannerSettings, Scenario
-from .sources import Source, SourceSettings
-from .sources import choose as choose_source
-from .tolerances import Tolerances, tol
+from typing import TYPE_CHECKING
 
 __version__ = _minkowski_core.__version__
+
+_EXPORTS = {
+    "AssemblyResult": "assembly", "plan_assembly": "assembly",
+    "Decomposition": "decompose", "decompose": "decompose",
+    "GeometryError": "errors", "InvalidMeshError": "errors",
+    "InvalidParameterError": "errors", "MinkplanError": "errors",
+    "ResourceLimitError": "errors", "ScenarioError": "errors",
+    "load_assembly": "io", "load_problem": "io", "load_scenario": "io",
+    "load_mesh": "meshes", "mirror": "meshes", "repair_mesh": "meshes",
+    "validate_solid": "meshes",
+    "MinkowskiResult": "minkowski", "c_obstacle": "minkowski", "minkowski_sum": "minkowski",
+    "PlanOutcome": "planning", "PlanStatus": "planning", "plan": "planning",
+    "Assembly": "problem", "Part": "problem", "PlannerSettings": "problem",
+    "Scenario": "problem",
+    "Source": "sources", "SourceSettings": "sources",
+    "Tolerances": "tolerances", "tol": "tolerances",
+}
+"""Where each public name lives: imported when first used, so ``import planner`` (and
+``minkplan --help``) does not load trimesh, FCL and OMPL until something needs them."""
+
+
+def __getattr__(name: str):
+    if name == "choose_source":
+        from .sources import choose
+
+        return choose
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'planner' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+if TYPE_CHECKING:
+    from .assembly import AssemblyResult, plan_assembly
+    from .decompose import Decomposition, decompose
+    from .errors import (
+        GeometryError,
+        InvalidMeshError,
+        InvalidParameterError,
+        MinkplanError,
+        ResourceLimitError,
+        ScenarioError,
+    )
+    from .io import load_assembly, load_problem, load_scenario
+    from .meshes import load_mesh, mirror, repair_mesh, validate_solid
+    from .minkowski import MinkowskiResult, c_obstacle, minkowski_sum
+    from .planning import PlanOutcome, PlanStatus, plan
+    from .problem import Assembly, Part, PlannerSettings, Scenario
+    from .sources import Source, SourceSettings
+    from .sources import choose as choose_source
+    from .tolerances import Tolerances, tol
 
 __all__ = [
     "Assembly",

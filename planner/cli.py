@@ -29,10 +29,40 @@ def _version() -> str:
 
 class _Parser(argparse.ArgumentParser):
     """Argument errors as one line (``minkplan: error: …``), exit code 2, like every other
-    input error; ``--help`` shows the usage."""
+    input error, with a did-you-mean for a misspelled command, choice or option;
+    ``--help`` shows the usage."""
+
+    def _option_strings(self) -> list[str]:
+        """Every option of this parser and of its subcommands."""
+        options: list[str] = []
+        for action in self._actions:
+            options += action.option_strings
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    options += [o for a in sub._actions for o in a.option_strings]
+        return sorted(set(options))
+
+    def _suggestion(self, message: str) -> str:
+        import difflib
+        import re
+
+        choice = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:
+            choices = re.findall(r"[\w-]+", choice.group(2))
+            close = difflib.get_close_matches(choice.group(1), choices, n=1)
+            return f"; did you mean {close[0]!r}?" if close else ""
+        unknown = re.search(r"unrecognized arguments: (.*)", message)
+        if unknown:
+            options = self._option_strings()
+            for token in unknown.group(1).split():
+                close = difflib.get_close_matches(token.split("=")[0], options, n=1)
+                if token.startswith("-") and close:
+                    return f"; did you mean {close[0]!r} (for {token!r})?"
+        return ""
 
     def error(self, message: str) -> NoReturn:
-        sys.stderr.write(f"minkplan: error: {message} (see {self.prog} --help)\n")
+        sys.stderr.write(f"minkplan: error: {message}{self._suggestion(message)} "
+                         f"(see {self.prog} --help)\n")
         raise SystemExit(2)
 
 
@@ -123,6 +153,9 @@ def _parser() -> argparse.ArgumentParser:
         "boundary convolution of the meshes, false convex decomposition, auto the "
         "decomposition only when every body is convex",
     )
+    pl.add_argument("--export-path", default=None, metavar="FILE.path",
+                    help="also write a found path in OMPL's SE(3) path format (x y z qx qy "
+                    "qz qw per line, the robot's orientation throughout), as OMPL.app reads it")
     pl.add_argument(
         "--html",
         action="store_true",
@@ -165,10 +198,12 @@ def _add_batch_parser(sub, common: _Parser) -> None:
     b.add_argument("--planners", default="minkplan",
                    help="comma-separated: minkplan, ompl:NAME (default minkplan; "
                    "assemblies run with minkplan only)")
-    b.add_argument("--runs", type=int, default=1, help="runs per problem and planner; run "
-                   "k uses the problem's seed + k (default 1)")
+    b.add_argument("--runs", type=int, default=1, help="runs per planning problem and "
+                   "planner; run k uses the problem's seed + k (default 1; an assembly runs "
+                   "once: its planner is deterministic)")
     b.add_argument("--time-limit", type=float, default=None,
-                   help="planner seconds per run (default: each problem's own)")
+                   help="planner seconds per run of a planning problem (default: each "
+                   "problem's own; assemblies have none, see --task-timeout)")
     b.add_argument("--task-timeout", type=float, default=None,
                    help="wall-clock seconds after which a task is killed (default: "
                    "2 × --time-limit + 60, or 1800 without it)")
@@ -247,7 +282,10 @@ def _cmd_minkowski(args) -> int:
         )
     except OSError as exc:
         return _fail(f"--output {out}: cannot write it ({exc.strerror or exc})")
+    from planner.output import schema_id
+
     summary = {
+        "schema": schema_id("minkowski_stats"),
         "output": str(out),
         "error_bound": result.error_bound,
         "eps": result.eps,
@@ -287,6 +325,12 @@ def _cmd_plan(args) -> int:
     scenario_path = Path(args.scenario)
     if not scenario_path.is_file():
         return _fail(f"scenario: file {str(scenario_path)!r} not found")
+    if args.export_path is not None:
+        from planner.output import unwritable
+
+        problem = unwritable(Path(args.export_path))
+        if problem:
+            return _fail(f"--export-path {args.export_path}: {problem}")
 
     from planner.io import load_scenario
     from planner.output import write_json
@@ -335,6 +379,11 @@ def _cmd_plan(args) -> int:
         f"{outcome.timings.get('total', 0.0):.2f} s; wrote {out}/path.json, report.json"
         f"{', certificate.json' if certificate is not None else ''}\n"
     )
+    if args.export_path is not None and outcome.found:
+        from planner.io.omplapp import write_omplapp_path
+
+        write_omplapp_path(args.export_path, outcome.waypoints, scenario.orientation)
+        sys.stdout.write(f"wrote {args.export_path} (OMPL's SE(3) path format)\n")
     if args.html:
         from planner import viz
 
@@ -372,6 +421,8 @@ def _cmd_assemble(args) -> int:
 
 
 def _batch_settings(args):
+    import math
+
     from planner.batch import BatchSettings, Limits
 
     for flag, value in (("--runs", args.runs), ("--workers", args.workers)):
@@ -380,8 +431,8 @@ def _batch_settings(args):
     for flag, value in (("--time-limit", args.time_limit),
                         ("--task-timeout", args.task_timeout),
                         ("--memory-limit", args.memory_limit)):
-        if value is not None and not value > 0:
-            raise ValueError(f"{flag} {value}: must be positive")
+        if value is not None and not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{flag} {value}: must be a positive finite number")
     timeout = args.task_timeout or (2 * args.time_limit + 60 if args.time_limit else 1800.0)
     return BatchSettings(Path(args.out), workers=args.workers, address=args.address,
                          resume=args.resume, limits=Limits(timeout, args.memory_limit),
@@ -392,12 +443,22 @@ def _planner_names(text: str) -> list[str]:
     from planner.validation import available_planners
 
     names = [n.strip() for n in text.split(",") if n.strip()]
-    known = {n.lower() for n in available_planners()}
+    known = {n.lower(): n for n in available_planners()}
+    canonical: list[str] = []
     for name in names:
         if name != "minkplan" and not (name.startswith("ompl:")
                                        and name[5:].lower() in known):
-            raise ValueError(f"--planners: {name!r} is not minkplan or ompl:NAME with NAME "
-                             f"one of {', '.join(available_planners())}")
+            import difflib
+
+            every = ["minkplan", *(f"ompl:{n}" for n in available_planners())]
+            close = difflib.get_close_matches(name, every, n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise ValueError(f"--planners: {name!r} is not minkplan or ompl:NAME; {hint}NAME "
+                             f"is one of {', '.join(available_planners())}")
+        spelled = name if name == "minkplan" else f"ompl:{known[name[5:].lower()]}"
+        if spelled not in canonical:  # ompl:prm and ompl:PRM are one planner, run once
+            canonical.append(spelled)
+    names = canonical
     if not names:
         raise ValueError("--planners: no planner named")
     return names
@@ -418,7 +479,8 @@ def _cmd_batch(args) -> int:
     try:
         report = batch(args.inputs, settings, planners=planners, runs=args.runs,
                        time_limit=args.time_limit, hold_orientation=args.hold_orientation,
-                       cache_dir=args.cache_dir)
+                       cache_dir=None if args.cache_dir is None
+                       else str(Path(args.cache_dir).resolve()))
     except FileExistsError as exc:
         return _fail(str(exc))
     answered = len(report.records) - report.failed
@@ -459,7 +521,7 @@ def _cmd_view(args) -> int:
     import signal
 
     signal.signal(signal.SIGTERM, _terminate)
-    viz.serve(scene, out=sys.stdout)
+    viz.serve(scene, out=sys.stdout, host=args.host)
     return 0
 
 
@@ -474,6 +536,9 @@ def _add_viz_parsers(sub, common: _Parser) -> None:
     v.add_argument("scenario", help="scenario .yaml, or an OMPL.app problem .cfg")
     v.add_argument("--path", default=None, help="a path.json written by minkplan plan")
     v.add_argument("--no-c-obstacle", action="store_true", help="do not compute C-obstacles")
+    v.add_argument("--host", default="127.0.0.1",
+                   help="the address the viewer listens on (default 127.0.0.1: this machine "
+                   "only; 0.0.0.0 lets anyone on the network watch)")
 
 
 def main(argv: list[str] | None = None) -> int:

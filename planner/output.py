@@ -1,9 +1,10 @@
 """Output files: JSON-ready values and writes that never leave half a file.
 
-Entry points: :func:`jsonable` (numpy scalars and arrays to Python ones, non-finite floats
-to ``None``), :func:`atomic_write` (a temporary file in the same folder, then a rename),
-:func:`write_json`, :func:`unwritable` (why a file could not be written there, checked
-before the work).
+Every JSON file minkplan writes starts with ``"schema": "minkplan/NAME/1"``
+(:func:`schema_id`). Entry points: :func:`jsonable` (numpy scalars and arrays to Python
+ones, non-finite floats to ``None``), :func:`atomic_write` (a temporary file in the same
+folder, then a rename), :func:`write_json`, :func:`unwritable` (why a file could not be
+written there, checked before the work).
 """
 
 from __future__ import annotations
@@ -18,7 +19,18 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["atomic_write", "jsonable", "unwritable", "write_json"]
+__all__ = ["SCHEMA_VERSION", "atomic_write", "jsonable", "schema_id", "unwritable",
+           "write_json"]
+
+SCHEMA_VERSION = 1
+"""The version of every output file's layout; it changes when a key changes meaning or
+goes away (new keys do not change it). Each file's JSON Schema is
+``docs/schemas/NAME.schema.json``."""
+
+
+def schema_id(name: str) -> str:
+    """The ``"schema"`` value of output file ``name``: ``minkplan/NAME/VERSION``."""
+    return f"minkplan/{name}/{SCHEMA_VERSION}"
 
 
 def jsonable(value: Any) -> Any:
@@ -53,6 +65,11 @@ def unwritable(path: Path) -> str | None:
                 return f"{parent} is a file, not a folder"
             if not os.access(parent, os.W_OK | os.X_OK):
                 return f"folder {parent} is not writable"
+            try:  # the permission bits can say yes where the file system says no (/proc)
+                with tempfile.TemporaryFile(dir=parent):
+                    pass
+            except OSError as exc:
+                return f"folder {parent} is not writable ({exc.strerror or exc})"
             return None
     return None
 

@@ -25,6 +25,8 @@ from planner.planning import plan
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
 PROBLEMS = sorted(p for p in SCENARIOS.rglob("*.yaml"))
+TWO_RUNS = sum(1 if "assemblies" in p.parts else 2 for p in PROBLEMS)
+"""Tasks of ``--runs 2`` over the scenarios: an assembly runs once."""
 
 
 def _batch(*args: str, **kw) -> subprocess.Popen:
@@ -75,7 +77,8 @@ def test_a_local_batch_gives_the_serial_answers_and_records_a_broken_problem(
         assert record.get("waypoints") == waypoints, path
     assert "1 failed" in done[0]
     summary = (out / "summary.md").read_text()
-    assert "| peg_in_hole | minkplan | 1/1 |" in summary and "missing_mesh" in summary
+    assert "| peg_in_hole | minkplan | 1 | 1 | 0 |" in summary and "missing_mesh" in summary
+    assert "| sealed_chamber | minkplan | 1 | 0 | 1 |" in summary
     database = tmp_path / "bench.db"
     logs = sorted(str(p) for p in out.glob("*.log"))
     assert len(logs) == sum("assemblies" not in p.parts for p in PROBLEMS) + 1
@@ -127,7 +130,7 @@ def test_a_worker_killed_mid_batch_still_leaves_every_record(tmp_path):
     records = _records(out)
     keys = [r["key"] for r in records]
     assert run.returncode == 0, stderr
-    assert len(keys) == len(set(keys)) == 2 * len(PROBLEMS)
+    assert len(keys) == len(set(keys)) == TWO_RUNS
     assert not [r for r in records if r["status"] not in ("found", "no_path", "not_found")]
 
 
@@ -139,12 +142,25 @@ def test_resume_after_an_interrupt_runs_only_the_missing_tasks(tmp_path):
     first.communicate(timeout=120)
     assert first.returncode == 130
     before = _records(out)
-    assert 3 <= len(before) < 2 * len(PROBLEMS)
+    assert 3 <= len(before) < TWO_RUNS
     again = _batch(str(SCENARIOS), "--runs", "2", "--out", str(out), "--resume")
     stdout, stderr = again.communicate(timeout=600)
     assert again.returncode == 0, stderr
-    assert (f"({2 * len(PROBLEMS) - len(before)} run now, {len(before)} done before)"
+    assert (f"({TWO_RUNS - len(before)} run now, {len(before)} done before)"
             in stdout)
     keys = [r["key"] for r in _records(out)]
-    assert len(keys) == len(set(keys)) == 2 * len(PROBLEMS)
+    assert len(keys) == len(set(keys)) == TWO_RUNS
     assert [r["key"] for r in _records(out)[:len(before)]] == [r["key"] for r in before]
+
+
+def test_a_source_tree_in_the_launch_folder_does_not_shadow_the_installed_planner(tmp_path):
+    shadow = tmp_path / "planner"
+    shadow.mkdir()
+    (shadow / "__init__.py").write_text("raise ImportError('the shadowing source tree')\n")
+    out = tmp_path / "out"
+    run = subprocess.run([str(Path(sys.executable).parent / "minkplan"), "batch",
+                          str(SCENARIOS / "bug_trap.yaml"), "--out", str(out), "--workers",
+                          "1", "--no-progress"], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert [r["status"] for r in _records(out)] == ["found"]

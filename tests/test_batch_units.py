@@ -57,7 +57,7 @@ def test_assemblies_run_with_minkplan_only_and_every_task_has_its_own_key():
     problems = find_problems([SCENARIOS / "bug_trap.yaml",
                               SCENARIOS / "assemblies" / "peg_in_block.yaml"])
     tasks = make_tasks(problems, ["minkplan", "ompl:RRTConnect"], 3)
-    assert len(tasks) == 2 * 3 + 3
+    assert len(tasks) == 2 * 3 + 1  # an assembly runs once: its planner is deterministic
     assert {t.planner for t in tasks if t.kind == "assembly"} == {"minkplan"}
     assert len({t.key for t in tasks}) == len(tasks)
 
@@ -126,3 +126,42 @@ def test_a_child_killed_mid_task_is_recorded_as_crashed():
     timer.join()
     assert record["status"] == "crashed" and "SIGKILL" in record["message"]
     assert time.perf_counter() - t0 < 30
+
+
+def _batch_cli(args: list[str], capsys) -> tuple[int, str]:
+    from planner.cli import main
+
+    code = main(["batch", *args, "--no-progress"])
+    return code, capsys.readouterr().err
+
+
+def test_a_resume_with_other_settings_is_refused_before_any_work(tmp_path, capsys):
+    out = tmp_path / "out"
+    task = make_tasks(find_problems([SCENARIOS / "bug_trap.yaml"]), ["minkplan"], 1,
+                      time_limit=3.0)[0]
+    results = ResultsFile(out / "results.jsonl", resume=False)
+    results.append({**task.to_json(), "key": task.key, "status": "found"})
+    results.close()
+    code, err = _batch_cli([str(SCENARIOS / "bug_trap.yaml"), "--out", str(out),
+                            "--time-limit", "1", "--resume"], capsys)
+    assert code == 2 and "time_limit = 3.0, this batch asks 1.0" in err
+
+
+def test_inputs_without_problems_and_broken_yaml_are_refused_by_name(tmp_path, capsys):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    code, err = _batch_cli([str(empty), "--out", str(tmp_path / "out")], capsys)
+    assert code == 2 and "no problems" in err and not (tmp_path / "out").exists()
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("a: [1\n")  # not recognisable as a scenario: its syntax is the reason
+    code, err = _batch_cli([str(broken), "--out", str(tmp_path / "out")], capsys)
+    assert code == 2 and "YAML syntax error at line 2" in err
+
+
+def test_one_planner_named_twice_runs_once_and_limits_must_be_finite(tmp_path, capsys):
+    from planner.cli import _planner_names
+
+    assert _planner_names("minkplan,ompl:prm,ompl:PRM,minkplan") == ["minkplan", "ompl:PRM"]
+    code, err = _batch_cli([str(SCENARIOS / "bug_trap.yaml"), "--out", str(tmp_path),
+                            "--time-limit", "inf"], capsys)
+    assert code == 2 and "--time-limit inf: must be a positive finite number" in err

@@ -195,3 +195,61 @@ def test_an_internal_error_is_exit_3_and_one_line(tmp_path, capsys, monkeypatch)
     assert main(["plan", str(scenario), "--out", str(tmp_path / "o"), "-vv"]) == 3
     assert "Traceback" in capsys.readouterr().err
     assert not (tmp_path / "o" / "path.json").exists()
+
+
+def test_a_found_path_exports_in_ompls_se3_format(tmp_path, capsys, cache_dir):
+    from trimesh import transformations as tf
+
+    from planner.io.omplapp import read_omplapp_path
+
+    folder = SCENARIOS / "_schema_examples"
+    text = (folder / "full.yaml").read_text().replace("mesh: block.stl",
+                                                      f"mesh: {folder / 'block.stl'}")
+    text = text.replace("mesh: peg.stl", f"mesh: {folder / 'peg.stl'}")
+    text = text.replace("orientation: {rpy: [0, 0, 0]}", "orientation: {rpy: [0, 0, 30]}")
+    scenario_file = tmp_path / "turned.yaml"
+    scenario_file.write_text(text)
+    exported = tmp_path / "turned.path"
+    code, out, _ = run(["plan", str(scenario_file), "--out", str(tmp_path / "out"),
+                        "--cache-dir", str(cache_dir), "--export-path", str(exported)], capsys)
+    assert code == 0 and "OMPL's SE(3) path format" in out
+    rows = read_omplapp_path(exported)
+    waypoints = json.loads((tmp_path / "out" / "path.json").read_text())["waypoints"]
+    np.testing.assert_array_equal(rows[:, :3], waypoints)
+    scenario = load_scenario(scenario_file)
+    for row in rows:  # every state holds the robot's one orientation, 30° about z
+        x, y, z, w = row[3:]
+        np.testing.assert_allclose(tf.quaternion_matrix([w, x, y, z])[:3, :3],
+                                   scenario.orientation, atol=1e-12)
+    assert np.isclose(rows[0, 6], np.cos(np.radians(15)))
+
+
+def test_no_path_exports_nothing_and_a_bad_export_path_is_refused(tmp_path, capsys,
+                                                                   cache_dir):
+    exported = tmp_path / "none.path"
+    code, out, _ = run(["plan", str(SCENARIOS / "sealed_chamber.yaml"), "--out",
+                        str(tmp_path / "out"), "--cache-dir", str(cache_dir),
+                        "--export-path", str(exported)], capsys)
+    assert code == 1 and not exported.exists()
+    (tmp_path / "file").write_text("")
+    code, _, err = run(["plan", str(SCENARIOS / "peg_in_hole.yaml"), "--out",
+                        str(tmp_path / "out2"), "--export-path",
+                        str(tmp_path / "file" / "x.path")], capsys)
+    assert code == 2 and "--export-path" in err and "is a file" in err
+    assert not (tmp_path / "out2" / "path.json").exists()
+
+
+@pytest.mark.parametrize("args, hint", [
+    (["plam", "x.yaml"], "did you mean 'plan'?"),
+    (["plan", "x.yaml", "--out", "o", "--tme-limit", "3"], "did you mean '--time-limit'"),
+    (["batch", "x.yaml", "--out", "o", "--planners", "ompl:RRTConect"],
+     "did you mean 'ompl:RRTConnect'?"),
+])
+def test_a_misspelling_gets_a_did_you_mean(tmp_path, capsys, monkeypatch, args, hint):
+    monkeypatch.chdir(tmp_path)
+    try:
+        code = main(args)
+    except SystemExit as exit_:  # argparse's own errors leave through SystemExit
+        code = exit_.code
+    err = capsys.readouterr().err
+    assert code == 2 and hint in err and len(err.strip().splitlines()) == 1, err

@@ -286,3 +286,22 @@ def test_ompl_rejects_out_of_bounds_path():
     assert not ompl_check_path([(-3, 0, 0), (-3, 0, 6)], checker, BOUNDS, clearance=1.0).valid
     with pytest.raises(ValueError):
         ompl_check_path([(0, 0, 0)], checker, [[0, 0, 0], [0, 1, 1]])
+
+
+def test_without_ompl_validation_is_fcls_and_ompl_planners_say_why(monkeypatch):
+    import sys
+    from pathlib import Path
+
+    from planner.errors import InvalidParameterError
+    from planner.io import load_scenario
+    from planner.planning import plan
+
+    scenario = load_scenario(Path(__file__).resolve().parents[1] / "scenarios"
+                             / "peg_in_hole.yaml")
+    monkeypatch.setitem(sys.modules, "ompl", None)  # `import ompl` fails, as off Linux/macOS
+    outcome = plan(scenario, progress=False)
+    assert outcome.found and outcome.validation["valid"] and outcome.validation["fcl"]["valid"]
+    assert outcome.validation["ompl"]["available"] is False
+    assert "wheels for Linux and macOS only" in outcome.validation["ompl"]["reason"]
+    with pytest.raises(InvalidParameterError, match="OMPL is not installed"):
+        plan(scenario, planner="ompl:RRTConnect", progress=False)

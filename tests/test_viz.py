@@ -15,6 +15,7 @@ import re
 import threading
 import time
 import urllib.request
+from pathlib import Path
 
 import browser
 import numpy as np
@@ -426,3 +427,21 @@ def test_serve_prints_the_url_and_stops(scenario):
         stop.set()
         thread.join(timeout=30)
     assert not thread.is_alive() and result["url"] == url.group(1)
+
+
+def _listening_addresses(port: int) -> set[str]:
+    """The local addresses with a socket listening on ``port`` (``/proc/net/tcp*``)."""
+    found = set()
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        for row in Path(table).read_text().splitlines()[1:]:
+            local, state = row.split()[1], row.split()[3]
+            address, hex_port = local.split(":")
+            if state == "0A" and int(hex_port, 16) == port:  # 0A: LISTEN
+                found.add(address)
+    return found
+
+
+def test_the_live_viewer_listens_on_this_machine_only(scenario):
+    with viz.open_live(plan_scene(scenario)) as view:
+        port = int(re.search(r":(\d+)/static/", view.url).group(1))
+        assert _listening_addresses(port) == {"0100007F"}  # 127.0.0.1, nothing else

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.output import jsonable
+from planner.output import jsonable, schema_id
 from planner.problem import Assembly
 
 __all__ = ["INTERLOCKED", "SEQUENCE", "AssemblyResult", "AssemblyStep"]
@@ -136,6 +136,7 @@ class AssemblyResult:
                           "direction": step.direction, "insertion": step.insertion,
                           "validation": step.validation})
         return jsonable({
+            "schema": schema_id("sequence"),
             "name": self.assembly.name, "units": self.assembly.units, "status": self.status,
             "contact_tolerance": self.contact_tolerance, "base": self.base,
             "parts": parts, "interlocked": self.interlocked, "stuck": self.stuck,
@@ -145,6 +146,7 @@ class AssemblyResult:
     def report_json(self) -> dict[str, Any]:
         """``report.json``: removal steps with timings, obstacles and attempts."""
         return jsonable({
+            "schema": schema_id("assembly_report"),
             "name": self.assembly.name, "status": self.status, "message": self.message,
             "contact_tolerance": self.contact_tolerance, "seconds": self.seconds,
             "removal": [{"part": s.part, "method": s.method, "direction": s.direction,

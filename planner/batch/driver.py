@@ -18,11 +18,15 @@ from __future__ import annotations
 import logging
 import os
 import sys
+import tempfile
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from planner.errors import InvalidParameterError
+from planner.output import schema_id
 
 from .execute import FAILURES
 from .results import ResultsFile
@@ -35,6 +39,9 @@ log = logging.getLogger(__name__)
 
 RETRIES = 2
 """Times Ray runs a task again after losing its worker process."""
+
+_RESUME_SETTINGS = ("time_limit", "hold_orientation")
+"""Task settings that change an answer: a resumed batch must ask the same."""
 
 
 @dataclass(frozen=True)
@@ -75,17 +82,54 @@ class BatchReport:
 
 
 def _start_ray(settings: BatchSettings) -> float:
+    """Start (or join) Ray; its start-up seconds.
+
+    The workers get an empty working folder: by default Ray puts the driver's folder on
+    their import path, where a source tree would shadow the installed planner.
+
+    Raises:
+        InvalidParameterError: the cluster at ``address`` cannot be reached (one line).
+    """
     import ray
 
+    where = f"the Ray cluster at {settings.address}" if settings.address else (
+        f"a local Ray with {settings.workers or os.cpu_count() or 1} workers")
+    if settings.progress is not False and sys.stderr.isatty():
+        sys.stderr.write(f"minkplan: starting {where}...\n")
     t0 = time.perf_counter()
-    if settings.address:
-        ray.init(address=settings.address, logging_level=logging.WARNING,
-                 log_to_driver=False)
-    else:
-        ray.init(num_cpus=settings.workers or os.cpu_count() or 1,
-                 include_dashboard=False, logging_level=logging.WARNING,
-                 log_to_driver=False)
+    with tempfile.TemporaryDirectory(prefix="minkplan-batch-") as empty:
+        options: dict[str, Any] = {"logging_level": logging.WARNING, "log_to_driver": False,
+                                   "runtime_env": {"working_dir": empty}}
+        if not settings.address:
+            options.update(num_cpus=settings.workers or os.cpu_count() or 1,
+                           include_dashboard=False)
+        try:
+            ray.init(address=settings.address, **options)
+        except (ConnectionError, RuntimeError, ValueError, ImportError) as exc:
+            first = (str(exc).strip().splitlines() or [""])[0]
+            raise InvalidParameterError(f"--address {settings.address}: cannot start or "
+                                        f"join Ray: {first}") from None
     return time.perf_counter() - t0
+
+
+def _check_resume(tasks: Sequence[Task], records: Sequence[dict[str, Any]]) -> None:
+    """A resumed batch must ask what the records answered: the same time limit and
+    orientation reading per task key.
+
+    Raises:
+        InvalidParameterError: a record made with other settings (one line naming it).
+    """
+    done = {r["key"]: r for r in records}
+    for task in tasks:
+        record = done.get(task.key)
+        if record is None:
+            continue
+        for name in _RESUME_SETTINGS:
+            if record.get(name) != getattr(task, name):
+                raise InvalidParameterError(
+                    f"--resume: results.jsonl ran {Path(task.problem).name} "
+                    f"({task.planner}, run {task.run}) with {name} = {record.get(name)!r}, "
+                    f"this batch asks {getattr(task, name)!r}; use another --out")
 
 
 def _progress_bar(total: int, enabled: bool | None):
@@ -106,7 +150,8 @@ def _lost(task: Task, error: Exception) -> dict[str, Any]:
         first = (str(error).strip().splitlines() or [""])[0]
         message = (f"Ray lost the task's worker {RETRIES + 1} times: "
                    f"{type(error).__name__}: {first}")
-    return {**task.to_json(), "key": task.key, "status": "crashed", "reason": "crashed",
+    return {"schema": schema_id("batch_record"), **task.to_json(), "key": task.key,
+            "status": "crashed", "reason": "crashed",
             "message": message, "seconds": 0.0}
 
 
@@ -139,11 +184,18 @@ def run_batch(tasks: Sequence[Task], settings: BatchSettings) -> BatchReport:
 
     Raises:
         FileExistsError: ``results.jsonl`` holds records and ``resume`` is false.
+        InvalidParameterError: ``resume`` with records of other settings, or a cluster
+            that cannot be reached.
     """
     import ray
 
     t0 = time.perf_counter()
     results = ResultsFile(settings.out / "results.jsonl", resume=settings.resume)
+    try:
+        _check_resume(tasks, results.records)
+    except InvalidParameterError:
+        results.close()
+        raise
     done = results.done
     todo = [t for t in tasks if t.key not in done]
     skipped = len(tasks) - len(todo)

@@ -17,7 +17,7 @@ import time
 from typing import Any
 
 from planner.errors import MinkplanError, ResourceLimitError
-from planner.output import jsonable
+from planner.output import jsonable, schema_id
 
 from .tasks import ASSEMBLY, Task
 
@@ -41,14 +41,14 @@ def _plan(task: Task) -> dict[str, Any]:
     scenario = dataclasses.replace(scenario, settings=settings)
     outcome = plan(scenario, planner=task.planner, cache_dir=task.cache_dir, progress=False)
     validation = outcome.validation or {}
-    valid = bool(outcome.found and validation.get("fcl", {}).get("valid")
-                 and validation.get("ompl", {}).get("valid"))
+    valid = bool(outcome.found and validation.get("valid"))
+    timings = outcome.timings
     return {"status": str(outcome.status), "reason": outcome.reason,
             "message": outcome.message, "seed": settings.seed,
-            "time_limit": settings.time_limit, "length": outcome.length,
+            "effective_time_limit": settings.time_limit, "length": outcome.length,
             "clearance": outcome.clearance, "valid": valid,
             "waypoints": outcome.waypoints if outcome.found else None,
-            "plan_seconds": outcome.timings.get("total")}
+            "planner_seconds": timings.get("total", 0.0) - timings.get("validate", 0.0)}
 
 
 def _assemble(task: Task) -> dict[str, Any]:
@@ -59,7 +59,7 @@ def _assemble(task: Task) -> dict[str, Any]:
     status = "found" if result.found else "no_path" if result.proved else "not_found"
     return {"status": status, "reason": result.status, "message": result.message,
             "order": result.order, "interlocked": result.interlocked,
-            "valid": result.found, "plan_seconds": result.seconds}
+            "valid": result.found, "planner_seconds": result.seconds}
 
 
 def execute(task: Task) -> dict[str, Any]:
@@ -75,5 +75,6 @@ def execute(task: Task) -> dict[str, Any]:
         first = (str(exc).strip().splitlines() or [""])[0]
         body = {"status": ERROR, "reason": "internal",
                 "message": f"{type(exc).__name__}: {first}"}
-    return jsonable({**task.to_json(), "key": task.key, **body,
+    return jsonable({"schema": schema_id("batch_record"), **task.to_json(), "key": task.key,
+                     **body,
                      "seconds": time.perf_counter() - t0})

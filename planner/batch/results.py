@@ -14,11 +14,30 @@ import json
 import logging
 import os
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
-__all__ = ["ResultsFile"]
+__all__ = ["ResultsFile", "read_records"]
 
 log = logging.getLogger(__name__)
+
+
+def read_records(path: Path, *, warn: bool = False) -> list[dict[str, Any]]:
+    """The whole records of a ``results.jsonl`` (none if it does not exist); a line cut
+    short is dropped (logged with ``warn``)."""
+    if not path.exists():
+        return []
+    records = []
+    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            if warn:
+                log.warning("%s:%d: an incomplete record (the batch was cut short there); "
+                            "its task runs again", path, number)
+            continue
+        if isinstance(record, dict) and "key" in record:
+            records.append(record)
+    return records
 
 
 class ResultsFile:
@@ -39,23 +58,12 @@ class ResultsFile:
         if not resume and self.path.exists() and self.path.stat().st_size > 0:
             raise FileExistsError(f"{path} holds the results of an earlier batch; "
                                   f"use --resume to finish it, or another --out")
-        self._rewrite()
-        self._file = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 (kept open)
+        if self.path.exists():
+            self._rewrite()
+        self._file: IO[str] | None = None  # opened at the first record: none, no file
 
     def _read(self) -> list[dict[str, Any]]:
-        if not self.path.exists():
-            return []
-        records = []
-        for number, line in enumerate(self.path.read_text(encoding="utf-8").splitlines(), 1):
-            try:
-                record = json.loads(line)
-            except json.JSONDecodeError:
-                log.warning("%s:%d: an incomplete record (the batch was cut short there); "
-                            "its task runs again", self.path, number)
-                continue
-            if isinstance(record, dict) and "key" in record:
-                records.append(record)
-        return records
+        return read_records(self.path, warn=True)
 
     def _rewrite(self) -> None:
         """The file as the records kept (drops cut-short lines before appending)."""
@@ -73,10 +81,14 @@ class ResultsFile:
         return {r["key"] for r in self.records}
 
     def append(self, record: dict[str, Any]) -> None:
+        if self._file is None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 (kept open)
         self._file.write(json.dumps(record, allow_nan=False) + "\n")
         self._file.flush()
         os.fsync(self._file.fileno())
         self.records.append(record)
 
     def close(self) -> None:
-        self._file.close()
+        if self._file is not None:
+            self._file.close()

@@ -31,10 +31,12 @@ Record = dict[str, Any]
 
 
 def _groups(records: Sequence[Record]) -> dict[tuple[str, str], list[Record]]:
+    """The records per (problem, planner), in the order of the records (the tasks'
+    order: the inputs as given), each group by run."""
     groups: dict[tuple[str, str], list[Record]] = {}
-    for record in sorted(records, key=lambda r: (r["problem"], r["planner"], r["run"])):
+    for record in records:
         groups.setdefault((record["problem"], record["planner"]), []).append(record)
-    return groups
+    return {k: sorted(v, key=lambda r: r["run"]) for k, v in groups.items()}
 
 
 def experiment_names(problems: Sequence[str]) -> dict[str, str]:
@@ -48,11 +50,12 @@ def experiment_names(problems: Sequence[str]) -> dict[str, str]:
 def _row(name: str, planner: str, runs: list[Record]) -> str:
     seconds = [r["seconds"] for r in runs]
     valid = sum(r["status"] == "found" and bool(r.get("valid")) for r in runs)
+    proved = sum(r["status"] == "no_path" for r in runs)
     answers = Counter(f"{r['status']} ({r['reason']})" for r in runs)
     failed = sum(r["status"] in FAILURES for r in runs)
     said = ", ".join(f"{n}× {a}" for a, n in sorted(answers.items()))
-    return (f"| {name} | {planner} | {valid}/{len(runs)} | {statistics.median(seconds):.3g} "
-            f"| {max(seconds):.3g} | {failed} | {said} |")
+    return (f"| {name} | {planner} | {len(runs)} | {valid} | {proved} | "
+            f"{statistics.median(seconds):.3g} | {max(seconds):.3g} | {failed} | {said} |")
 
 
 def write_summary(path: Path, records: Sequence[Record], *, title: str) -> None:
@@ -60,8 +63,8 @@ def write_summary(path: Path, records: Sequence[Record], *, title: str) -> None:
     message (one line per distinct message)."""
     names = experiment_names(sorted({r["problem"] for r in records}))
     lines = [f"# {title}", "", f"{len(records)} tasks.", "",
-             "| problem | planner | valid successes | median s | max s | failed | answers |",
-             "|---|---|---|---|---|---|---|"]
+             "| problem | planner | runs | found (valid) | no path (proved) | median s | "
+             "max s | failed | answers |", "|---|---|---|---|---|---|---|---|---|"]
     lines += [_row(names[problem], planner, runs)
               for (problem, planner), runs in _groups(records).items()]
     failures = sorted({(names[r["problem"]], r["planner"], r["status"], r["message"])
@@ -70,20 +73,25 @@ def write_summary(path: Path, records: Sequence[Record], *, title: str) -> None:
         lines += ["", "## Failures", ""]
         lines += [f"- {n} / {p}: {s}: {m}" for n, p, s, m in failures]
     lines += ["", "Seconds: each task's own time in its worker (reading the problem, "
-              "planning, validating). 'valid successes': found paths (or assembly "
-              "sequences) that passed the independent validation."]
+              "planning, validating). 'found (valid)': paths (or assembly sequences) that "
+              "passed the independent validation; 'no path (proved)': a certificate, a start "
+              "or goal in collision, or a proved interlock."]
     text = "\n".join(lines) + "\n"
     atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
 def _run(record: Record) -> Run:
+    """The record as an OMPL run; its time is the planner's (setup and solve, without
+    reading the problem or validating the path), as OMPL's benchmarks time a run."""
     if record["status"] in FAILURES:
         return Run(record["seconds"], "not_found", reason=record["status"])
     def real(key: str) -> float:
         value = record.get(key)
         return math.nan if value is None else float(value)
 
-    return Run(record["seconds"], record["status"], real("length"), real("clearance"),
+    seconds = record.get("planner_seconds")
+    return Run(record["seconds"] if seconds is None else seconds, record["status"],
+               real("length"), real("clearance"),
                bool(record.get("valid")), record.get("reason") or "")
 
 
@@ -97,7 +105,8 @@ def write_ompl_logs(folder: Path, records: Sequence[Record], *, version: str) ->
     written = []
     for problem, planners in by_problem.items():
         every = [r for runs in planners.values() for r in runs]
-        limits = [r["time_limit"] for r in every if r.get("time_limit") is not None]
+        limits = [float(r.get("effective_time_limit") or r.get("time_limit") or 0.0)
+                  for r in every]
         seeds = [r["seed"] for r in every if r.get("seed") is not None]
         held = next((r.get("hold_orientation") for r in every), None)
         memory = [r["memory_limit_mb"] for r in every if r.get("memory_limit_mb")]

@@ -6,8 +6,8 @@ A *problem* is a file :func:`planner.io.load_problem` reads: a scenario YAML (to
 problem files, folders (searched recursively; YAML files that are neither scenarios nor
 assemblies are passed over, with a log line) and list files (``.txt``: one path per line,
 relative to the list file, ``#`` starts a comment). Every planning problem runs once per
-planner and run; an assembly runs once per run, with minkplan's assembly planner (OMPL's
-planners do not plan assemblies).
+planner and run; an assembly runs once, with minkplan's assembly planner (OMPL's planners
+do not plan assemblies; it is deterministic and has no time limit).
 
 A task's :attr:`Task.key` names it in ``results.jsonl``: ``--resume`` skips the keys
 already there.
@@ -100,6 +100,21 @@ def _yaml_kind(path: Path) -> str | None:
     return None
 
 
+def _yaml_problem(path: Path) -> str | None:
+    """What keeps a YAML file from being read at all (syntax, encoding), or ``None``."""
+    import yaml
+
+    try:
+        yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        return f"cannot read it ({exc})"
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        return f"YAML syntax error{where}: {getattr(exc, 'problem', None) or exc}"
+    return None
+
+
 def _problem_at(path: Path, *, strict: bool) -> Problem | None:
     suffix = path.suffix.lower()
     if suffix == ".cfg":
@@ -109,8 +124,8 @@ def _problem_at(path: Path, *, strict: bool) -> Problem | None:
         if kind is not None:
             return Problem(path, kind)
         if strict:
-            raise ScenarioError(f"{path}: neither a scenario (robot:) nor an assembly "
-                                f"(parts:)")
+            why = _yaml_problem(path) or "neither a scenario (robot:) nor an assembly (parts:)"
+            raise ScenarioError(f"{path}: {why}")
         log.info("%s: not a scenario or an assembly; passed over", path)
         return None
     if strict:
@@ -177,12 +192,12 @@ def make_tasks(problems: Sequence[Problem], planners: Sequence[str], runs: int, 
                time_limit: float | None = None, hold_orientation: str | None = None,
                cache_dir: str | None = None) -> list[Task]:
     """Every (problem, planner, run): planning problems with each planner, assemblies
-    with minkplan only."""
+    once with minkplan (the assembly planner is deterministic and has no time limit)."""
     tasks = []
     for problem in problems:
         names = planners if problem.kind == PLAN else ["minkplan"]
         for name in names:
-            for run in range(runs):
+            for run in range(runs if problem.kind == PLAN else 1):
                 tasks.append(Task(str(problem.path), problem.kind, name, run, time_limit,
                                   hold_orientation, cache_dir))
     return tasks

@@ -28,6 +28,8 @@ import time
 from dataclasses import dataclass
 from typing import IO, Any
 
+from planner.output import schema_id
+
 from .tasks import Task
 
 __all__ = ["Limits", "run_task"]
@@ -89,11 +91,15 @@ class _Child:
 
     def __init__(self) -> None:
         self.stderr: IO[bytes] = tempfile.TemporaryFile()
+        # -P and a neutral folder: a source tree in the worker's folder must not shadow
+        # the installed planner
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "planner.batch.child"], stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE, stderr=self.stderr, preexec_fn=_die_with_parent)
+            [sys.executable, "-P", "-m", "planner.batch.child"], stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE, stderr=self.stderr, preexec_fn=_die_with_parent,
+            cwd=tempfile.gettempdir())
         self.buffer = b""
         self._wait_ready()
+        self.idle_mb = _rss_mb(self.process.pid)
 
     def _wait_ready(self) -> None:
         deadline = time.perf_counter() + _START_SECONDS
@@ -167,7 +173,8 @@ def _child() -> _Child:
 
 def _failure(task: Task, status: str, message: str, seconds: float,
              peak_mb: float) -> dict[str, Any]:
-    return {**task.to_json(), "key": task.key, "status": status, "reason": status,
+    return {"schema": schema_id("batch_record"), **task.to_json(), "key": task.key,
+            "status": status, "reason": status,
             "message": message, "seconds": seconds, "peak_mb": peak_mb}
 
 
@@ -197,8 +204,9 @@ def _wait(child: _Child, task: Task, limits: Limits, t0: float) -> dict[str, Any
             _CHILD = None
             if over:
                 return _failure(task, "memory_limit", f"resident memory {peak:.0f} MB "
-                                f"over the limit of {limits.memory_limit_mb:g} MB",
-                                elapsed, peak)
+                                f"over the limit of {limits.memory_limit_mb:g} MB (the "
+                                f"task's process takes {child.idle_mb:.0f} MB before any "
+                                f"work)", elapsed, peak)
             return _failure(task, "timeout", f"still running after "
                             f"{limits.task_timeout:g} s (the task timeout)", elapsed, peak)
 

@@ -11,7 +11,8 @@ Entry points:
 - :func:`read_app_mesh` -- a COLLADA file's triangles in OMPL.app's frame, as loaded.
 - :func:`robot_reference_point` -- OMPL.app's reference point of a robot mesh.
 - :func:`read_omplapp_path` / :func:`path_state_transform` -- OMPL.app solution files
-  (rows ``x y z qx qy qz qw``) and the ``(4, 4)`` pose of one row.
+  (rows ``x y z qx qy qz qw``) and the ``(4, 4)`` pose of one row;
+  :func:`write_omplapp_path` writes a translational path in that format.
 
 The meshes are read as OMPL.app reads them (:mod:`planner.io.omplapp_meshes`: its frame,
 its reference point, the world as solids and surfaces). A state ``(p, R)`` places a robot
@@ -57,10 +58,12 @@ from .omplapp_meshes import (
 __all__ = [
     "APP_FROM_ZUP",
     "load_omplapp",
+    "path_rows",
     "path_state_transform",
     "read_app_mesh",
     "read_omplapp_path",
     "robot_reference_point",
+    "write_omplapp_path",
 ]
 
 
@@ -323,3 +326,26 @@ def path_state_transform(row: Any) -> np.ndarray:
     matrix = tf.quaternion_matrix([qw, qx, qy, qz])
     matrix[:3, 3] = (x, y, z)
     return matrix
+
+
+def path_rows(waypoints: Any, orientation: Any) -> np.ndarray:
+    """A translational path as OMPL SE(3) states: rows ``x y z qx qy qz qw``, each
+    waypoint with the robot's one orientation ``(3, 3)`` (quaternion scalar last, sign
+    chosen with ``qw >= 0``)."""
+    matrix = np.eye(4)
+    matrix[:3, :3] = np.asarray(orientation, dtype=np.float64)
+    qw, qx, qy, qz = tf.quaternion_from_matrix(matrix)
+    quaternion = np.array([qx, qy, qz, qw]) * (1.0 if qw >= 0 else -1.0)
+    points = np.asarray(waypoints, dtype=np.float64).reshape(-1, 3)
+    return np.hstack([points, np.tile(quaternion, (len(points), 1))])
+
+
+def write_omplapp_path(path: str | os.PathLike[str], waypoints: Any, orientation: Any) -> None:
+    """Write a path in OMPL's SE(3) path format (what ``PathGeometric::printAsMatrix``
+    prints and OMPL.app reads: a state per line), atomically; :func:`read_omplapp_path`
+    reads it back."""
+    from planner.output import atomic_write
+
+    text = "".join(" ".join(repr(float(v)) for v in row) + "\n"
+                   for row in path_rows(waypoints, orientation))
+    atomic_write(Path(path), lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))

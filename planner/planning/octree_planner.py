@@ -267,7 +267,7 @@ class OctreePlanner:
         for path in candidates:
             with self.clock.stage("validate"):
                 validation = validate_path(path, self.checker, self.bounds)
-            if validation["fcl"]["valid"] and validation["ompl"]["valid"]:
+            if validation["valid"]:
                 return self._finish(FOUND, "path", result.message, waypoints=path,
                                     validation=validation, space=space,
                                     clearance=validation["fcl"]["min_clearance"])

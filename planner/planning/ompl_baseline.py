@@ -74,7 +74,7 @@ def plan_ompl(scenario: Scenario, name: str, *, validate: bool = True) -> PlanOu
         validation = validate_path(waypoints, checker, bounds)
         timings["validate"] = time.perf_counter() - t1
         clearance = validation["fcl"]["min_clearance"]
-        if not (validation["fcl"]["valid"] and validation["ompl"]["valid"]):
+        if not validation["valid"]:
             return done(NOT_FOUND, "validation_failed",
                         f"{planner.name}'s path failed validation", validation=validation)
     return done(FOUND, "path", f"{planner.name} found a path", waypoints=waypoints,

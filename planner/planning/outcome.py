@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.output import jsonable
+from planner.output import jsonable, schema_id
 from planner.roles import FOUND, PlanStatus
 
 __all__ = ["PlanOutcome"]
@@ -80,6 +80,7 @@ class PlanOutcome:
         """The ``path.json`` document."""
         return jsonable(
             {
+                "schema": schema_id("path"),
                 "status": self.status,
                 "waypoints": np.asarray(self.waypoints, dtype=float).reshape(-1, 3),
                 "length": self.length,
@@ -101,6 +102,7 @@ class PlanOutcome:
         """The ``report.json`` document."""
         return jsonable(
             {
+                "schema": schema_id("report"),
                 "status": self.status,
                 "reason": self.reason,
                 "message": self.message,
@@ -114,4 +116,6 @@ class PlanOutcome:
 
     def certificate_json(self) -> dict[str, Any] | None:
         """The full certificate (wall cells and the walled-off component), or ``None``."""
-        return None if self.certificate is None else jsonable(self.certificate)
+        if self.certificate is None:
+            return None
+        return jsonable({"schema": schema_id("certificate"), **self.certificate})

@@ -16,7 +16,7 @@ from planner.roles import MotionValidator, Planner, PlanResult, PlanStatus, Stat
 
 from .checks import CheckerTolerances, PathCheck, SegmentCheck
 from .fcl_checker import FclChecker
-from .ompl_check import OmplPathCheck, ompl_check_path, resolution_for_clearance
+from .ompl_check import OmplPathCheck, ompl_check_path, ompl_missing, resolution_for_clearance
 from .ompl_planners import OmplPlanner, available_planners
 
 __all__ = [
@@ -32,6 +32,7 @@ __all__ = [
     "SegmentCheck",
     "StateValidityChecker",
     "available_planners",
+    "ompl_missing",
     "ompl_check_path",
     "resolution_for_clearance",
 ]

@@ -41,7 +41,19 @@ from numpy.typing import ArrayLike
 
 from planner.errors import InvalidParameterError
 
+
+def ompl_missing() -> str | None:
+    """Why OMPL cannot be used here (its Python package does not import: it has wheels
+    for Linux and recent macOS only), or ``None`` when it can."""
+    try:
+        import ompl  # noqa: F401
+    except ImportError as exc:
+        return (f"OMPL is not installed ({exc}); it has wheels for Linux and macOS only: "
+                f"the OMPL path check and planners are unavailable, FCL validation runs")
+    return None
+
 __all__ = [
+    "ompl_missing",
     "DEFAULT_RESOLUTION",
     "MIN_RESOLUTION",
     "OmplPathCheck",

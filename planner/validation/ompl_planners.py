@@ -42,6 +42,7 @@ from .ompl_check import (
     CheckCounter,
     as_bounds,
     make_space_information,
+    ompl_missing,
     quiet_ompl,
     states_to_array,
 )
@@ -68,19 +69,29 @@ _PLANNER_NAMES = (
 
 
 def available_planners() -> tuple[str, ...]:
-    """Names of the OMPL planners :class:`OmplPlanner` accepts (case-insensitive)."""
+    """Names of the OMPL planners :class:`OmplPlanner` accepts (case-insensitive); none
+    where OMPL is not installed."""
+    if ompl_missing() is not None:
+        return ()
     from ompl import geometric as og
 
     return tuple(n for n in _PLANNER_NAMES if hasattr(og, n))
 
 
 def _resolve_name(name: str) -> str:
+    missing = ompl_missing()
+    if missing is not None:
+        raise InvalidParameterError(f"planner {name!r}: {missing}")
     names = available_planners()
     by_key = {n.lower(): n for n in names}
     key = str(name).strip().lower()
     if key not in by_key:
+        import difflib
+
+        close = difflib.get_close_matches(key, list(by_key), n=1)
+        hint = f"did you mean {by_key[close[0]]!r}? " if close else ""
         raise InvalidParameterError(
-            f"planner {name!r}: unknown OMPL planner; available: {', '.join(names)}"
+            f"planner {name!r}: unknown OMPL planner; {hint}available: {', '.join(names)}"
         )
     return by_key[key]
 

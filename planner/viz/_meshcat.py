@@ -18,7 +18,7 @@ with warnings.catch_warnings():
     from meshcat.animation import Animation
     from meshcat.commands import Delete, SetAnimation, SetObject, SetProperty, SetTransform
     from meshcat.path import Path
-    from meshcat.servers.zmqserver import start_zmq_server_as_subprocess
+    from meshcat.servers.zmqserver import ZMQWebSocketBridge
     from meshcat.visualizer import ViewerWindow, Visualizer
 
 __all__ = [
@@ -31,7 +31,7 @@ __all__ = [
     "SetTransform",
     "ViewerWindow",
     "Visualizer",
+    "ZMQWebSocketBridge",
     "geometry",
     "meshcat",
-    "start_zmq_server_as_subprocess",
 ]

@@ -1,7 +1,8 @@
-"""Live transport: meshcat's own server on localhost, fed the scene's commands.
+"""Live transport: meshcat's server on localhost, fed the scene's commands.
 
-- :func:`open_live` -- start meshcat's server (a subprocess: tornado + ZeroMQ, bound to
-  127.0.0.1), send it a scene, return a :class:`LiveView` (URL, ``update``, ``close``).
+- :func:`open_live` -- start meshcat's server (a subprocess: tornado + ZeroMQ, both
+  listening on 127.0.0.1 only unless ``host`` says otherwise; :mod:`.server`), send it a
+  scene, return a :class:`LiveView` (URL, ``update``, ``close``).
 - :func:`serve` -- the same, print the URL and keep serving until interrupted (Ctrl+C)
   or until ``stop`` is set; then stop the server.
 
@@ -20,7 +21,8 @@ from typing import TextIO
 
 import zmq
 
-from ._meshcat import Delete, ViewerWindow, Visualizer, start_zmq_server_as_subprocess
+from . import server
+from ._meshcat import Delete, ViewerWindow, Visualizer
 from ._meshcat import Path as MeshcatPath
 from .lower import ROOT, commands
 from .scene import Scene
@@ -108,9 +110,10 @@ def _window(process, zmq_url: str, web_url: str) -> ViewerWindow:
     return window
 
 
-def open_live(scene: Scene | None = None) -> LiveView:
-    """Start meshcat's server on localhost and show ``scene`` (if given) in it."""
-    process, zmq_url, web_url = start_zmq_server_as_subprocess()
+def open_live(scene: Scene | None = None, *, host: str = server.LOCALHOST) -> LiveView:
+    """Start meshcat's server, listening on ``host`` only (default 127.0.0.1: this
+    machine), and show ``scene`` (if given) in it."""
+    process, zmq_url, web_url = server.start(host)
     try:
         view = LiveView(Visualizer(window=_window(process, zmq_url, web_url)), process)
     except BaseException:
@@ -127,7 +130,7 @@ def open_live(scene: Scene | None = None) -> LiveView:
 
 
 def serve(scene: Scene, *, out: TextIO | None = None, stop: threading.Event | None = None,
-          poll: float = 0.5) -> str:
+          poll: float = 0.5, host: str = server.LOCALHOST) -> str:
     """Serve ``scene`` live on localhost until interrupted; returns the URL it served.
 
     Prints ``minkplan: serving <title> at <url> (Ctrl+C to stop)`` to ``out`` (default
@@ -135,7 +138,7 @@ def serve(scene: Scene, *, out: TextIO | None = None, stop: threading.Event | No
     the server either way. Raises ``RuntimeError`` if the server dies meanwhile.
     """
     out = sys.stdout if out is None else out
-    view = open_live(scene)
+    view = open_live(scene, host=host)
     try:
         out.write(f"minkplan: serving {scene.title!r} at {view.url} (Ctrl+C to stop)\n")
         out.flush()

@@ -68,8 +68,7 @@ def one_run(scenario, name: str, seed: int) -> tuple[Run, dict]:
                    progress=False)
     seconds = time.perf_counter() - t0
     validation = outcome.validation or {}
-    valid = bool(outcome.found and validation.get("fcl", {}).get("valid")
-                 and validation.get("ompl", {}).get("valid"))
+    valid = bool(outcome.found and validation.get("valid"))
     run = Run(seconds, str(outcome.status), outcome.length, outcome.clearance, valid,
               outcome.reason)
     return run, {"planner": name, "seed": seed, "status": str(outcome.status),

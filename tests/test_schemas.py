@@ -1,0 +1,91 @@
+"""Every JSON file minkplan writes names its schema (``"schema": "minkplan/NAME/1"``) and
+validates against ``docs/schemas/NAME.schema.json``: the files of real runs of ``plan``
+(a path, a proved no-path), ``assemble`` (a sequence, an interlock), ``minkowski --stats``
+and a batch's records (an answer and a failure)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import jsonschema
+import pytest
+
+from planner.batch import Limits, find_problems, make_tasks
+from planner.batch.execute import execute
+from planner.batch.worker import run_task
+from planner.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMAS = ROOT / "docs" / "schemas"
+
+
+def _validator(name: str) -> jsonschema.Draft202012Validator:
+    schema = json.loads((SCHEMAS / f"{name}.schema.json").read_text())
+    jsonschema.Draft202012Validator.check_schema(schema)
+    return jsonschema.Draft202012Validator(schema)
+
+
+def _valid(name: str, document: dict) -> None:
+    assert document["schema"] == f"minkplan/{name}/1"
+    errors = [e.message for e in _validator(name).iter_errors(document)]
+    assert not errors, (name, errors[:3])
+
+
+def _read(path: Path) -> dict:
+    return json.loads(path.read_text())
+
+
+@pytest.mark.parametrize("scenario, files", [
+    ("peg_in_hole.yaml", ("path", "report")),
+    ("sealed_chamber.yaml", ("path", "report", "certificate")),
+])
+def test_plan_files_validate(tmp_path, scenario, files):
+    main(["plan", str(ROOT / "scenarios" / scenario), "--out", str(tmp_path), "--no-progress"])
+    for name in files:
+        _valid(name, _read(tmp_path / f"{name}.json"))
+    if "certificate" in files:  # the report summarises the certificate it wrote
+        assert _read(tmp_path / "report.json")["certificate"]["verified"] is True
+
+
+@pytest.mark.parametrize("assembly", ["pegs_and_holes.yaml", "linked_rings.yaml"])
+def test_assembly_files_validate(tmp_path, assembly):
+    main(["assemble", str(ROOT / "scenarios" / "assemblies" / assembly), "--out",
+          str(tmp_path), "--no-progress"])
+    _valid("sequence", _read(tmp_path / "sequence.json"))
+    _valid("assembly_report", _read(tmp_path / "report.json"))
+
+
+def test_minkowski_stats_validate(tmp_path):
+    block = ROOT / "scenarios" / "_schema_examples" / "block.stl"
+    peg = ROOT / "scenarios" / "_schema_examples" / "peg.stl"
+    stats = tmp_path / "stats.json"
+    assert main(["minkowski", str(block), str(peg), "--mirror-b", "-o",
+                 str(tmp_path / "sum.stl"), "--stats", str(stats), "--no-progress"]) == 0
+    _valid("minkowski_stats", _read(stats))
+
+
+def test_batch_records_validate():
+    problems = find_problems([ROOT / "scenarios" / "bug_trap.yaml"])
+    task = make_tasks(problems, ["minkplan"], 1)[0]
+    _valid("batch_record", execute(task))
+    _valid("batch_record", run_task(task.to_json(), Limits(memory_limit_mb=1)))
+
+
+def test_a_file_that_breaks_its_schema_is_caught(tmp_path):
+    main(["plan", str(ROOT / "scenarios" / "peg_in_hole.yaml"), "--out", str(tmp_path),
+          "--no-progress"])
+    document = _read(tmp_path / "path.json")
+    document["status"] = "maybe"
+    document["waypoints"] = [[0.0, 1.0]]
+    messages = {e.validator for e in _validator("path").iter_errors(document)}
+    assert {"enum", "minItems"} <= messages
+
+
+def test_every_schema_names_its_file():
+    names = {p.name.removesuffix(".schema.json") for p in SCHEMAS.glob("*.schema.json")}
+    assert names == {"path", "report", "certificate", "sequence", "assembly_report",
+                     "minkowski_stats", "batch_record"}
+    for name in names:
+        schema = json.loads((SCHEMAS / f"{name}.schema.json").read_text())
+        assert schema["properties"]["schema"]["const"] == f"minkplan/{name}/1"
