@@ -36,22 +36,32 @@ def _revalidate(result) -> None:
     """Replay the removal: each path, checked by a fresh FclChecker against the parts
     still present, at the result's contact tolerance; insertion = removal reversed."""
     parts = {p.name: p for p in result.assembly.parts}
-    present = set(parts)
-    for step in result.removal:
-        present.discard(step.part)
+    _replay(result.removal, parts, set(parts), result.contact_tolerance)
+
+
+def _replay(steps, parts, present: set[str], delta: float) -> None:
+    """Each step's moving parts (one, or a group's members moving as one) checked by FCL
+    against the parts still present; a group's own steps replayed among its members."""
+    for step in steps:
+        present -= set(step.parts)
         assert sorted(step.obstacles) == sorted(present)
-        checker = FclChecker(parts[step.part].mesh, [parts[n].mesh for n in step.obstacles],
-                             contact_tolerance=result.contact_tolerance)
-        assert checker.check_path(step.removal).valid, step.part
-        assert checker.check_path(step.insertion).valid, step.part
+        for name in step.parts:
+            checker = FclChecker(parts[name].mesh, [parts[n].mesh for n in step.obstacles],
+                                 contact_tolerance=delta)
+            assert checker.check_path(step.removal).valid, name
+            assert checker.check_path(step.insertion).valid, name
         np.testing.assert_array_equal(step.removal[0], np.zeros(3))
-        # the part ends outside the box of the remaining parts (its own included)
+        # the moving parts end outside the box of the remaining parts (theirs included)
         if step.obstacles:
-            names = [step.part, *step.obstacles]
+            names = [*step.parts, *step.obstacles]
             lo = np.min([parts[n].mesh.bounds[0] for n in names], axis=0)
             hi = np.max([parts[n].mesh.bounds[1] for n in names], axis=0)
-            p_lo, p_hi = parts[step.part].mesh.bounds + step.removal[-1]
+            p_lo = np.min([parts[n].mesh.bounds[0] for n in step.parts], axis=0)
+            p_hi = np.max([parts[n].mesh.bounds[1] for n in step.parts], axis=0)
+            p_lo, p_hi = p_lo + step.removal[-1], p_hi + step.removal[-1]
             assert np.any(p_lo > hi) or np.any(p_hi < lo), step.part
+        if step.members:
+            _replay(step.inner, parts, set(step.members), delta)
 
 
 def test_peg_in_block():
@@ -96,6 +106,39 @@ def test_linked_rings_are_interlocked(tmp_path, capsys):
     assert all(report["attempts"][n]["proved"] for n in ("ring_a", "ring_b"))
     assert report["interlocked_attempts"]["ring_a"]["obstacles"] == ["ring_b"]
     assert "ring_a, ring_b" in capsys.readouterr().out
+
+
+def test_a_pair_that_no_part_of_can_leave_alone_leaves_as_a_subassembly(tmp_path):
+    assembly = load_assembly(DEMOS / "hooked_pair.yaml")
+    alone = plan_assembly(assembly, groups=False)
+    # one part at a time, the cup takes part in the lock: without it the hooks come apart
+    assert not alone.found and alone.proved
+    assert alone.interlocked == ["cup", "hook_a", "hook_b"]
+    result = plan_assembly(assembly)
+    assert result.found, result.message
+    (step,) = result.removal
+    assert (step.method, step.direction, step.members) == ("group", "+z",
+                                                           ("hook_a", "hook_b"))
+    assert step.obstacles == ["cup"] and len(step.inner) == 1
+    assert result.order == ["cup", "[hook_a + hook_b]"]
+    assert "put together first: hook_a -> hook_b" in result.message
+    _revalidate(result)
+    main(["assemble", str(DEMOS / "hooked_pair.yaml"), "--out", str(tmp_path),
+          "--no-progress"])
+    group = json.loads((tmp_path / "sequence.json").read_text())["parts"][1]
+    assert group["group"] == ["hook_a", "hook_b"]
+    assert [p["part"] for p in group["subassembly"]] == ["hook_a", "hook_b"]
+
+
+def test_rings_leave_the_tray_together_and_are_interlocked_with_each_other():
+    result = plan_assembly(load_assembly(DEMOS / "rings_in_tray.yaml"))
+    assert not result.found and result.proved
+    assert result.interlocked == ["ring_a", "ring_b"]
+    (step,) = result.removal
+    assert step.members == ("ring_a", "ring_b") and step.obstacles == ["tray"]
+    assert step.inner == [] and "they leave the rest together" in result.message
+    _replay(result.removal, {p.name: p for p in result.assembly.parts},
+            {p.name for p in result.assembly.parts}, result.contact_tolerance)
 
 
 def test_cli_writes_sequence(tmp_path):
@@ -308,7 +351,8 @@ def _trapped_post(tmp_path: Path, parts=("base", "post", "ring_a", "ring_b")) ->
 
 
 def test_interlocked_set_is_irreducible(tmp_path):
-    result = plan_assembly(load_assembly(_trapped_post(tmp_path)))
+    # one part at a time (no groups), the post is stuck too, but not needed in the lock
+    result = plan_assembly(load_assembly(_trapped_post(tmp_path)), groups=False)
     assert not result.found and result.exit_code == 1
     assert result.stuck == ["post", "ring_a", "ring_b"]
     assert result.interlocked == ["ring_a", "ring_b"]
@@ -327,9 +371,19 @@ def test_interlocked_set_is_irreducible(tmp_path):
 
 
 def test_interlocked_set_without_minimizing(tmp_path):
-    result = plan_assembly(load_assembly(_trapped_post(tmp_path)), minimize=False)
+    result = plan_assembly(load_assembly(_trapped_post(tmp_path)), minimize=False,
+                           groups=False)
     assert result.interlocked == result.stuck == ["post", "ring_a", "ring_b"]
     assert result.proved  # each of them was proved stuck with the others present
+
+
+def test_with_groups_the_rings_leave_the_post_together_and_only_they_are_stuck(tmp_path):
+    result = plan_assembly(load_assembly(_trapped_post(tmp_path)))
+    assert result.stuck == result.interlocked == ["ring_a", "ring_b"] and result.proved
+    (step,) = result.removal
+    assert step.members == ("ring_a", "ring_b") and sorted(step.obstacles) == ["base", "post"]
+    _replay(result.removal, {p.name: p for p in result.assembly.parts},
+            {p.name for p in result.assembly.parts}, result.contact_tolerance)
 
 
 # ---------------------------------------------------------------- goal sides

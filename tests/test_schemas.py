@@ -48,7 +48,8 @@ def test_plan_files_validate(tmp_path, scenario, files):
         assert _read(tmp_path / "report.json")["certificate"]["verified"] is True
 
 
-@pytest.mark.parametrize("assembly", ["pegs_and_holes.yaml", "linked_rings.yaml"])
+@pytest.mark.parametrize("assembly", ["pegs_and_holes.yaml", "linked_rings.yaml",
+                                      "hooked_pair.yaml"])
 def test_assembly_files_validate(tmp_path, assembly):
     main(["assemble", str(ROOT / "scenarios" / "assemblies" / assembly), "--out",
           str(tmp_path), "--no-progress"])

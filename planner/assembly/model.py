@@ -12,7 +12,8 @@ import numpy as np
 from planner.output import jsonable, schema_id
 from planner.problem import Assembly
 
-__all__ = ["INTERLOCKED", "SEQUENCE", "AssemblyResult", "AssemblyStep"]
+__all__ = ["INTERLOCKED", "SEQUENCE", "AssemblyResult", "AssemblyStep", "group_label",
+           "inner_order"]
 
 
 SEQUENCE = "sequence"
@@ -23,16 +24,23 @@ INTERLOCKED = "interlocked"
 
 @dataclass
 class AssemblyStep:
-    """One part's removal (in removal order) and hence insertion (reversed).
+    """One part's (or one group's) removal, in removal order, and hence insertion
+    (reversed).
 
     Attributes:
-        part: the part's name.
-        method: ``"straight"`` (one segment along ``direction``) or ``"planned"``.
+        part: the part's name; for a group, its label (:func:`group_label`).
+        method: ``"straight"`` (one segment along ``direction``), ``"planned"``, or
+            ``"group"`` (a subassembly leaving as one rigid body, straight).
         direction: ``"+z"`` etc. for straight removals, the goal's side when planned.
         removal: ``(n, 3)`` translations from ``0`` (assembled) to outside.
         obstacles: the parts present while it moves.
         seconds: time spent finding it.
-        validation: FCL's check of the removal path at the contact tolerance.
+        validation: FCL's check of the removal path at the contact tolerance (for a
+            group: of every member against the parts outside it).
+        members: a group's parts (empty for one part).
+        inner: a group's own removal steps with only its members present (how the
+            subassembly comes apart once out; fewer than ``len(members) - 1`` when it
+            cannot be taken apart by translations).
     """
 
     part: str
@@ -42,11 +50,39 @@ class AssemblyStep:
     obstacles: list[str]
     seconds: float
     validation: dict[str, Any]
+    members: tuple[str, ...] = ()
+    inner: list[AssemblyStep] = field(default_factory=list)
 
     @property
     def insertion(self) -> np.ndarray:
         """Translations from outside to ``0`` (the removal reversed)."""
         return self.removal[::-1].copy()
+
+    @property
+    def parts(self) -> tuple[str, ...]:
+        """The parts that move in this step."""
+        return self.members or (self.part,)
+
+
+def group_label(members: tuple[str, ...]) -> str:
+    """A group's name in orders and messages: ``[a + b]``."""
+    return "[" + " + ".join(members) + "]"
+
+
+def inner_order(step: AssemblyStep) -> list[str]:
+    """A group's own assembly order: its part left last, then its removals reversed."""
+    removed = [name for s in step.inner for name in s.parts]
+    return [n for n in step.members if n not in removed] + [s.part for s in step.inner[::-1]]
+
+
+def _inner_json(step: AssemblyStep) -> list[dict[str, Any]]:
+    """A group's own assembly, in order: its first part fixed, then each insertion (in
+    the group's assembled frame, before the group moves in)."""
+    inner = {s.part: s for s in step.inner}
+    return [{"part": n, "fixed": True, "insertion": [[0.0, 0.0, 0.0]]} if n not in inner
+            else {"part": n, "fixed": False, "method": inner[n].method,
+                  "direction": inner[n].direction, "insertion": inner[n].insertion}
+            for n in inner_order(step)]
 
 
 @dataclass
@@ -99,9 +135,9 @@ class AssemblyResult:
         """Assembly order: the base (if any) or the last part left, then the rest."""
         if not self.found:
             return []
-        removed = [s.part for s in self.removal]
+        removed = {name for s in self.removal for name in s.parts}
         first = [p.name for p in self.assembly.parts if p.name not in removed]
-        return first + removed[::-1]
+        return first + [s.part for s in self.removal[::-1]]
 
     @property
     def proved(self) -> bool:
@@ -115,9 +151,14 @@ class AssemblyResult:
     @property
     def message(self) -> str:
         if self.found:
-            return f"assembly order: {' -> '.join(self.order)}"
+            groups = "".join(f"; {s.part} is put together first: {' -> '.join(inner_order(s))}"
+                             for s in self.removal if s.members)
+            return f"assembly order: {' -> '.join(self.order)}{groups}"
         how = "proved" if self.proved else "not proved: some planner gave up"
         text = f"no sequence: interlocked parts {', '.join(self.interlocked)} ({how})"
+        together = [s for s in self.removal if set(self.interlocked) <= set(s.members)]
+        if together:
+            text += f"; they leave the rest together, as {together[0].part}"
         others = [n for n in self.stuck if n not in self.interlocked]
         if others:
             text += f"; also stuck: {', '.join(others)}"
@@ -132,9 +173,12 @@ class AssemblyResult:
             if step is None:
                 parts.append({"part": name, "fixed": True, "insertion": [[0.0, 0.0, 0.0]]})
                 continue
-            parts.append({"part": name, "fixed": False, "method": step.method,
-                          "direction": step.direction, "insertion": step.insertion,
-                          "validation": step.validation})
+            entry = {"part": name, "fixed": False, "method": step.method,
+                     "direction": step.direction, "insertion": step.insertion,
+                     "validation": step.validation}
+            if step.members:
+                entry.update(group=list(step.members), subassembly=_inner_json(step))
+            parts.append(entry)
         return jsonable({
             "schema": schema_id("sequence"),
             "name": self.assembly.name, "units": self.assembly.units, "status": self.status,
@@ -151,7 +195,11 @@ class AssemblyResult:
             "contact_tolerance": self.contact_tolerance, "seconds": self.seconds,
             "removal": [{"part": s.part, "method": s.method, "direction": s.direction,
                          "waypoints": s.removal, "obstacles": s.obstacles,
-                         "seconds": s.seconds, "validation": s.validation}
+                         "seconds": s.seconds, "validation": s.validation,
+                         **({"group": list(s.members),
+                             "inner": [{"part": i.part, "method": i.method,
+                                        "direction": i.direction, "waypoints": i.removal}
+                                       for i in s.inner]} if s.members else {})}
                         for s in self.removal],
             "interlocked": self.interlocked, "stuck": self.stuck,
             "attempts": self.attempts, "interlocked_attempts": self.core_attempts,

@@ -1,5 +1,5 @@
-"""The disassembly search: which part (or, later, which group) can leave, along which
-path, one step at a time; the reverse is an assembly order.
+"""The disassembly search: which part (or which group) can leave, along which path, one
+step at a time; the reverse is an assembly order.
 
 Search: while movable parts remain, find one that can translate from its assembled pose
 to outside the remaining parts' bounding box (its own included) grown by a margin, with
@@ -15,9 +15,14 @@ then checked with all of them by FCL. Then, for each part in turn, the octree pl
 :class:`~planner.problem.Scenario` whose robot is the part (start ``0``) and whose goal
 lies outside that box on one of its six sides, the most open first (the shallowest block
 of the straight line); the region outside the box is connected, so the first path found,
-or a certificate walling off the start, settles it. When no part can leave, the stuck
-parts are shrunk to an irreducible interlocked set by greedy deletion (each part left out
-in turn, the search re-run on the rest), which is what the result reports.
+or a certificate walling off the start, settles it. When no part can leave alone, a group
+may: along each axis, the parts that block a part, the parts that block those, and so on
+(the directional blocking graph of Wilson and Latombe's non-directional blocking graph)
+form a group no other part blocks; if FCL agrees, it leaves as one rigid body (a
+subassembly) and is taken apart on its own afterwards. When nothing can leave, or a group
+that left cannot be taken apart, the stuck parts are shrunk to an irreducible interlocked
+set by greedy deletion (each part left out in turn, the search re-run on the rest), which
+is what the result reports.
 
 Contact: assembled parts touch face to face. One contact tolerance ``delta`` (the file's
 ``contact_tolerance``, else :data:`~planner.problem.DEFAULT_CONTACT_REL` times the
@@ -47,7 +52,7 @@ from .geometry import (
     exit_point,
     vector_name,
 )
-from .model import INTERLOCKED, SEQUENCE, AssemblyResult, AssemblyStep
+from .model import INTERLOCKED, SEQUENCE, AssemblyResult, AssemblyStep, group_label
 from .pairs import PairCache
 
 __all__ = ["GOAL_SIDE", "plan_assembly", "removal_problems", "removal_scenario",
@@ -110,7 +115,7 @@ class _Search:
     """The disassembly search of one assembly, with every cache shared by its runs."""
 
     def __init__(self, assembly: Assembly, *, planner: str, cache_dir, progress,
-                 plan_parts: bool) -> None:
+                 plan_parts: bool, groups: bool = True) -> None:
         self.assembly = assembly
         self.parts = {p.name: p for p in assembly.parts}
         self.order = [p.name for p in assembly.parts]
@@ -118,6 +123,7 @@ class _Search:
         self.cache_dir = cache_dir
         self.progress = progress
         self.plan_parts = plan_parts
+        self.groups = groups
         self.delta = assembly.contact_tolerance
         self.margin = ESCAPE_MARGIN_REL * assembly.diagonal
         self.pairs = PairCache(assembly, cache_dir)
@@ -245,6 +251,60 @@ class _Search:
         self._planned[key] = (step, attempt or {})
         return step, attempt or {}
 
+    # ---------------------------------------------------------------- a group of parts
+
+    def blockers(self, seed: str, remaining: list[str], dname: str, vec: np.ndarray,
+                 base: str | None) -> tuple[str, ...] | None:
+        """The smallest group holding ``seed`` that no other remaining part blocks along
+        ``vec``: ``seed`` and, again and again, every part that blocks a member (the
+        parts reachable from ``seed`` in the directional blocking graph); ``None`` when
+        it takes in the base or every remaining part."""
+        members, frontier = [seed], [seed]
+        while frontier:
+            moving = frontier.pop()
+            for other in remaining:
+                if other in members:
+                    continue
+                verdict = self.pairs.verdict(moving, other, dname, vec)
+                if verdict is None or not verdict.blocked:  # free, or FCL checks it later
+                    continue
+                if other == base:
+                    return None
+                members.append(other)
+                frontier.append(other)
+        if len(members) == len(remaining):
+            return None
+        return tuple(n for n in remaining if n in members)
+
+    def group(self, remaining: list[str], base: str | None) -> AssemblyStep | None:
+        """A straight removal of a group of parts moving as one rigid body, when no part
+        can leave alone (Wilson and Latombe's non-directional blocking graph, along the
+        six axes: a group closed under "is blocked by" leaves along that axis). FCL
+        checks every member against the parts outside it; the group's own removal steps
+        (with only its members present) are found at once, by the same search."""
+        t0 = time.perf_counter()
+        tried: set[tuple[tuple[str, ...], str]] = set()
+        for dname, vec in DIRECTIONS.items():
+            for seed in [n for n in reversed(remaining) if n != base]:
+                members = self.blockers(seed, remaining, dname, vec, base)
+                if members is None or (members, dname) in tried:
+                    continue
+                tried.add((members, dname))
+                outside = [n for n in remaining if n not in members]
+                box = exit_box(self.parts[members[0]], [self.parts[n] for n in remaining
+                                                        if n != members[0]], self.margin)
+                path = np.array([np.zeros(3), exit_point(vec, box, self.margin)])
+                checks = {n: validate_removal(self.parts[n], [self.parts[o] for o in outside],
+                                              path, self.delta) for n in members}
+                if not all(c["valid"] for c in checks.values()):
+                    continue
+                inner = self.disassemble(list(members), None)
+                validation = {"valid": True, "members": checks}
+                return AssemblyStep(group_label(members), "group", dname, path, outside,
+                                    time.perf_counter() - t0, validation, members,
+                                    inner.steps)
+        return None
+
     # ---------------------------------------------------------------- a set of parts
 
     def disassemble(self, names: list[str], base: str | None) -> _Run:
@@ -272,6 +332,12 @@ class _Search:
                     if step is not None:
                         break
                     attempts[part] = attempt
+            if step is None and self.groups:
+                step = self.group(remaining, base)
+                if step is not None:
+                    inner = self._inner_stuck(step)
+                    if inner is not None:  # out as one, but it does not come apart
+                        return _Run([*steps, step], *inner)
             if step is None:
                 if not self.plan_parts:
                     for part in movable():
@@ -284,8 +350,16 @@ class _Search:
                             {k: v for k, v in attempts.items() if k in stuck})
             steps.append(step)
             attempts.pop(step.part, None)
-            remaining = [n for n in remaining if n != step.part]
+            remaining = [n for n in remaining if n not in step.parts]
         return _Run(steps, list(remaining), [], {})
+
+    def _inner_stuck(self, step: AssemblyStep) -> tuple[list[str], list[str], dict] | None:
+        """For a group that leaves but cannot be taken apart: its remaining parts, its
+        stuck parts and their attempts (as a stuck run reports them); else ``None``."""
+        if len(step.inner) >= len(step.members) - 1:
+            return None
+        run = self.disassemble(list(step.members), None)  # cached: the same answers
+        return list(run.remaining), list(run.stuck), dict(run.attempts)
 
     def irreducible(self, run: _Run, base: str | None) -> _Run:
         """Shrink a stuck run's remaining parts to a set that still cannot be taken
@@ -322,7 +396,7 @@ class _Search:
 
 def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=None,
                   progress: bool | None = False, plan_parts: bool = True,
-                  minimize: bool = True) -> AssemblyResult:
+                  minimize: bool = True, groups: bool = True) -> AssemblyResult:
     """Find an assembly sequence by disassembly (see the module docstring).
 
     Args:
@@ -333,10 +407,12 @@ def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=No
         plan_parts: run the planner when no straight removal exists (else give up there).
         minimize: when stuck, shrink the stuck parts to an irreducible interlocked set
             (more searches on subsets, sharing every cache).
+        groups: when no part can leave alone, look for a group that leaves as one
+            (a subassembly), then take it apart on its own.
     """
     t_start = time.perf_counter()
     search = _Search(assembly, planner=planner, cache_dir=cache_dir, progress=progress,
-                     plan_parts=plan_parts)
+                     plan_parts=plan_parts, groups=groups)
     base = assembly.base
     run = search.disassemble([p.name for p in assembly.parts], base)
     source = {"used": search.source.kind, "why": search.source.why}

@@ -25,12 +25,15 @@ def scene_for_assembly(result: AssemblyResult, *, seconds_per_part: float = 3.0)
 
     Every part is a layer ``assembly/<name>``. With a sequence, each part waits at the
     start of its insertion path (outside), then moves along it in its turn
-    (``seconds_per_part`` each, in assembly order) and stays in place. Without one, the
+    (``seconds_per_part`` each, in assembly order) and stays in place; the parts of a
+    subassembly wait and move in together, already put together. Without one, the
     parts are shown assembled and the interlocked ones in red.
     """
     scene = Scene(f"{result.assembly.name}: {result.message}")
-    steps = {s.part: s for s in result.removal}
-    turn = {name: i for i, name in enumerate(result.order)}
+    steps = {name: s for s in result.removal for name in s.parts}
+    turn = {label: i for i, label in enumerate(result.order)}
+    for step in result.removal:  # a group's members move in its turn
+        turn.update({name: turn.get(step.part, 0) for name in step.members})
     for k, part in enumerate(result.assembly.parts):
         step = steps.get(part.name)
         if part.name in result.interlocked:

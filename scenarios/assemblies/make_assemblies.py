@@ -90,6 +90,34 @@ PARTS = {
         ([0.3, -0.1, -0.55], [0.5, 0.1, 0.55]),
         ([1.3, -0.1, -0.55], [1.5, 0.1, 0.55]),
     ),
+    # rings_in_tray: the linked rings above the floor of an open tray: neither ring can
+    # leave alone, the two leave upwards together (and stay linked).
+    "tray": union_of(
+        ([-1.2, -1.2, -0.8], [1.8, 1.2, -0.65]),      # floor, 0.05 under ring_b
+        ([-1.2, -1.2, -0.75], [-1.05, 1.2, 0.8]),     # west wall
+        ([1.65, -1.2, -0.75], [1.8, 1.2, 0.8]),       # east wall
+        ([-1.15, -1.2, -0.75], [1.75, -1.05, 0.8]),   # south wall
+        ([-1.15, 1.05, -0.75], [1.75, 1.2, 0.8]),     # north wall
+    ),
+    # hooked_pair: in an open cup, a C-shaped hook_a (opening +x) holds the arm of a
+    # Γ-shaped hook_b: each blocks the other upwards and the cup blocks them sideways, so
+    # neither can leave alone; together they lift out, then hook_b slides out along +x.
+    "cup": union_of(
+        ([0.0, -0.1, 0.0], [1.0, 0.5, 0.1]),          # floor
+        ([0.0, -0.1, 0.05], [0.1, 0.5, 0.8]),         # west wall
+        ([0.9, -0.1, 0.05], [1.0, 0.5, 0.8]),         # east wall
+        ([0.05, -0.1, 0.05], [0.95, 0.0, 0.8]),       # south wall
+        ([0.05, 0.4, 0.05], [0.95, 0.5, 0.8]),        # north wall
+    ),
+    "hook_a": union_of(
+        ([0.12, 0.02, 0.1], [0.2, 0.38, 0.7]),        # stem, resting on the floor
+        ([0.15, 0.02, 0.1], [0.6, 0.38, 0.2]),        # foot
+        ([0.15, 0.02, 0.6], [0.6, 0.38, 0.7]),        # top
+    ),
+    "hook_b": union_of(
+        ([0.3, 0.02, 0.3], [0.8, 0.38, 0.5]),         # arm, between hook_a's foot and top
+        ([0.75, 0.02, 0.1], [0.88, 0.38, 0.7]),       # stem, resting on the floor
+    ),
 }
 
 
