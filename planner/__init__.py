@@ -6,6 +6,7 @@ Public API:
   :func:`load_scenario` -> :class:`Scenario`; :func:`plan` -> :class:`PlanOutcome`
 - :func:`load_assembly`, :func:`plan_assembly` -> :class:`AssemblyResult`
 - :func:`minkowski_sum`, :func:`c_obstacle` -> :class:`MinkowskiResult`
+- :func:`penetration_depth` -> :class:`PenetrationDepth` (proved interval, direction)
 - :func:`choose_source` -> a C-obstacle :class:`Source` (exact or decomposition) that
   every one of those takes
 - :func:`decompose` -> :class:`Decomposition` (convex pieces, cached)
@@ -25,6 +26,7 @@ except ImportError as _exc:  # pragma: no cover - depends on how it was installe
     ) from _exc
 from .assembly import AssemblyResult, plan_assembly
 from .decompose import Decomposition, decompose
+from .depth import PenetrationDepth, penetration_depth
 from .errors import (
     GeometryError,
     InvalidMeshError,
@@ -54,6 +56,7 @@ __all__ = [
     "MinkowskiResult",
     "MinkplanError",
     "Part",
+    "PenetrationDepth",
     "PlanOutcome",
     "PlanStatus",
     "PlannerSettings",
@@ -72,6 +75,7 @@ __all__ = [
     "load_scenario",
     "minkowski_sum",
     "mirror",
+    "penetration_depth",
     "plan",
     "plan_assembly",
     "repair_mesh",

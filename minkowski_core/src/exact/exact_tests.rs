@@ -86,7 +86,7 @@ fn u_block() -> (TriMesh, Vec<Aabb>) {
 }
 
 /// A square frame: a 3×3×1 slab with the middle voxel removed (a through hole).
-fn frame() -> TriMesh {
+pub(super) fn frame() -> TriMesh {
     voxel_mesh(|x, y, z| (0..3).contains(&x) && (0..3).contains(&y) && z == 0 && !(x == 1 && y == 1), "frame")
 }
 
