@@ -132,6 +132,9 @@ struct Search<'a> {
     upper: f64,
     point: Vec3,
     cells: usize,
+    /// Smallest key of the MIXED cells left unsearched because it was within the tolerance
+    /// of the upper bound at the time.
+    dropped: f64,
 }
 
 impl Search<'_> {
@@ -204,7 +207,12 @@ impl Search<'_> {
                 }
                 let facet = out.iter().map(|&i| self.dist[i as usize]).fold(f64::INFINITY, f64::min);
                 let key = bx.distance_to_point(self.p).max(facet);
-                (key < self.upper - self.tol).then_some(Cell { key, bx, cand: out })
+                if key < self.upper - self.tol {
+                    return Some(Cell { key, bx, cand: out });
+                }
+                // not searched further, but its boundary points still bound the depth
+                self.dropped = self.dropped.min(key);
+                None
             }
         }
     }
@@ -222,7 +230,7 @@ impl Search<'_> {
                 break;
             }
             if self.cells >= max_cells {
-                return (top.key.min(floor), false);
+                return (top.key.min(floor).min(self.dropped), false);
             }
             let cell = heap.pop().expect("peeked");
             if cell.bx.extent().max_element() <= min_cell {
@@ -235,7 +243,7 @@ impl Search<'_> {
                 }
             }
         }
-        let lower = heap.peek().map_or(self.upper, |c| c.key).min(floor).min(self.upper);
+        let lower = heap.peek().map_or(self.upper, |c| c.key).min(floor).min(self.dropped).min(self.upper);
         (lower, self.upper - lower <= self.tol)
     }
 }
@@ -271,7 +279,7 @@ impl ExactSource {
             let d = (point - p).length();
             return Ok(Depth { inside, lower: d, upper: d, point, converged: nearest.is_some(), cells: 0, facets_tried: 0 });
         }
-        let mut s = Search { src: self, p, tol, dist, upper: f64::INFINITY, point: p, cells: 0 };
+        let mut s = Search { src: self, p, tol, dist, upper: f64::INFINITY, point: p, cells: 0, dropped: f64::INFINITY };
         s.box_exit();
         let facets_tried = s.nearest_facets();
         let nearest_facet = s.dist.iter().copied().fold(f64::INFINITY, f64::min).min(s.upper);

@@ -1,4 +1,4 @@
-use super::exact_tests::{box_mesh, frame};
+use super::exact_tests::{box_mesh, frame, voxel_mesh};
 use super::*;
 
 /// The C-obstacle `B ⊕ (−A)` of `B` for `A = [lo, hi]` (a box, reflected as `[−hi, −lo]`).
@@ -35,10 +35,24 @@ fn boxes_take_the_smallest_axis() {
 #[test]
 fn peg_in_a_hole_pushed_into_the_wall() {
     // the frame's hole is [1, 2]²; the peg reaches 0.2 into the wall at x = 2
-    let src = c_obstacle(frame(), [1.6, 1.2, 0.0], [2.2, 1.8, 1.0]);
-    let d = src.try_depth(Vec3::ZERO, 1e-3, 200_000).unwrap();
-    check(&d, &src, 0.2, 1e-3);
-    assert!(d.point.normalize().x < -0.999, "{d:?}");
+    for tol in [1e-2, 1e-3, 1e-5] {
+        let src = c_obstacle(frame(), [1.6, 1.2, 0.0], [2.2, 1.8, 1.0]);
+        let d = src.try_depth(Vec3::ZERO, tol, 200_000).unwrap();
+        check(&d, &src, 0.2, tol);
+        assert!(d.point.normalize().x < -0.999, "{d:?}");
+    }
+}
+
+#[test]
+fn peg_in_a_blind_hole_lower_bound_stays_below_the_depth() {
+    // a 3×3×2 block with a blind hole [1, 2]² × [1, 2]; the peg stands 0.5 above the
+    // hole's floor and reaches 0.15 into the wall at x = 2 (lifting it out takes 0.5)
+    let block = voxel_mesh(|x, y, z| (0..3).contains(&x) && (0..3).contains(&y) && (0..2).contains(&z) && !(x == 1 && y == 1 && z == 1), "block");
+    for tol in [1e-2, 1e-3, 1e-4] {
+        let src = c_obstacle(block.clone(), [1.35, 1.1, 1.5], [2.15, 1.9, 3.0]);
+        let d = src.try_depth(Vec3::ZERO, tol, 200_000).unwrap();
+        check(&d, &src, 0.15, tol);
+    }
 }
 
 #[test]

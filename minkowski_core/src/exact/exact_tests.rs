@@ -24,7 +24,7 @@ pub(super) fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
 
 /// The closed surface of a union of unit voxels `(x, y, z)` in `[-1, 4)³` (those `full`
 /// says), two outward triangles per exposed voxel face, corners shared on the lattice.
-fn voxel_mesh(full: impl Fn(i32, i32, i32) -> bool, what: &str) -> TriMesh {
+pub(super) fn voxel_mesh(full: impl Fn(i32, i32, i32) -> bool, what: &str) -> TriMesh {
     let (mut v, mut f) = (Vec::new(), Vec::new());
     let mut index = std::collections::HashMap::new();
     let mut vid = |p: [i32; 3], v: &mut Vec<Vec3>| -> u32 {
