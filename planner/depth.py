@@ -66,8 +66,10 @@ class PenetrationDepth:
         converged: ``upper - lower <= tolerance`` was reached within the cell budget.
         validated: FCL agrees: ``A`` moved by ``translation`` overlaps ``B`` by at most
             ``tolerance`` (overlapping), or FCL's distance matches (separated).
-        stats: cells classified, facets, seconds, FCL's own distance at the origin
-            (``None`` without ``validate``).
+        stats: cells classified, facets, ``smallest_cells`` (cells of the smallest size
+            the search could not resolve: when not converged, what held the lower bound
+            down), seconds, FCL's own distance at the origin (``None`` without
+            ``validate``).
     """
 
     lower: float
@@ -196,7 +198,8 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
     validated, fcl_distance = (_fcl_check(part_a, part_b, point, separated, distance, width)
                                if validate else (False, None))
     stats = {"cells": int(found["cells"]), "facets": int(pair.stats["facets"]),
-             "facets_tried": int(found["facets_tried"]), "fcl_distance": fcl_distance,
+             "facets_tried": int(found["facets_tried"]),
+             "smallest_cells": int(found["smallest_cells"]), "fcl_distance": fcl_distance,
              "seconds": {"search": float(found["seconds"]),
                          "total": time.perf_counter() - t0}}
     result = PenetrationDepth(lower=lower, upper=upper, direction=direction, translation=point,
@@ -209,9 +212,13 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
 
 def _log(result: PenetrationDepth, a: str, b: str, validate: bool) -> None:
     if not result.converged:
+        stuck = result.stats["smallest_cells"]
+        why = (f"{stuck} cells of the smallest size (tolerance / 8) could not be shown inside "
+               "the C-obstacle; a larger tolerance may help" if stuck else
+               "the cell budget ran out; raise max_cells or the tolerance")
         log.warning("%s into %s: the depth search stopped after %d cells with [%.6g, %.6g], "
-                    "wider than %.3g; raise max_cells or the tolerance", a, b,
-                    result.stats["cells"], result.lower, result.upper, result.tolerance)
+                    "wider than %.3g: %s", a, b, result.stats["cells"], result.lower,
+                    result.upper, result.tolerance, why)
     if validate and not result.validated:
         log.warning("%s into %s: FCL disagrees with the depth result (FCL distance %.6g); "
                     "please report this input", a, b, result.stats["fcl_distance"])

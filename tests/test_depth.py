@@ -163,6 +163,19 @@ def test_random_overlaps_against_sampled_directions(seed):
     assert_separating(a, b, r)
 
 
+@pytest.mark.parametrize("shift", [(0.3, 0.2, 0.1), (0.05, 0.03, 0.02), (-0.6, 0.4, 0.0)])
+def test_deep_nonconvex_overlaps_converge(shift):
+    # a bracket against itself moved a little: facets of the convolution inside the
+    # C-obstacle lie nearer than the depth; witness points show the cells they cross inside
+    a = shapes.l_bracket(length=2.0, height=1.5, thickness=0.5, depth=1.0)
+    b = a.copy()
+    b.apply_translation(shift)
+    r = planner.penetration_depth(a, b)
+    assert_separating(a, b, r)
+    brute = directional_min(a, b, _unit(30, 0), step=0.05, tol=1e-6)
+    assert r.lower <= brute + 1e-9 and r.upper <= brute + r.tolerance + 1e-9
+
+
 @pytest.mark.parametrize("pair", ["convex", "bracket"])
 def test_separated_pairs_give_fcl_distance(pair):
     if pair == "convex":

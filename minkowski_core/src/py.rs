@@ -410,7 +410,7 @@ impl ExactSum {
     /// `max_cells`); outside, the separation distance (nearest facet, exact). A dict:
     /// `inside`, `lower`, `upper`, `point` (inside: proved outside, at distance `upper`;
     /// outside: the nearest point of the sum), `converged`, `cells`, `facets_tried`,
-    /// `seconds`.
+    /// `smallest_cells` (unresolved cells of the smallest size), `seconds`.
     #[pyo3(signature = (point, tolerance, max_cells=1_000_000))]
     fn depth<'py>(&self, py: Python<'py>, point: PyReadonlyArray1<'py, f64>, tolerance: f64, max_cells: usize) -> PyResult<Bound<'py, PyDict>> {
         let p = vec3_of(&point, "point")?;
@@ -425,6 +425,7 @@ impl ExactSum {
         d.set_item("converged", r.converged)?;
         d.set_item("cells", r.cells)?;
         d.set_item("facets_tried", r.facets_tried)?;
+        d.set_item("smallest_cells", r.smallest_cells)?;
         d.set_item("seconds", t0.elapsed().as_secs_f64())?;
         Ok(d)
     }

@@ -13,9 +13,10 @@
 //! is at least the distance to the nearest facet, but interior facets can lie nearer. The
 //! search then goes best first over octree cells around `p`, each keyed by a lower bound
 //! on the distance from `p` to any boundary point in it: the larger of its box distance and
-//! its nearest candidate facet's distance. Cells FULL by the source's exact tests (no facet
-//! and the centre inside, one piece containing the cell, a vertex nested for the whole
-//! cell) hold no point outside and are dropped; an EMPTY cell (no facet, centre outside)
+//! its nearest candidate facet's distance. Cells FULL by exact tests (no facet and the
+//! centre inside, one piece containing the cell, a vertex nested for the whole cell, or a
+//! *witness*: a point `x` of one mesh with the cell, moved by `−x`, inside the other, see
+//! [`super::witness`]) hold no point outside and are dropped; an EMPTY cell (no facet, centre outside)
 //! is outside as a whole, and its nearest point is an upper bound; so is the nearest point
 //! of a MIXED cell that the exact point query puts outside. The lower bound is the
 //! smallest key left, and the search stops when the gap is within the tolerance.
@@ -24,6 +25,7 @@
 
 use super::convolution::Facet;
 use super::verify::octants;
+use super::witness::Witnesses;
 use super::ExactSource;
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
@@ -58,6 +60,10 @@ pub struct Depth {
     pub cells: usize,
     /// Facets the exact point query was asked about, nearest first.
     pub facets_tried: usize,
+    /// MIXED cells of the smallest size (an eighth of the tolerance) left unresolved: no
+    /// exact test showed them inside; when not converged and this is not 0, they held the
+    /// lower bound down.
+    pub smallest_cells: usize,
 }
 
 /// A cell of the search, ordered by its key (smallest first in the heap).
@@ -135,6 +141,10 @@ struct Search<'a> {
     /// Smallest key of the MIXED cells left unsearched because it was within the tolerance
     /// of the upper bound at the time.
     dropped: f64,
+    /// FULL witnesses (built when the cell search starts).
+    witnesses: Option<Witnesses>,
+    /// MIXED cells of the smallest size that no test showed FULL.
+    smallest: usize,
 }
 
 impl Search<'_> {
@@ -182,12 +192,21 @@ impl Search<'_> {
         tried
     }
 
+    /// Whether a witness point keeps every translation of `bx` in the solid.
+    fn witnessed(&mut self, bx: &Aabb, exhaustive: bool) -> bool {
+        let src = self.src;
+        self.witnesses.get_or_insert_with(|| Witnesses::new(src, self.p)).show(src, bx, exhaustive)
+    }
+
     /// Classify `bx` against the parent's records `cand`; the cell to search further, if any.
     fn visit(&mut self, bx: Aabb, cand: &[u32]) -> Option<Cell> {
         self.cells += 1;
         let src = self.src;
         let mut out = Vec::new();
         let mut label = src.classify_near(&bx, cand, false, None, &mut out);
+        if label == Label::Mixed && self.witnessed(&bx, false) {
+            label = Label::Full;
+        }
         if label == Label::Mixed && bx.extent().max_element() <= src.max_piece {
             let nested = (0..src.obstacles.len()).any(|k| src.vertex_nested(k, &bx));
             if nested || src.piece_contains_box(&bx).is_some() {
@@ -234,7 +253,11 @@ impl Search<'_> {
             }
             let cell = heap.pop().expect("peeked");
             if cell.bx.extent().max_element() <= min_cell {
+                if self.witnessed(&cell.bx, true) {
+                    continue; // FULL after all: every witness candidate tried
+                }
                 floor = floor.min(cell.key);
+                self.smallest += 1;
                 continue;
             }
             for child in octants(&cell.bx) {
@@ -277,9 +300,9 @@ impl ExactSource {
             let nearest = (0..dist.len()).min_by(|&i, &j| dist[i].total_cmp(&dist[j]));
             let point = nearest.map_or(p, |i| facet_nearest(&self.facets[i], p));
             let d = (point - p).length();
-            return Ok(Depth { inside, lower: d, upper: d, point, converged: nearest.is_some(), cells: 0, facets_tried: 0 });
+            return Ok(Depth { inside, lower: d, upper: d, point, converged: nearest.is_some(), cells: 0, facets_tried: 0, smallest_cells: 0 });
         }
-        let mut s = Search { src: self, p, tol, dist, upper: f64::INFINITY, point: p, cells: 0, dropped: f64::INFINITY };
+        let mut s = Search { src: self, p, tol, dist, upper: f64::INFINITY, point: p, cells: 0, dropped: f64::INFINITY, witnesses: None, smallest: 0 };
         s.box_exit();
         let facets_tried = s.nearest_facets();
         let nearest_facet = s.dist.iter().copied().fold(f64::INFINITY, f64::min).min(s.upper);
@@ -287,6 +310,6 @@ impl ExactSource {
         // the distances are rounded: the proved bound gives way by their rounding error
         let slack = 1e-12 * (self.aabb.extent().max_element() + p.abs().max_element());
         let lower = (lower.max(nearest_facet.min(s.upper)) - slack).max(0.0);
-        Ok(Depth { inside, lower, upper: s.upper, point: s.point, converged, cells: s.cells, facets_tried })
+        Ok(Depth { inside, lower, upper: s.upper, point: s.point, converged, cells: s.cells, facets_tried, smallest_cells: s.smallest })
     }
 }

@@ -1,4 +1,5 @@
-use super::exact_tests::{box_mesh, frame, voxel_mesh};
+use super::exact_tests::{box_mesh, frame, u_block, voxel_mesh};
+use super::witness::Witnesses;
 use super::*;
 
 /// The C-obstacle `B ⊕ (−A)` of `B` for `A = [lo, hi]` (a box, reflected as `[−hi, −lo]`).
@@ -56,6 +57,34 @@ fn peg_in_a_blind_hole_lower_bound_stays_below_the_depth() {
 }
 
 #[test]
+fn nearly_coincident_frames_converge() {
+    // two frames 0.1 apart in x: every face nearly meets its twin, so interior facets crowd
+    // the origin's neighbourhood; the depth is the frame's thickness (lift it off)
+    let shifted = |m: &TriMesh, d: Vec3| TriMesh::new(m.vertices.iter().map(|v| *v + d).collect(), &m.faces, "shifted").unwrap();
+    let robot = shifted(&frame(), Vec3::new(0.1, 0.0, 0.0));
+    let src = ExactSource::new(vec![frame()], robot.negated(), 0.0, None);
+    let d = src.try_depth(Vec3::ZERO, 1e-3, 200_000).unwrap();
+    check(&d, &src, 1.0, 1e-3);
+    assert!(d.point.normalize().z.abs() > 0.999, "{d:?}");
+}
+
+#[test]
+fn deep_overlaps_of_a_non_convex_part_converge() {
+    // a U block against itself moved a little: interior facets of the convolution lie
+    // nearer than the depth and no single piece covers the cells they cross; witness
+    // points (inside one part, the whole cell of translations keeping them in the other)
+    // show those cells inside
+    let (u, _) = u_block();
+    let shifted = |d: Vec3| TriMesh::new(u.vertices.iter().map(|v| *v + d).collect(), &u.faces, "shifted").unwrap();
+    for d in [Vec3::new(0.3, 0.2, 0.1), Vec3::new(0.05, 0.03, 0.02), Vec3::new(-0.4, 0.1, 0.3)] {
+        let src = ExactSource::new(vec![u.clone()], shifted(d).negated(), 0.0, None);
+        let r = src.try_depth(Vec3::ZERO, 1e-3, 200_000).unwrap();
+        assert!(r.converged && r.upper - r.lower <= 1e-3, "{d}: {r:?}");
+        assert!(!src.contains_point(r.point), "{r:?}");
+    }
+}
+
+#[test]
 fn separated_parts_give_the_exact_distance() {
     // A = [0, 1]³ and B 0.5 beyond it in x and 0.3 in y: distance sqrt(0.34)
     let src = c_obstacle(box_mesh([1.5, 1.3, 0.0], [2.0, 2.0, 1.0]), [0.0; 3], [1.0; 3]);
@@ -78,4 +107,18 @@ fn facet_nearest_is_exact() {
 fn bad_tolerance_is_refused() {
     let src = c_obstacle(box_mesh([0.5; 3], [2.0; 3]), [0.0; 3], [1.0; 3]);
     assert!(matches!(src.try_depth(Vec3::ZERO, 0.0, 10), Err(CoreError::InvalidParameter { .. })));
+}
+
+#[test]
+fn witnesses_show_cells_inside_only() {
+    // C-obstacle of [0, 2]³ for the unit cube: the box [-1, 2]³ of translations
+    let src = c_obstacle(box_mesh([0.0; 3], [2.0; 3]), [0.0; 3], [1.0; 3]);
+    let mut w = Witnesses::new(&src, Vec3::splat(0.5));
+    let cube = |c: f64, r: f64| Aabb::new(Vec3::splat(c - r), Vec3::splat(c + r));
+    assert!(w.show(&src, &cube(0.5, 0.4), false));
+    assert!(w.show(&src, &cube(1.0, 0.9), true));
+    for exhaustive in [false, true] {
+        assert!(!w.show(&src, &cube(2.2, 0.1), exhaustive), "outside the sum");
+        assert!(!w.show(&src, &cube(1.9, 0.2), exhaustive), "across its boundary");
+    }
 }

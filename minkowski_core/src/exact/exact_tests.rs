@@ -75,7 +75,7 @@ pub(super) fn voxel_mesh(full: impl Fn(i32, i32, i32) -> bool, what: &str) -> Tr
 
 /// A U-shaped block (a 3×1×2 bar with a 1×1×1 notch cut from the top middle), as one
 /// closed mesh, and its three convex boxes.
-fn u_block() -> (TriMesh, Vec<Aabb>) {
+pub(super) fn u_block() -> (TriMesh, Vec<Aabb>) {
     let full = |x: i32, y: i32, z: i32| (0..3).contains(&x) && y == 0 && (0..2).contains(&z) && !(x == 1 && z == 1);
     let boxes = vec![
         Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0)),

@@ -47,6 +47,7 @@ mod verify;
 pub mod winding;
 #[cfg(test)]
 mod winding_tests;
+mod witness;
 
 pub use convolution::{convolution, convolution_within, Facet};
 #[cfg(test)]
