@@ -78,6 +78,11 @@ def nonconvex_cases():
         shapes.box(size=(1.0, 1.0, 1.0), center=(2.0, 0.0, 0.3))
     yield "slotted bar vs peg", shapes.slotted_bar(), shapes.box(
         size=(0.3, 0.3, 1.0), center=(-0.5, 0.05, 0.2))
+    for shift in ((0.3, 0.2, 0.1), (0.05, 0.03, 0.02)):
+        yield f"L bracket vs itself + {shift}", bracket, bracket.copy().apply_translation(shift)
+    part = shapes.nonconvex_part_2k()
+    yield "2k-triangle part vs itself + (0.5, 0.3, 0.2)", part, \
+        part.copy().apply_translation((0.5, 0.3, 0.2))
 
 
 def _epa(a, b, solver) -> tuple[float, float]:
