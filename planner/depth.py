@@ -41,7 +41,7 @@ import trimesh
 
 from .errors import InvalidMeshError, InvalidParameterError
 from .problem import Part
-from .sources import ExactSource, SourceSettings
+from .sources import ExactSource, Source, SourceSettings
 from .tolerances import tol
 
 __all__ = ["PenetrationDepth", "penetration_depth"]
@@ -60,7 +60,8 @@ class PenetrationDepth:
             they overlap, towards ``B`` when separated).
         translation: ``(3,)`` the translation of ``A``: overlapping, a separating one of
             length ``upper``; separated, the shortest one that brings them into contact.
-        separated: the parts do not touch (then ``distance > 0``).
+        separated: the parts do not touch (then ``distance > 0``); touching parts are in
+            contact (depth ``0``: ``lower == 0``, ``upper <= tolerance``).
         distance: the separation distance (``0`` when they touch or overlap).
         tolerance: the interval width asked for (absolute).
         converged: ``upper - lower <= tolerance`` was reached within the cell budget.
@@ -149,7 +150,7 @@ def _fcl_check(a: Part, b: Part, translation: np.ndarray, separated: bool, dista
 
 def penetration_depth(a, b, *, tolerance: float | None = None,
                       max_cells: int | None = None, validate: bool = True,
-                      source: ExactSource | None = None) -> PenetrationDepth:
+                      source: Source | None = None) -> PenetrationDepth:
     """The translational penetration depth of solid ``a`` into solid ``b``.
 
     The length of the shortest translation ``t`` with ``(A + t) ∩ B = ∅`` (interiors), as
@@ -165,7 +166,8 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
             search stopped by it returns a wider, still proved, interval
             (``converged=False``, with a warning).
         validate: check the answer with FCL (see :attr:`PenetrationDepth.validated`).
-        source: an :class:`~planner.sources.ExactSource` whose checked meshes to reuse.
+        source: an exact :class:`~planner.sources.Source` whose checked meshes to reuse
+            (another kind is refused).
 
     Returns:
         :class:`PenetrationDepth`.
@@ -182,12 +184,23 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
     cells = tol.depth_max_cells if max_cells is None else int(max_cells)
     if cells < 1:
         raise InvalidParameterError(f"max_cells = {max_cells!r}: must be >= 1")
+    if source is not None and source.kind != "exact":
+        raise InvalidParameterError(f"source: the depth is computed on the exact source, got "
+                                    f"the {source.kind} source")
     source = source or ExactSource(SourceSettings(exact=True), "penetration depth")
     pair = source.pair(part_b, part_a, mirror_b=True)  # B ⊕ (−A)
     bounds = np.vstack([part_a.mesh.bounds, part_b.mesh.bounds])
     size = float(np.linalg.norm(bounds.max(axis=0) - bounds.min(axis=0)))
     width = _tolerance(tolerance, size)
     found = pair.native.depth(np.zeros(3), width, max_cells=cells)
+    result = _result(found, (part_a, part_b), int(pair.stats["facets"]), width, validate, t0)
+    _log(result, part_a.name, part_b.name, validate)
+    return result
+
+
+def _result(found: dict, parts: tuple[Part, Part], facets: int, width: float, validate: bool,
+            t0: float) -> PenetrationDepth:
+    """The core's answer as a :class:`PenetrationDepth`, checked with FCL (``validate``)."""
     point = np.asarray(found["point"], dtype=np.float64)
     length = float(np.linalg.norm(point))
     direction = point / length if length > 0.0 else np.zeros(3)
@@ -195,19 +208,17 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
     distance = float(found["upper"]) if separated else 0.0
     lower, upper = ((-distance, -distance) if separated
                     else (float(found["lower"]), float(found["upper"])))
-    validated, fcl_distance = (_fcl_check(part_a, part_b, point, separated, distance, width)
+    validated, fcl_distance = (_fcl_check(*parts, point, separated, distance, width)
                                if validate else (False, None))
-    stats = {"cells": int(found["cells"]), "facets": int(pair.stats["facets"]),
+    stats = {"cells": int(found["cells"]), "facets": facets,
              "facets_tried": int(found["facets_tried"]),
              "smallest_cells": int(found["smallest_cells"]), "fcl_distance": fcl_distance,
              "seconds": {"search": float(found["seconds"]),
                          "total": time.perf_counter() - t0}}
-    result = PenetrationDepth(lower=lower, upper=upper, direction=direction, translation=point,
-                              separated=separated, distance=distance, tolerance=width,
-                              converged=bool(found["converged"]), validated=validated,
-                              stats=stats)
-    _log(result, part_a.name, part_b.name, validate)
-    return result
+    return PenetrationDepth(lower=lower, upper=upper, direction=direction, translation=point,
+                            separated=separated, distance=distance, tolerance=width,
+                            converged=bool(found["converged"]), validated=validated,
+                            stats=stats)
 
 
 def _log(result: PenetrationDepth, a: str, b: str, validate: bool) -> None:

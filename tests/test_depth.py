@@ -195,6 +195,16 @@ def test_separated_pairs_give_fcl_distance(pair):
     assert not FclChecker(a, [b]).collides(r.translation * (1 - 1e-6))
 
 
+@pytest.mark.parametrize("center", [(1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (1.0, 1.0, 1.0)])
+def test_touching_parts_have_zero_depth(center):
+    # face, edge and corner contact: in contact (closed solids), not separated
+    a, b = shapes.box(), shapes.box(center=center)
+    r = planner.penetration_depth(a, b)
+    assert not r.separated and r.distance == 0.0
+    assert r.lower == 0.0 and 0.0 < r.upper <= r.tolerance
+    assert_separating(a, b, r)
+
+
 def test_bad_input_is_refused():
     a = shapes.box()
     with pytest.raises(InvalidParameterError, match="tolerance"):
