@@ -272,6 +272,30 @@ impl Search<'_> {
 }
 
 impl ExactSource {
+    /// [`ExactSource::try_depth`] for a source it accepts.
+    ///
+    /// ```
+    /// use minkowski_core::{ExactSource, TriMesh, Vec3};
+    ///
+    /// // the box [lo, hi] as 12 outward triangles
+    /// let cube = |lo: f64, hi: f64| {
+    ///     let v = (0..8).map(|k| Vec3::new([lo, hi][k & 1], [lo, hi][k >> 1 & 1], [lo, hi][k >> 2 & 1])).collect();
+    ///     let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    ///     let f: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+    ///     TriMesh::new(v, &f, "cube").unwrap()
+    /// };
+    /// // the C-obstacle of [0.25, 1.25]³ for the robot [0, 1]³ (reflected: [-1, 0]³)
+    /// let co = ExactSource::new(vec![cube(0.25, 1.25)], cube(-1.0, 0.0), 0.0, None);
+    /// let d = co.depth(Vec3::ZERO, 1e-6, 10_000);
+    /// assert!(d.inside && d.lower <= 0.75 && 0.75 <= d.upper && d.upper - d.lower <= 1e-6);
+    /// ```
+    ///
+    /// # Panics
+    /// When [`ExactSource::try_depth`] refuses the source or the parameters.
+    pub fn depth(&self, p: Vec3, tol: f64, max_cells: usize) -> Depth {
+        self.try_depth(p, tol, max_cells).expect("a depth query the source accepts")
+    }
+
     /// The distance from `p` to the boundary of the solid as a proved interval (see the
     /// module documentation): inside, the penetration depth, to within `tol` unless the
     /// search runs out of `max_cells` cells; outside, the separation distance, exact up to
