@@ -39,6 +39,10 @@ __all__ = ["parse_assembly", "read_assembly"]
 
 log = logging.getLogger(__name__)
 
+# cells the depth of an overlap may search (an error message's detail: kept cheap; a search
+# cut short still gives a proved, wider interval)
+_DEPTH_CELLS = 100_000
+
 
 TOP_LEVEL_KEYS = ("name", "units", "parts", "base", "contact_tolerance", "planner")
 
@@ -142,7 +146,7 @@ def _overlap_depth(part: Part, other: Part) -> dict | None:
     from planner.errors import MinkplanError  # noqa: PLC0415
 
     try:
-        result = penetration_depth(part, other, validate=False)
+        result = penetration_depth(part, other, validate=False, max_cells=_DEPTH_CELLS)
     except MinkplanError as exc:
         log.warning("penetration depth of %s into %s not computed: %s", part.name,
                     other.name, exc)
