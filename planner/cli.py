@@ -266,8 +266,10 @@ def _cmd_depth(args) -> int:
     if r.separated:
         what = f"separated: distance {r.distance:.9g} along ({along})"
     else:
+        stuck = r.stats["smallest_cells"]
+        why = (f"{stuck} smallest cells unresolved" if stuck else "the cell budget ran out")
         what = (f"penetration depth in [{r.lower:.9g}, {r.upper:.9g}] along ({along})"
-                + ("" if r.converged else " (not converged: the cell budget ran out)"))
+                + ("" if r.converged else f" (wider than the tolerance: {why})"))
     sys.stdout.write(f"{args.a} into {args.b}: {what}; {checked}; {r.stats['cells']} cells, "
                      f"{r.stats['seconds']['total']:.3f} s\n")
     return 0

@@ -117,7 +117,8 @@ def _as_part(obj, role: str) -> Part:
     if not isinstance(obj, trimesh.Trimesh):
         raise InvalidMeshError(f"{role}: expected a trimesh.Trimesh, (vertices, faces) or a "
                                f"mesh file, got {type(obj).__name__}")
-    return Part(role, obj, f"operand {role}")
+    name = obj.metadata.get("name")
+    return Part(f"{role} ({name})" if name else role, obj, f"operand {role}")
 
 
 def _tolerance(tolerance, size: float) -> float:
