@@ -6,6 +6,7 @@ Public API:
   :func:`load_scenario` -> :class:`Scenario`; :func:`plan` -> :class:`PlanOutcome`
 - :func:`load_assembly`, :func:`plan_assembly` -> :class:`AssemblyResult`
 - :func:`minkowski_sum`, :func:`c_obstacle` -> :class:`MinkowskiResult`
+- :func:`penetration_depth` -> :class:`PenetrationDepth` (proved interval, direction)
 - :func:`choose_source` -> a C-obstacle :class:`Source` (exact or decomposition) that
   every one of those takes
 - :func:`decompose` -> :class:`Decomposition` (convex pieces, cached)
@@ -30,6 +31,7 @@ __version__ = _minkowski_core.__version__
 _EXPORTS = {
     "AssemblyResult": "assembly", "plan_assembly": "assembly",
     "Decomposition": "decompose", "decompose": "decompose",
+    "PenetrationDepth": "depth", "penetration_depth": "depth",
     "GeometryError": "errors", "InvalidMeshError": "errors",
     "InvalidParameterError": "errors", "MinkplanError": "errors",
     "ResourceLimitError": "errors", "ScenarioError": "errors",
@@ -65,6 +67,7 @@ def __getattr__(name: str):
 if TYPE_CHECKING:
     from .assembly import AssemblyResult, plan_assembly
     from .decompose import Decomposition, decompose
+    from .depth import PenetrationDepth, penetration_depth
     from .errors import (
         GeometryError,
         InvalidMeshError,
@@ -92,6 +95,7 @@ __all__ = [
     "MinkowskiResult",
     "MinkplanError",
     "Part",
+    "PenetrationDepth",
     "PlanOutcome",
     "PlanStatus",
     "PlannerSettings",
@@ -110,6 +114,7 @@ __all__ = [
     "load_scenario",
     "minkowski_sum",
     "mirror",
+    "penetration_depth",
     "plan",
     "plan_assembly",
     "repair_mesh",

@@ -122,6 +122,11 @@ class ExactSum:
     def surface(
         self, eps: float, max_cells: int = 8000000, max_refinements: int = 2, simplify: bool = True
     ) -> dict[str, Any]: ...
+    def depth(
+        self, point: npt.NDArray[np.float64], tolerance: float, max_cells: int = 1000000
+    ) -> dict[str, Any]:
+        """The distance from ``point`` to the sum's boundary as a proved interval (inside:
+        penetration depth; outside: separation distance)."""
 
 @final
 class CSpace:

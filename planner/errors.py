@@ -87,19 +87,24 @@ class ScenarioError(MinkplanError, ValueError):
         field: dotted name of the offending field (``"robot.mesh"``), or ``None`` when the
             problem is not tied to one field (e.g. a YAML syntax error).
         line: 1-based line number in the YAML file, or ``None`` when unknown.
+        details: what a report should say about it beyond the message (JSON values), e.g.
+            the penetration depth of parts that overlap in an assembled pose; or ``None``.
     """
 
     def __init__(
-        self, message: object = "", *, field: str | None = None, line: int | None = None
+        self, message: object = "", *, field: str | None = None, line: int | None = None,
+        details: dict | None = None,
     ) -> None:
         super().__init__(message)
         self.field = field
         self.line = line
+        self.details = details
 
-    def __reduce__(self):  # keep field and line through pickling (multiprocessing)
-        return (_rebuild_scenario_error, (type(self), self.args, self.field, self.line))
+    def __reduce__(self):  # keep field, line and details through pickling (multiprocessing)
+        return (_rebuild_scenario_error,
+                (type(self), self.args, self.field, self.line, self.details))
 
 
-def _rebuild_scenario_error(cls, args, field, line):
-    error = cls(*args, field=field, line=line)
+def _rebuild_scenario_error(cls, args, field, line, details=None):
+    error = cls(*args, field=field, line=line, details=details)
     return error

@@ -62,6 +62,9 @@ class Tolerances:
             world's size is flat (it has no interior).
         planar_rel: a boundary loop whose points leave their best-fit plane by at most
             ``planar_rel`` times the loop's size is planar.
+        depth_rel: default width of a penetration-depth interval
+            (:func:`~planner.depth.penetration_depth`) as a fraction of the pair's size.
+        depth_max_cells: budget of cells one penetration-depth search may classify.
     """
 
     eps_rel: float = 0.005
@@ -80,6 +83,8 @@ class Tolerances:
     quaternion_norm: float = 1e-3
     flat_rel: float = 1e-9
     planar_rel: float = 1e-6
+    depth_rel: float = 1e-3
+    depth_max_cells: int = 1_000_000
 
     def __post_init__(self) -> None:
         for field in (
@@ -96,13 +101,14 @@ class Tolerances:
             "quaternion_norm",
             "flat_rel",
             "planar_rel",
+            "depth_rel",
         ):
             value = getattr(self, field)
             if not (np.isfinite(value) and value > 0):
                 raise InvalidParameterError(
                     f"Tolerances.{field} = {value!r}: must be a finite number > 0"
                 )
-        for field in ("max_cells", "excess_samples"):
+        for field in ("max_cells", "excess_samples", "depth_max_cells"):
             value = getattr(self, field)
             if int(value) != value or value < 1:
                 raise InvalidParameterError(

@@ -405,6 +405,31 @@ impl ExactSum {
         Ok(self.inner.segment_intervals(vec3_of(&a, "a")?, vec3_of(&b, "b")?))
     }
 
+    /// The distance from `point` (3,) to the sum's boundary as a proved interval: inside,
+    /// the penetration depth to within `tolerance` (best first over cells, at most
+    /// `max_cells`); outside, the separation distance (nearest facet, exact). A dict:
+    /// `inside`, `lower`, `upper`, `point` (inside: proved outside, at distance `upper`;
+    /// outside: the nearest point of the sum), `converged`, `cells`, `facets_tried`,
+    /// `smallest_cells` (unresolved cells of the smallest size), `seconds`.
+    #[pyo3(signature = (point, tolerance, max_cells=1_000_000))]
+    fn depth<'py>(&self, py: Python<'py>, point: PyReadonlyArray1<'py, f64>, tolerance: f64, max_cells: usize) -> PyResult<Bound<'py, PyDict>> {
+        let p = vec3_of(&point, "point")?;
+        let src = self.inner.clone();
+        let t0 = Instant::now();
+        let r = py.detach(move || src.try_depth(p, tolerance, max_cells))?;
+        let d = PyDict::new(py);
+        d.set_item("inside", r.inside)?;
+        d.set_item("lower", r.lower)?;
+        d.set_item("upper", r.upper)?;
+        d.set_item("point", r.point.to_array().to_vec().into_pyarray(py))?;
+        d.set_item("converged", r.converged)?;
+        d.set_item("cells", r.cells)?;
+        d.set_item("facets_tried", r.facets_tried)?;
+        d.set_item("smallest_cells", r.smallest_cells)?;
+        d.set_item("seconds", t0.elapsed().as_secs_f64())?;
+        Ok(d)
+    }
+
     /// The closed surface of the sum at resolution `eps` (as `union_surface`).
     #[pyo3(signature = (eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
     fn surface<'py>(&self, py: Python<'py>, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {

@@ -4,12 +4,14 @@ Entry points: :func:`read_assembly` (a file) and :func:`parse_assembly` (text or
 mapping), both to a validated :class:`~planner.problem.Assembly`: parts read like a
 scenario's obstacles (:mod:`planner.io.parts`), posed at their assembled pose, the
 contact tolerance given or defaulted, and the assembled pose checked for overlaps beyond
-it (FCL). Errors as for scenarios: ``"<file>:<line>: <field>: <problem>"``.
+it (FCL; an overlap is reported with its penetration depth, also in the error's
+``details`` for ``report.json``). Errors as for scenarios: ``"<file>:<line>: <field>: <problem>"``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import os
 from collections.abc import Mapping
@@ -18,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.problem import DEFAULT_CONTACT_REL, Assembly
+from planner.problem import DEFAULT_CONTACT_REL, Assembly, Part
 from planner.validation import FclChecker
 
 from .fields import (
@@ -34,6 +36,12 @@ from .fields import (
 from .parts import OBSTACLE_KEYS, assign_names, build_part, object_spec
 
 __all__ = ["parse_assembly", "read_assembly"]
+
+log = logging.getLogger(__name__)
+
+# cells the depth of an overlap may search (an error message's detail: kept cheap; a search
+# cut short still gives a proved, wider interval)
+_DEPTH_CELLS = 100_000
 
 
 TOP_LEVEL_KEYS = ("name", "units", "parts", "base", "contact_tolerance", "planner")
@@ -98,18 +106,51 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> A
         delta = DEFAULT_CONTACT_REL * float(np.linalg.norm(bounds[:, 1].max(axis=0)
                                                            - bounds[:, 0].min(axis=0)))
     settings = dataclasses.replace(settings, contact_tolerance=delta)
-    # The assembled pose must be valid: no part overlaps another beyond the tolerance.
+    _check_assembled_pose(parts, delta)
+    return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
+                    settings=settings, path=path)
+
+
+def _check_assembled_pose(parts: list[Part], delta: float) -> None:
+    """The assembled pose must be valid: no part overlaps another beyond the tolerance. An
+    overlap is reported with its penetration depth (computed for that pair only)."""
     for i, part in enumerate(parts):
         others = parts[i + 1:]
         if not others:
             continue
         checker = FclChecker.for_parts(part, others, contact_tolerance=delta)
-        if not checker.is_valid(np.zeros(3)):
-            hit = checker.colliding_obstacle(np.zeros(3))
-            other = hit[0] if hit else "another part"
-            raise field_error(f"parts[{i}]", f"part '{part.name}' collides with '{other}' in "
-                                        f"the assembled pose (overlap beyond contact "
-                                        f"tolerance {delta:g}, or clamped between faces "
-                                        f"on opposite sides)")
-    return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
-                    settings=settings, path=path)
+        if checker.is_valid(np.zeros(3)):
+            continue
+        hit = checker.colliding_obstacle(np.zeros(3))
+        other = next((p for p in others if hit and p.name == hit[0]), None)
+        name = other.name if other is not None else "another part"
+        depth = _overlap_depth(part, other) if other is not None else None
+        said = "" if depth is None else (
+            f"; penetration depth in [{depth['lower']:.6g}, {depth['upper']:.6g}] along "
+            f"({', '.join(f'{x:.4g}' for x in depth['direction'])})")
+        error = field_error(f"parts[{i}]", f"part '{part.name}' collides with '{name}' in "
+                                           f"the assembled pose (overlap beyond contact "
+                                           f"tolerance {delta:g}, or clamped between faces "
+                                           f"on opposite sides){said}")
+        error.details = {"overlap": {"part": part.name, "other": name,
+                                     "contact_tolerance": delta, "penetration_depth": depth}}
+        raise error
+
+
+def _overlap_depth(part: Part, other: Part) -> dict | None:
+    """The penetration depth of ``part`` into ``other`` (JSON values), or ``None`` when it
+    is not defined (a surface) or cannot be computed."""
+    if not (part.solid and other.solid):
+        return None
+    from planner.depth import penetration_depth  # noqa: PLC0415
+    from planner.errors import MinkplanError  # noqa: PLC0415
+
+    try:
+        result = penetration_depth(part, other, validate=False, max_cells=_DEPTH_CELLS)
+    except MinkplanError as exc:
+        log.warning("penetration depth of %s into %s not computed: %s", part.name,
+                    other.name, exc)
+        return None
+    out = result.describe()
+    out.pop("validated")
+    return out

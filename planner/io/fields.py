@@ -203,7 +203,8 @@ class Document:
         """The same error with ``"<file>:<line>: "`` in front and ``line`` set."""
         line = error.line if error.line is not None else self.line_of(error.field)
         where = self.label if line is None else f"{self.label}:{line}"
-        return ScenarioError(f"{where}: {error}", field=error.field, line=line)
+        return ScenarioError(f"{where}: {error}", field=error.field, line=line,
+                             details=error.details)
 
 
 def _record_lines(node: yaml.Node, field: str, lines: dict[str, int], document: Document,

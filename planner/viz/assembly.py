@@ -32,8 +32,8 @@ def scene_for_assembly(result: AssemblyResult, *, seconds_per_part: float = 3.0)
     scene = Scene(f"{result.assembly.name}: {result.message}")
     steps = {name: s for s in result.removal for name in s.parts}
     turn = {label: i for i, label in enumerate(result.order)}
-    for step in result.removal:  # a group's members move in its turn
-        turn.update({name: turn.get(step.part, 0) for name in step.members})
+    for group in result.removal:  # a group's members move in its turn
+        turn.update({name: turn.get(group.part, 0) for name in group.members})
     for k, part in enumerate(result.assembly.parts):
         step = steps.get(part.name)
         if part.name in result.interlocked:

@@ -24,7 +24,7 @@ pub(super) fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
 
 /// The closed surface of a union of unit voxels `(x, y, z)` in `[-1, 4)³` (those `full`
 /// says), two outward triangles per exposed voxel face, corners shared on the lattice.
-fn voxel_mesh(full: impl Fn(i32, i32, i32) -> bool, what: &str) -> TriMesh {
+pub(super) fn voxel_mesh(full: impl Fn(i32, i32, i32) -> bool, what: &str) -> TriMesh {
     let (mut v, mut f) = (Vec::new(), Vec::new());
     let mut index = std::collections::HashMap::new();
     let mut vid = |p: [i32; 3], v: &mut Vec<Vec3>| -> u32 {
@@ -75,7 +75,7 @@ fn voxel_mesh(full: impl Fn(i32, i32, i32) -> bool, what: &str) -> TriMesh {
 
 /// A U-shaped block (a 3×1×2 bar with a 1×1×1 notch cut from the top middle), as one
 /// closed mesh, and its three convex boxes.
-fn u_block() -> (TriMesh, Vec<Aabb>) {
+pub(super) fn u_block() -> (TriMesh, Vec<Aabb>) {
     let full = |x: i32, y: i32, z: i32| (0..3).contains(&x) && y == 0 && (0..2).contains(&z) && !(x == 1 && z == 1);
     let boxes = vec![
         Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0)),
@@ -86,7 +86,7 @@ fn u_block() -> (TriMesh, Vec<Aabb>) {
 }
 
 /// A square frame: a 3×3×1 slab with the middle voxel removed (a through hole).
-fn frame() -> TriMesh {
+pub(super) fn frame() -> TriMesh {
     voxel_mesh(|x, y, z| (0..3).contains(&x) && (0..3).contains(&y) && z == 0 && !(x == 1 && y == 1), "frame")
 }
 

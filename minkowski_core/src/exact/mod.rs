@@ -28,10 +28,14 @@
 //! one of its pieces is a boundary candidate, kept per cell as pairs of BVH nodes that are
 //! split as the cells shrink (see `root_records`), so no `n·m` list is built.
 //!
-//! Entry points: [`ExactSource`], [`TriMesh`], [`ExactSource::verify_box`].
+//! Entry points: [`ExactSource`], [`TriMesh`], [`ExactSource::verify_box`],
+//! [`ExactSource::try_depth`] (penetration depth and separation distance).
 
 mod convolution;
 pub mod crossing;
+mod depth;
+#[cfg(test)]
+mod depth_tests;
 #[cfg(test)]
 mod exact_tests;
 mod gauss;
@@ -43,10 +47,12 @@ mod verify;
 pub mod winding;
 #[cfg(test)]
 mod winding_tests;
+mod witness;
 
 pub use convolution::{convolution, convolution_within, Facet};
 #[cfg(test)]
 use convolution::{convolution_scan, planar_regions};
+pub use depth::{facet_nearest, Depth};
 pub use mesh::{MeshNode, Tri, TriMesh};
 pub use piece::{pair_contains_point, Piece};
 

@@ -76,7 +76,7 @@ fn sample<'a>(anchors: &'a [Vec3], vertices: &'a [Vec3]) -> impl Iterator<Item =
 }
 
 /// The eight octants of a box.
-fn octants(b: &Aabb) -> impl Iterator<Item = Aabb> + '_ {
+pub(super) fn octants(b: &Aabb) -> impl Iterator<Item = Aabb> + '_ {
     let c = b.center();
     (0..8).map(move |i| {
         let pick = |bit: usize, axis: usize| if i >> bit & 1 == 0 { (b.min[axis], c[axis]) } else { (c[axis], b.max[axis]) };

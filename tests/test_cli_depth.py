@@ -1,0 +1,88 @@
+"""`minkplan depth` (one line or JSON, exit 0; bad input one line, exit 2) and the depth
+of an assembled-pose overlap in `minkplan assemble`'s report.json."""
+
+import json
+
+import pytest
+import shapes
+import trimesh
+
+from planner.cli import main
+
+
+def _exit_code(argv) -> int:
+    """``main``'s exit code, also when argparse exits (a bad option value)."""
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return int(exc.code)
+
+
+@pytest.fixture
+def pair(tmp_path):
+    a = tmp_path / "a.stl"
+    b = tmp_path / "b.stl"
+    shapes.box().export(a)
+    shapes.box(center=(0.0, 0.75, 0.0)).export(b)  # overlap 0.25 along y
+    return a, b
+
+
+def test_depth_prints_one_line(pair, capsys):
+    assert main(["depth", str(pair[0]), str(pair[1])]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    assert len(out) == 1
+    assert "penetration depth in [0.2" in out[0] and "along (0, -1, 0)" in out[0]
+    assert "FCL agrees" in out[0]
+
+
+def test_depth_json(pair, capsys):
+    assert main(["depth", str(pair[0]), str(pair[1]), "--json", "--tolerance", "1e-5"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    # the STL stores float32: 0.25 up to its rounding
+    assert r["lower"] <= 0.25 + 1e-7 and 0.25 - 1e-7 <= r["upper"] <= r["lower"] + 1e-5
+    assert r["direction"] == pytest.approx([0.0, -1.0, 0.0])
+    assert r["separated"] is False and r["validated"] is True and r["converged"] is True
+
+
+def test_depth_of_separated_meshes(tmp_path, capsys):
+    a, b = tmp_path / "a.stl", tmp_path / "b.stl"
+    shapes.box().export(a)
+    shapes.box(center=(2.0, 0.0, 0.0)).export(b)
+    assert main(["depth", str(a), str(b), "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["separated"] is True and r["distance"] == pytest.approx(1.0)
+    assert r["lower"] == r["upper"] == -r["distance"]
+
+
+def test_depth_bad_input_is_one_line_exit_2(pair, tmp_path, capsys):
+    open_box = tmp_path / "open.stl"
+    box = shapes.box()
+    trimesh.Trimesh(box.vertices, box.faces[:-2], process=False).export(open_box)
+    cases = [
+        ["depth", str(pair[0]), str(tmp_path / "missing.stl")],
+        ["depth", str(pair[0]), str(tmp_path)],
+        ["depth", str(pair[0]), str(pair[1]), "--tolerance", "-1"],
+        ["depth", str(pair[0]), str(pair[1]), "--tolerance", "x"],
+        ["depth", str(open_box), str(pair[1])],
+    ]
+    for argv in cases:
+        assert _exit_code(argv) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("minkplan: error:"), (argv, err)
+        assert "Traceback" not in err[0]
+
+
+def test_assemble_overlap_reports_depth(tmp_path, capsys):
+    asm = tmp_path / "overlap.yaml"
+    asm.write_text("parts:\n  - {name: a, box: [1, 1, 1]}\n"
+                   "  - {name: b, box: [1, 1, 1], position: [0, 0, 0.6]}\n")
+    out = tmp_path / "out"
+    assert main(["assemble", str(asm), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "penetration depth in [" in err[0] and "(0, 0, -1)" in err[0]
+    report = json.loads((out / "report.json").read_text())
+    assert report["status"] == "invalid_input"
+    depth = report["overlap"]["penetration_depth"]
+    assert report["overlap"]["part"] == "a" and report["overlap"]["other"] == "b"
+    assert depth["lower"] <= 0.4 <= depth["upper"]
+    assert depth["direction"] == pytest.approx([0.0, 0.0, -1.0])
