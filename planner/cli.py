@@ -249,8 +249,11 @@ def _unwritable_folder(out: Path) -> str | None:
     """Why the output folder ``out`` cannot be written (checked before the work)."""
     from planner.output import unwritable
 
-    if out.exists() and not out.is_dir():
-        return "exists and is not a directory"
+    try:
+        if out.exists() and not out.is_dir():
+            return "exists and is not a directory"
+    except OSError as exc:  # a name over the file system's limit
+        return f"cannot be used ({exc.strerror or exc})"
     return unwritable(out / "path.json")
 
 
@@ -444,13 +447,14 @@ def _cmd_assemble(args) -> int:
     from planner.assembly import plan_assembly
     from planner.errors import ScenarioError
     from planner.io import load_assembly
-    from planner.output import write_json
+    from planner.output import schema_id, write_json
 
     try:
         assembly = load_assembly(args.assembly)
     except ScenarioError as exc:
         if exc.details:  # e.g. an overlap in the assembled pose, with its penetration depth
-            write_json(out / "report.json", {"status": "invalid_input", "error": str(exc),
+            write_json(out / "report.json", {"schema": schema_id("assembly_error"),
+                                             "status": "invalid_input", "error": str(exc),
                                              **exc.details})
         raise
     result = plan_assembly(assembly, cache_dir=args.cache_dir,

@@ -128,7 +128,9 @@ def _estimate_cells(box: np.ndarray, eps: float) -> float:
     ext = np.maximum(box[1] - box[0], 0.0)
     area = 2.0 * (ext[0] * ext[1] + ext[1] * ext[2] + ext[0] * ext[2])
     h = eps / _GRID_BOUND_PER_H
-    return _CELLS_PER_AREA * area / (h * h)
+    if h * h == 0.0:  # an eps so small its square underflows: no grid fits
+        return math.inf
+    return float(_CELLS_PER_AREA * area / (h * h))
 
 
 def _grid_eps(box: np.ndarray, diag: float, eps, max_cells: int) -> float:

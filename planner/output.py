@@ -57,6 +57,13 @@ def jsonable(value: Any) -> Any:
 def unwritable(path: Path) -> str | None:
     """Why a file cannot be written at ``path`` (its missing folders would be created), or
     ``None``: checked before the work, so a bad path costs nothing."""
+    try:
+        return _unwritable(path)
+    except OSError as exc:  # a name over the file system's limit, a loop of links...
+        return f"cannot be used ({exc.strerror or exc})"
+
+
+def _unwritable(path: Path) -> str | None:
     if path.is_dir():
         return "is a directory"
     for parent in path.parents:

@@ -57,6 +57,17 @@ def test_assembly_files_validate(tmp_path, assembly):
     _valid("assembly_report", _read(tmp_path / "report.json"))
 
 
+def test_the_report_of_an_overlapping_assembly_validates(tmp_path):
+    block = tmp_path / "overlap.yaml"
+    block.write_text("parts:\n  - {name: a, box: [2, 2, 2]}\n"
+                     "  - {name: b, box: [2, 2, 2], position: [1, 0, 0]}\n")
+    assert main(["assemble", str(block), "--out", str(tmp_path / "out"),
+                 "--no-progress"]) == 2
+    report = _read(tmp_path / "out" / "report.json")
+    _valid("assembly_error", report)
+    assert report["overlap"]["penetration_depth"] is not None
+
+
 def test_minkowski_stats_validate(tmp_path):
     block = ROOT / "scenarios" / "_schema_examples" / "block.stl"
     peg = ROOT / "scenarios" / "_schema_examples" / "peg.stl"
@@ -86,7 +97,7 @@ def test_a_file_that_breaks_its_schema_is_caught(tmp_path):
 def test_every_schema_names_its_file():
     names = {p.name.removesuffix(".schema.json") for p in SCHEMAS.glob("*.schema.json")}
     assert names == {"path", "report", "certificate", "sequence", "assembly_report",
-                     "minkowski_stats", "batch_record"}
+                     "assembly_error", "minkowski_stats", "batch_record"}
     for name in names:
         schema = json.loads((SCHEMAS / f"{name}.schema.json").read_text())
         assert schema["properties"]["schema"]["const"] == f"minkplan/{name}/1"

@@ -236,12 +236,44 @@ def _record_lines(node: yaml.Node, field: str, lines: dict[str, int], document: 
     stack.discard(id(node))
 
 
+MAX_YAML_VALUES = 200_000
+"""The most values a problem file may hold once its aliases are expanded: a real one has
+hundreds; an alias bomb (a few lines that expand to billions) is refused."""
+
+
+def _expanded_size(node: yaml.Node, sizes: dict[int, int], stack: set[int]) -> int:
+    """How many values ``node`` holds with its aliases expanded (shared nodes counted
+    each time they are used, computed once; a recursive alias counts once)."""
+    if id(node) in sizes:
+        return sizes[id(node)]
+    if id(node) in stack:
+        return 1
+    stack.add(id(node))
+    children: list[yaml.Node] = []
+    if isinstance(node, yaml.MappingNode):
+        children = [n for pair in node.value for n in pair]
+    elif isinstance(node, yaml.SequenceNode):
+        children = list(node.value)
+    total = 1
+    for child in children:
+        total += _expanded_size(child, sizes, stack)
+        if total > MAX_YAML_VALUES:
+            break
+    stack.discard(id(node))
+    sizes[id(node)] = total
+    return total
+
+
 def load_yaml(text: str, document: Document) -> Any:
     loader = _Loader(text)
     try:
         node = loader.get_single_node()
         if node is None:
             return None
+        if _expanded_size(node, {}, set()) > MAX_YAML_VALUES:
+            raise ScenarioError(f"{document.label}: the file holds more than "
+                                f"{MAX_YAML_VALUES:,} values once its aliases (*name) are "
+                                f"expanded; a problem file needs far fewer")
         document.lines[""] = node.start_mark.line + 1
         _record_lines(node, "", document.lines, document, set())
         return loader.construct_document(node)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -68,8 +69,10 @@ def load_mesh(path, *, name: str | None = None) -> trimesh.Trimesh:
     else:
         if suffix == ".stl":
             _check_stl(path, label)
-        try:
-            loaded = trimesh.load(path, force="mesh", process=False)
+        try:  # NaN/inf coordinates make trimesh's normals warn: validation refuses them
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                loaded = trimesh.load(path, force="mesh", process=False)
         except Exception as exc:  # trimesh raises many types on bad files
             raise InvalidMeshError(
                 f"{label}: cannot read {suffix[1:].upper()} file "
