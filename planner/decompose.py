@@ -23,6 +23,7 @@ import json
 import logging
 import math
 import os
+import stat
 import sys
 import tempfile
 import time
@@ -155,7 +156,7 @@ def decompose(
     directory = Path(cache_dir).expanduser() if cache_dir is not None else default_cache_dir()
     entry = directory / f"{key}{_SUFFIX}"
 
-    cached = _load_entry(entry, key, name)
+    cached = _load_entry(entry, key, name, np.asarray(solid.bounds, dtype=np.float64))
     if cached is not None:
         cached_pieces, meta = cached
         log.debug("%s: decomposition cache hit %s", name, entry)
@@ -492,16 +493,70 @@ def _decode(data: bytes, key: str):
     return pieces, meta
 
 
-def _load_entry(entry: Path, key: str, name: str):
+MAX_ENTRY_BYTES = 1 << 30
+"""The largest cache entry read (1 GiB; a CoACD decomposition takes kilobytes to
+megabytes): anything larger is not an entry this code wrote."""
+
+
+def _read_regular(entry: Path) -> bytes:
+    """The bytes of ``entry`` if it is a regular file (not a link, a FIFO or a device)
+    of at most :data:`MAX_ENTRY_BYTES`.
+
+    Raises:
+        FileNotFoundError: no entry.
+        _CorruptEntry: anything else there.
+    """
     try:
-        data = entry.read_bytes()
+        fd = os.open(entry, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0)
+                     | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError:
+        raise
+    except OSError as exc:  # ELOOP: a symbolic link
+        raise _CorruptEntry(f"not a regular file ({exc.strerror or exc})") from None
+    with os.fdopen(fd, "rb") as handle:
+        info = os.fstat(handle.fileno())
+        if not stat.S_ISREG(info.st_mode):
+            raise _CorruptEntry("not a regular file")
+        if info.st_size > MAX_ENTRY_BYTES:
+            raise _CorruptEntry(f"{info.st_size} bytes, over {MAX_ENTRY_BYTES}")
+        return handle.read(MAX_ENTRY_BYTES + 1)
+
+
+def _check_content(pieces: list[np.ndarray], meta: dict, box: np.ndarray) -> None:
+    """An entry's pieces must fit the part they claim to decompose: finite points, at
+    least four per piece, none outside the part's box grown by the recorded excess.
+
+    Raises:
+        _CorruptEntry: they do not.
+    """
+    try:
+        excess = float(meta["excess"])
+        for field in ("exact", "deficit", "method", "bodies"):
+            meta[field]  # noqa: B018 (present, or the entry is not ours)
+    except (KeyError, TypeError, ValueError):
+        raise _CorruptEntry("incomplete metadata") from None
+    if not math.isfinite(excess) or excess < 0:
+        raise _CorruptEntry(f"impossible excess {excess!r}")
+    slack = excess + 1e-6 * float(np.linalg.norm(box[1] - box[0]))
+    for piece in pieces:
+        if len(piece) < 4 or not np.all(np.isfinite(piece)):
+            raise _CorruptEntry("a piece with fewer than 4 points or a non-finite point")
+        if np.any(piece < box[0] - slack) or np.any(piece > box[1] + slack):
+            raise _CorruptEntry("a piece outside the part's box")
+
+
+def _load_entry(entry: Path, key: str, name: str, box: np.ndarray | None = None):
+    try:
+        data = _read_regular(entry)
+        pieces, meta = _decode(data, key)
+        if box is not None:
+            _check_content(pieces, meta, box)
+        return pieces, meta
     except FileNotFoundError:
         return None
     except OSError as exc:
         log.warning("%s: cannot read decomposition cache entry %s (%s)", name, entry, exc)
         return None
-    try:
-        return _decode(data, key)
     except _CorruptEntry as exc:
         log.warning(
             "%s: corrupt decomposition cache entry %s (%s); deleting it and recomputing",

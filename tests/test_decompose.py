@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import os
 import shutil
 
 import manifold3d
@@ -268,3 +269,53 @@ def test_coacd_options(tmp_path):
     assert not coarse.cache_hit and len(coarse.pieces) >= 2
     assert decompose(l_bracket(), cache_dir=tmp_path,
                      coacd_options={"resolution": 500}).cache_hit
+
+
+@pytest.mark.parametrize("kind", ["link_to_dev_zero", "fifo", "link_to_a_good_entry"])
+def test_a_cache_entry_that_is_no_regular_file_is_not_read(bracket_cache, tmp_path, caplog,
+                                                           kind):
+    directory, first = bracket_cache
+    shutil.copytree(directory, tmp_path / "cache", dirs_exist_ok=True)
+    (entry,) = entry_of(tmp_path / "cache")
+    if kind == "link_to_dev_zero":  # read whole, it would never end
+        entry.unlink()
+        entry.symlink_to("/dev/zero")
+    elif kind == "fifo":  # opened for reading, it would block forever
+        entry.unlink()
+        os.mkfifo(entry)
+    else:
+        good = tmp_path / "elsewhere.bin"
+        shutil.move(entry, good)
+        entry.symlink_to(good)
+    with caplog.at_level(logging.WARNING, logger="planner.decompose"):
+        result = decompose(l_bracket(), cache_dir=tmp_path / "cache", name="bracket")
+    assert not result.cache_hit
+    assert any("not a regular file" in r.getMessage() for r in caplog.records)
+    for a, b in zip(first.pieces, result.pieces, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("content", ["nan_point", "single_point", "far_outside"])
+def test_a_checksummed_entry_with_impossible_content_is_recomputed(bracket_cache, tmp_path,
+                                                                   caplog, content):
+    from planner.decompose import _encode
+
+    directory, first = bracket_cache
+    shutil.copytree(directory, tmp_path, dirs_exist_ok=True)
+    (entry,) = entry_of(tmp_path)
+    pieces = [p.copy() for p in first.pieces]
+    if content == "nan_point":
+        pieces[0][0, 0] = np.nan
+    elif content == "single_point":
+        pieces[0] = pieces[0][:1]
+    else:
+        pieces[-1] = pieces[-1] + 100.0
+    meta = {"key": entry.stem, "exact": first.exact, "excess": first.excess,
+            "deficit": first.deficit, "method": first.method, "bodies": first.bodies}
+    entry.write_bytes(_encode(pieces, meta))  # a valid checksum over impossible content
+    with caplog.at_level(logging.WARNING, logger="planner.decompose"):
+        result = decompose(l_bracket(), cache_dir=tmp_path, name="bracket")
+    assert not result.cache_hit
+    assert any("corrupt" in r.getMessage() for r in caplog.records)
+    for a, b in zip(first.pieces, result.pieces, strict=True):
+        np.testing.assert_array_equal(a, b)
