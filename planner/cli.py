@@ -3,7 +3,7 @@
 Exit codes: 0 success, 1 no result (planning: no path / not found; assembly: no
 sequence), 2 bad input or a resource limit (one line on stderr naming the field or file),
 3 an internal error (one line naming the command; -vv adds the traceback), 130
-interrupted.
+interrupted (Ctrl+C), 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -593,7 +593,36 @@ def _add_viz_parsers(sub, common: _Parser) -> None:
                    "only; 0.0.0.0 lets anyone on the network watch)")
 
 
+class _Terminated(BaseException):
+    """SIGTERM, raised where the work is, so it stops like Ctrl+C (outputs are written
+    atomically: the earlier ones or none, never half of one)."""
+
+
+EXIT_TERMINATED = 143
+"""Exit code after SIGTERM (128 + 15, as a shell reports it)."""
+
+
+def _on_sigterm(signum, frame) -> NoReturn:
+    raise _Terminated
+
+
 def main(argv: list[str] | None = None) -> int:
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        return _main(argv)
+    except _Terminated:
+        sys.stderr.write("minkplan: terminated\n")
+        return EXIT_TERMINATED
+    finally:
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _main(argv: list[str] | None) -> int:
     args = _parser().parse_args(argv)
     level = (
         logging.WARNING
