@@ -11,7 +11,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent / "fuzz"))
 
-from cases import FAMILIES, cases  # noqa: E402
+from cases import FAMILIES, Case, cases  # noqa: E402
 from runner import classify, run_cases  # noqa: E402
 
 SAMPLE_ROUNDS = 7
@@ -38,3 +38,19 @@ def test_the_classifier_tells_each_outcome_apart():
     assert classify(2, "minkplan: error: bad\n", "path.json does not parse")[0] == "partial"
     assert classify(2, "line one\nline two\n", "")[0] == "traceback"
     assert classify(1, "WARNING planner.io: repaired\nminkplan: no path\n", "")[0] == "clean"
+
+
+FOUND_BY_FULL_RUNS = [
+    # a control character: PyYAML's reader refuses it while the loader is made
+    Case("control_character", "assembly", ("assemble", "a.yaml", "--out", "out"),
+         {"a.yaml": b"\x1fparts: []\n"}),
+    Case("control_character", "scenario", ("plan", "s.yaml", "--out", "out"),
+         {"s.yaml": b"robot: {box: [1, 1, 1]}\x1f\n"}),
+]
+"""Cases the full run (``run_fuzz.py``) found, kept once fixed."""
+
+
+def test_what_full_runs_found_stays_fixed(tmp_path):
+    results = run_cases(FOUND_BY_FULL_RUNS, tmp_path, timeout=60.0)
+    assert [(r.outcome, r.code) for r in results] == [("clean", 2)] * len(results), \
+        [r.detail for r in results]

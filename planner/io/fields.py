@@ -265,7 +265,11 @@ def _expanded_size(node: yaml.Node, sizes: dict[int, int], stack: set[int]) -> i
 
 
 def load_yaml(text: str, document: Document) -> Any:
-    loader = _Loader(text)
+    try:
+        loader = _Loader(text)  # reads the characters at once: control characters fail here
+    except yaml.YAMLError as error:
+        raise ScenarioError(f"{document.label}: YAML error: {error}".replace("\n", " ")) \
+            from None
     try:
         node = loader.get_single_node()
         if node is None:
