@@ -90,8 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         lines.append(f"| {n} | {span:.1f} | {serial / span:.2f} | {big:.0f} | "
                      f"{suite_serial / big:.1f} |")
     lines += ["", f"The longest task takes {max(base['task_seconds']):.1f} s: no number of "
-              "workers finishes the batch sooner than that, so 100 workers on 20 tasks gain "
-              "little; on a suite of thousands the speed-up approaches N, bounded by the "
+              "workers finishes the batch sooner than that, so 100 workers on "
+              f"{base['tasks']} tasks gain little; on a suite of thousands the speed-up approaches N, bounded by the "
               "longest task and, on a real cluster, by the scheduler and the shared file "
               "system (not simulated)."]
     out.mkdir(parents=True, exist_ok=True)
