@@ -91,9 +91,9 @@ def main(argv: list[str] | None = None) -> int:
                      f"{suite_serial / big:.1f} |")
     lines += ["", f"The longest task takes {max(base['task_seconds']):.1f} s: no number of "
               "workers finishes the batch sooner than that, so 100 workers on "
-              f"{base['tasks']} tasks gain little; on a suite of thousands the speed-up approaches N, bounded by the "
-              "longest task and, on a real cluster, by the scheduler and the shared file "
-              "system (not simulated)."]
+              f"{base['tasks']} tasks gain little; on a suite of thousands the speed-up "
+              "approaches N, bounded by the longest task and, on a real cluster, by the "
+              "scheduler and the shared file system (not simulated)."]
     out.mkdir(parents=True, exist_ok=True)
     (out / f"{stamp}-batch.md").write_text("\n".join(lines) + "\n")
     sys.stdout.write("\n".join(lines) + "\n")
