@@ -445,3 +445,19 @@ def test_the_live_viewer_listens_on_this_machine_only(scenario):
     with viz.open_live(plan_scene(scenario)) as view:
         port = int(re.search(r":(\d+)/static/", view.url).group(1))
         assert _listening_addresses(port) == {"0100007F"}  # 127.0.0.1, nothing else
+
+
+def test_a_large_roadmap_is_drawn_nearest_the_path_and_counted_whole():
+    from planner.viz.layout import MAX_ROADMAP_SEGMENTS, shown_roadmap
+
+    rng = np.random.default_rng(0)
+    starts = rng.uniform(-10, 10, (3 * MAX_ROADMAP_SEGMENTS, 3))
+    segments = np.stack([starts, starts + 0.01], axis=1)
+    near = np.array([[0.0, 0.0, 0.0]])
+    shown = shown_roadmap(segments, near)
+    assert len(shown) == MAX_ROADMAP_SEGMENTS
+    kept = np.linalg.norm(shown.mean(axis=1), axis=1)
+    dropped_floor = np.sort(np.linalg.norm(segments.mean(axis=1), axis=1))[MAX_ROADMAP_SEGMENTS]
+    assert kept.max() <= dropped_floor  # the nearest ones, none farther than one left out
+    small = segments[:10]
+    np.testing.assert_array_equal(shown_roadmap(small, near), small)

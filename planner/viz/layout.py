@@ -32,6 +32,7 @@ from .scene import (
     MINKOWSKI_A,
     MINKOWSKI_B,
     MINKOWSKI_SUM,
+    ROADMAP,
     Scene,
 )
 
@@ -105,6 +106,33 @@ def roadmap_from_cspace(cspace, boxes: np.ndarray | None = None) -> np.ndarray:
     first = np.stack([centres[pairs[:, 0]], portals], axis=1)
     second = np.stack([portals, centres[pairs[:, 1]]], axis=1)
     return np.concatenate([first, second])
+
+
+MAX_ROADMAP_SEGMENTS = 40_000
+"""The page draws at most this many roadmap segments (about 1 MB), those nearest the path
+(or the start and goal): a fine C-space has hundreds of thousands, which made pages of
+tens of MB and show nothing more. The layer's count is the roadmap's full size."""
+
+
+def shown_roadmap(segments: np.ndarray, near: np.ndarray) -> np.ndarray:
+    """At most :data:`MAX_ROADMAP_SEGMENTS` of ``segments`` ``(m, 2, 3)``: the ones whose
+    midpoints lie nearest the points ``near`` ``(k, 3)``, in their original order."""
+    if len(segments) <= MAX_ROADMAP_SEGMENTS or len(near) == 0:
+        return segments[:MAX_ROADMAP_SEGMENTS]
+    from scipy.spatial import cKDTree
+
+    distance, _ = cKDTree(near).query(segments.mean(axis=1))
+    keep = np.argsort(distance, kind="stable")[:MAX_ROADMAP_SEGMENTS]
+    return segments[np.sort(keep)]
+
+
+def _densified(points: np.ndarray, pieces: int = 64) -> np.ndarray:
+    """Points along the polyline ``points`` (``pieces`` per segment)."""
+    if len(points) < 2:
+        return points
+    t = np.linspace(0.0, 1.0, pieces, endpoint=False)[:, None]
+    along = [a + t * (b - a) for a, b in zip(points[:-1], points[1:], strict=True)]
+    return np.vstack([*along, points[-1:]])
 
 
 def _cspace_arrays(cspace) -> dict[str, np.ndarray]:
@@ -280,10 +308,15 @@ def scene_for_plan(scenario, plan=None, cspace=None, *, c_obstacle=None, certifi
     arrays = _cspace_arrays(cspace if cspace is not None else parts["cspace"])
     if arrays.get("boxes") is not None and arrays.get("labels") is not None:
         scene.add_cells(arrays["boxes"], arrays["labels"], style=cell_style)
-    if arrays.get("roadmap") is not None:
-        scene.add_roadmap(arrays["roadmap"])
-
     waypoints = parts["waypoints"]
+    roadmap = arrays.get("roadmap")
+    if roadmap is not None and len(roadmap):
+        ends = np.stack([scenario.start, scenario.goal])
+        near = _densified(np.asarray(waypoints, dtype=np.float64).reshape(-1, 3)) \
+            if len(waypoints) else ends
+        scene.add_segments(ROADMAP, shown_roadmap(np.asarray(roadmap), near),
+                           color=COLORS["roadmap"], count=len(roadmap))
+
     if len(waypoints):
         scene.add_path(waypoints)
         if animate and len(waypoints) >= 2:
