@@ -7,6 +7,8 @@ Public API:
 - :func:`load_assembly`, :func:`plan_assembly` -> :class:`AssemblyResult`
 - :func:`minkowski_sum`, :func:`c_obstacle` -> :class:`MinkowskiResult`
 - :func:`penetration_depth` -> :class:`PenetrationDepth` (proved interval, direction)
+- :func:`offset`, :func:`opening`, :func:`closing` -> :class:`OffsetResult` (grown or
+  eroded solids with a two-sided bound)
 - :func:`choose_source` -> a C-obstacle :class:`Source` (exact or decomposition) that
   every one of those takes
 - :func:`decompose` -> :class:`Decomposition` (convex pieces, cached)
@@ -32,6 +34,8 @@ _EXPORTS = {
     "AssemblyResult": "assembly", "plan_assembly": "assembly",
     "Decomposition": "decompose", "decompose": "decompose",
     "PenetrationDepth": "depth", "penetration_depth": "depth",
+    "OffsetResult": "offsets", "offset": "offsets", "opening": "offsets",
+    "closing": "offsets",
     "GeometryError": "errors", "InvalidMeshError": "errors",
     "InvalidParameterError": "errors", "MinkplanError": "errors",
     "ResourceLimitError": "errors", "ScenarioError": "errors",
@@ -79,6 +83,7 @@ if TYPE_CHECKING:
     from .io import load_assembly, load_problem, load_scenario
     from .meshes import load_mesh, mirror, repair_mesh, validate_solid
     from .minkowski import MinkowskiResult, c_obstacle, minkowski_sum
+    from .offsets import OffsetResult, closing, offset, opening
     from .planning import PlanOutcome, PlanStatus, plan
     from .problem import Assembly, Part, PlannerSettings, Scenario
     from .sources import Source, SourceSettings
@@ -94,6 +99,7 @@ __all__ = [
     "InvalidParameterError",
     "MinkowskiResult",
     "MinkplanError",
+    "OffsetResult",
     "Part",
     "PenetrationDepth",
     "PlanOutcome",
@@ -107,6 +113,7 @@ __all__ = [
     "Tolerances",
     "c_obstacle",
     "choose_source",
+    "closing",
     "decompose",
     "load_assembly",
     "load_mesh",
@@ -114,6 +121,8 @@ __all__ = [
     "load_scenario",
     "minkowski_sum",
     "mirror",
+    "offset",
+    "opening",
     "penetration_depth",
     "plan",
     "plan_assembly",

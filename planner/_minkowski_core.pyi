@@ -17,6 +17,7 @@ __all__ = [
     "crossing_windings",
     "front_windings",
     "num_threads",
+    "offset_surface",
     "union_surface",
     "winding_numbers",
 ]
@@ -94,6 +95,15 @@ class CheckedMesh:
     def negated(self) -> CheckedMesh: ...
 
 _MeshArg = tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]] | CheckedMesh
+
+def offset_surface(
+    mesh: CheckedMesh,
+    radius: float,
+    eps: float,
+    max_cells: int = 8000000,
+    max_refinements: int = 2,
+    simplify: bool = True,
+) -> dict[str, Any]: ...
 
 @final
 class ExactSum:

@@ -19,6 +19,7 @@ pub mod exact;
 pub mod math;
 pub mod minkowski;
 pub mod octree;
+pub mod offset;
 pub mod polytope;
 pub mod roadmap;
 pub mod surface;

@@ -155,6 +155,28 @@ fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: 
     surface_dict(py, &r)
 }
 
+/// The offset of the solid `mesh` (a [`CheckedMesh`] checked as a solid) by `radius`:
+/// `{x : dist(x, P) <= r}` for `r > 0`, the erosion `{x in P : dist(x, boundary) >= |r|}`
+/// for `r < 0`, as a closed surface at resolution `eps` with its two-sided error bound (a
+/// dict as `union_surface`'s).
+#[pyfunction]
+#[pyo3(signature = (mesh, radius, eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
+fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
+    if !(radius.is_finite() && radius != 0.0) {
+        return Err(InvalidParameterError::new_err(format!("radius = {radius}: must be a non-zero finite number")));
+    }
+    if !mesh.inner.solid {
+        return Err(InvalidParameterError::new_err("mesh: checked as a surface; an offset needs a solid".to_string()));
+    }
+    let solid = mesh.inner.clone();
+    let params = UnionParams { eps, max_cells, max_refinements, simplify };
+    let r = py.detach(move || {
+        let src = crate::offset::OffsetSource::new(solid.as_ref(), radius);
+        approximate_solid(&src, &src.aabb, &params)
+    })?;
+    surface_dict(py, &r)
+}
+
 fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let s = &r.surface;
@@ -451,6 +473,7 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<Primitives>()?;
     m.add_function(wrap_pyfunction!(union_surface, m)?)?;
+    m.add_function(wrap_pyfunction!(offset_surface, m)?)?;
     m.add_function(wrap_pyfunction!(build_octree, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
     m.add_function(wrap_pyfunction!(front_windings, m)?)?;

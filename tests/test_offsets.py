@@ -1,0 +1,113 @@
+"""Offsets and morphology against closed forms and exact distances: a grown box and a grown
+regular tetrahedron against Steiner's formula, an eroded box against the shrunken box, a
+torus that keeps its hole while the radius is below the hole's and loses it after, an
+opening that removes a fin thinner than twice the radius, and the two-sided bound checked
+point by point against the exact distance to the solid."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+import planner
+from planner.cli import main
+from planner.errors import GeometryError, InvalidParameterError
+
+
+def _steiner(mesh: trimesh.Trimesh, r: float) -> float:
+    """Volume of a convex polytope grown by ``r``: V + A r + (1/2) Σ_e L_e (π − θ_e) r²
+    + (4/3) π r³, with θ_e the dihedral angle at edge e."""
+    edges = mesh.face_adjacency_edges
+    lengths = np.linalg.norm(mesh.vertices[edges[:, 0]] - mesh.vertices[edges[:, 1]], axis=1)
+    exterior = mesh.face_adjacency_angles  # π − θ_e (0 for coplanar faces)
+    mean = 0.5 * float(np.sum(lengths * exterior))
+    return mesh.volume + mesh.area * r + mean * r * r + 4.0 / 3.0 * math.pi * r ** 3
+
+
+def _volume_slack(result, area: float) -> float:
+    """How far the volume may be off: the surface lies within the bound of the true one."""
+    return area * result.error_bound * 1.05
+
+
+@pytest.mark.parametrize("shape", ["box", "tetrahedron"])
+def test_a_grown_convex_solid_has_steiners_volume(shape):
+    if shape == "box":
+        solid = trimesh.creation.box([2.0, 1.0, 0.5])
+    else:
+        solid = trimesh.Trimesh([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]],
+                                [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
+    r = 0.3
+    result = planner.offset(solid, r, eps=0.03)
+    exact = _steiner(solid, r)
+    grown_area = float(planner.offset(solid, r, eps=0.03).mesh.area)
+    assert result.mesh.is_watertight and result.mesh.volume > 0
+    assert abs(result.mesh.volume - exact) <= _volume_slack(result, grown_area), (
+        result.mesh.volume, exact, result.error_bound)
+
+
+def test_an_eroded_box_is_the_shrunken_box():
+    result = planner.offset(trimesh.creation.box([2.0, 1.0, 1.0]), -0.2, eps=0.02)
+    np.testing.assert_allclose(result.mesh.bounds, [[-0.8, -0.3, -0.3], [0.8, 0.3, 0.3]],
+                               atol=result.error_bound)
+    exact = 1.6 * 0.6 * 0.6
+    assert abs(result.mesh.volume - exact) <= _volume_slack(result, 2 * (0.96 + 0.36 + 0.96))
+
+
+def test_every_output_point_is_within_the_bound_of_the_true_offset_surface():
+    solid = trimesh.creation.box([1.0, 1.0, 1.0])
+    r = 0.25
+    result = planner.offset(solid, r, eps=0.03)
+    points, _ = trimesh.sample.sample_surface(result.mesh, 4000, seed=0)
+    # the exact distance to the box (a solid: 0 inside)
+    outside = np.maximum(np.abs(points) - 0.5, 0.0)
+    distance = np.linalg.norm(outside, axis=1)
+    assert np.all(np.abs(distance - r) <= result.error_bound + 1e-12)
+
+
+@pytest.mark.parametrize("r, genus", [(0.15, 1), (0.9, 0)])
+def test_a_torus_keeps_its_hole_until_the_radius_fills_it(r, genus):
+    torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.3,
+                                   major_sections=24, minor_sections=12)
+    result = planner.offset(torus, r, eps=0.05)  # the hole's radius is about 0.7
+    euler = result.mesh.euler_number
+    assert result.mesh.is_watertight and euler == 2 - 2 * genus, euler
+
+
+def test_an_opening_removes_a_fin_thinner_than_twice_the_radius():
+    body = trimesh.creation.box([1.0, 1.0, 1.0])
+    fin = trimesh.creation.box([0.7, 0.1, 0.6])
+    fin.apply_translation([0.7, 0.0, 0.0])  # 0.1 thin in y, sticking out to x = 1.05
+    finned = trimesh.boolean.union([body, fin], engine="manifold")
+    assert finned.bounds[1][0] == pytest.approx(1.05)
+    opened = planner.opening(finned, 0.12, eps=0.05)
+    assert opened.mesh.bounds[1][0] <= 0.5 + opened.error_bound  # the fin is gone
+    assert opened.mesh.volume < 1.0  # and the body's edges are rounded off
+    closed = planner.closing(finned, 0.12, eps=0.05)
+    assert closed.mesh.bounds[1][0] >= 1.05 - closed.error_bound  # closing keeps it
+
+
+def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors():
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    with pytest.raises(InvalidParameterError, match="non-zero finite"):
+        planner.offset(box, 0.0)
+    with pytest.raises(InvalidParameterError, match="non-zero finite"):
+        planner.offset(box, math.nan)
+    with pytest.raises(GeometryError, match="nothing is left"):
+        planner.offset(box, -0.6, eps=0.05)
+
+
+def test_the_offset_command_writes_the_mesh_and_says_its_bound(tmp_path, capsys):
+    part = tmp_path / "part.stl"
+    trimesh.creation.box([1.0, 1.0, 1.0]).export(part)
+    grown = tmp_path / "grown.stl"
+    assert main(["offset", str(part), "-r", "0.2", "-o", str(grown), "--eps", "0.04"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith(f"wrote {grown}") and "error bound" in line
+    assert trimesh.load(grown).is_watertight
+    assert main(["offset", str(part), "-r", "-0.1", "-o", str(tmp_path / "shrunk.stl"),
+                 "--eps", "0.04"]) == 0
+    assert main(["offset", str(part), "-r", "0", "-o", str(tmp_path / "x.stl")]) == 2
+    assert "radius" in capsys.readouterr().err
