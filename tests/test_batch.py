@@ -25,8 +25,9 @@ from planner.planning import plan
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
 PROBLEMS = sorted(p for p in SCENARIOS.rglob("*.yaml"))
-TWO_RUNS = sum(1 if "assemblies" in p.parts else 2 for p in PROBLEMS)
-"""Tasks of ``--runs 2`` over the scenarios: an assembly runs once."""
+FIVE_RUNS = sum(1 if "assemblies" in p.parts else 5 for p in PROBLEMS)
+"""Tasks of ``--runs 5`` over the scenarios (an assembly runs once): about 15 s of work,
+so an interrupt or a killed worker lands in the middle of the batch."""
 
 
 def _batch(*args: str, **kw) -> subprocess.Popen:
@@ -121,8 +122,9 @@ def _wait_for(out: Path, count: int, run: subprocess.Popen) -> None:
 
 def test_a_worker_killed_mid_batch_still_leaves_every_record(tmp_path):
     out = tmp_path / "out"
-    run = _batch(str(SCENARIOS), "--runs", "2", "--out", str(out))
-    _wait_for(out, 2, run)
+    total = FIVE_RUNS
+    run = _batch(str(SCENARIOS), "--runs", "5", "--out", str(out))  # about 15 s
+    _wait_for(out, 1, run)
     workers = _child_workers()
     assert workers, "no worker with a task child running"
     os.kill(min(workers), signal.SIGKILL)
@@ -130,26 +132,27 @@ def test_a_worker_killed_mid_batch_still_leaves_every_record(tmp_path):
     records = _records(out)
     keys = [r["key"] for r in records]
     assert run.returncode == 0, stderr
-    assert len(keys) == len(set(keys)) == TWO_RUNS
+    assert len(keys) == len(set(keys)) == total
     assert not [r for r in records if r["status"] not in ("found", "no_path", "not_found")]
 
 
 def test_resume_after_an_interrupt_runs_only_the_missing_tasks(tmp_path):
     out = tmp_path / "out"
-    first = _batch(str(SCENARIOS), "--runs", "2", "--out", str(out))
-    _wait_for(out, 3, first)
+    runs = ("--runs", "5")  # long enough (about 15 s) that the interrupt lands mid-batch
+    total = FIVE_RUNS
+    first = _batch(str(SCENARIOS), *runs, "--out", str(out))
+    _wait_for(out, 1, first)
     first.send_signal(signal.SIGINT)
     first.communicate(timeout=120)
     assert first.returncode == 130
     before = _records(out)
-    assert 3 <= len(before) < TWO_RUNS
-    again = _batch(str(SCENARIOS), "--runs", "2", "--out", str(out), "--resume")
+    assert 1 <= len(before) < total
+    again = _batch(str(SCENARIOS), *runs, "--out", str(out), "--resume")
     stdout, stderr = again.communicate(timeout=600)
     assert again.returncode == 0, stderr
-    assert (f"({TWO_RUNS - len(before)} run now, {len(before)} done before)"
-            in stdout)
+    assert f"({total - len(before)} run now, {len(before)} done before)" in stdout
     keys = [r["key"] for r in _records(out)]
-    assert len(keys) == len(set(keys)) == TWO_RUNS
+    assert len(keys) == len(set(keys)) == total
     assert [r["key"] for r in _records(out)[:len(before)]] == [r["key"] for r in before]
 
 
