@@ -267,9 +267,10 @@ def _expanded_size(node: yaml.Node, sizes: dict[int, int], stack: set[int]) -> i
 def load_yaml(text: str, document: Document) -> Any:
     try:
         loader = _Loader(text)  # reads the characters at once: control characters fail here
-    except yaml.YAMLError as error:
-        raise ScenarioError(f"{document.label}: YAML error: {error}".replace("\n", " ")) \
-            from None
+    except yaml.reader.ReaderError as error:
+        row = text.count("\n", 0, error.position) + 1
+        raise ScenarioError(f"{document.label}:{row}: a control character (code "
+                            f"{error.character!r}) where YAML allows none", line=row) from None
     try:
         node = loader.get_single_node()
         if node is None:
