@@ -30,10 +30,17 @@ FIVE_RUNS = sum(1 if "assemblies" in p.parts else 5 for p in PROBLEMS)
 so an interrupt or a killed worker lands in the middle of the batch."""
 
 
+def _interruptible() -> None:
+    """In the child: SIGINT as a terminal delivers it, even when this test runs where it
+    is ignored (a shell's background job), so Python turns it into KeyboardInterrupt."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _batch(*args: str, **kw) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "planner", "batch", *args, "--workers",
                              "2", "--no-progress"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, cwd=ROOT, **kw)
+                            stderr=subprocess.PIPE, text=True, cwd=ROOT,
+                            preexec_fn=_interruptible, **kw)
 
 
 def _records(out: Path) -> list[dict]:
