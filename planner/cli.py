@@ -119,19 +119,6 @@ def _parser() -> argparse.ArgumentParser:
     )
     m.add_argument("--no-progress", action="store_true", help="no progress bar")
 
-    d = sub.add_parser(
-        "depth", parents=[common],
-        help="penetration depth of two overlapping closed meshes (or their distance)",
-        description="The length of the shortest translation of A that frees it from B, as "
-        "a proved interval [lower, upper], with its direction; for disjoint meshes, their "
-        "separation distance as a negative depth. Exit 0; 2: bad input.",
-    )
-    d.add_argument("a", help="the mesh that moves")
-    d.add_argument("b", help="the mesh it penetrates")
-    d.add_argument("--tolerance", type=float, default=None,
-                   help="widest interval wanted (default 1e-3 of the pair's size)")
-    d.add_argument("--json", action="store_true", help="print the result as JSON")
-
     pl = sub.add_parser(
         "plan", parents=[common],
         help="plan a translational path for a scenario (YAML or OMPL.app .cfg)",
@@ -191,68 +178,11 @@ def _parser() -> argparse.ArgumentParser:
     asm.add_argument("--html", action="store_true",
                      help="also write DIR/assembly.html: the parts moving in one after "
                      "another (self-contained, opens offline)")
-    _add_batch_parser(sub, common)
-    _add_offset_parser(sub, common)
+    from planner import cli_batch, cli_shapes
+
+    cli_shapes.add_parsers(sub, common)
+    cli_batch.add_parser(sub, common)
     return p
-
-
-def _add_offset_parser(sub, common: _Parser) -> None:
-    o = sub.add_parser(
-        "offset", parents=[common],
-        help="grow or shrink a closed mesh by a radius (offset, erosion, opening, closing)",
-        description="Write the offset {x : dist(x, P) <= r} of a closed mesh P (r > 0), its "
-        "erosion (r < 0), or with --opening / --closing both in turn, with a two-sided "
-        "error bound. Exit 0; 2: bad input.",
-    )
-    o.add_argument("mesh", help="closed mesh file")
-    o.add_argument("-r", "--radius", type=float, required=True,
-                   help="offset radius (negative: erode)")
-    o.add_argument("-o", "--output", required=True, help="output mesh (.stl .obj .ply .off .glb)")
-    o.add_argument("--eps", type=float, default=None,
-                   help="resolution (default 0.5%% of the result's diagonal)")
-    morph = o.add_mutually_exclusive_group()
-    morph.add_argument("--opening", action="store_true", help="erode then grow by |r|")
-    morph.add_argument("--closing", action="store_true", help="grow then erode by |r|")
-
-
-def _add_batch_parser(sub, common: _Parser) -> None:
-    b = sub.add_parser(
-        "batch", parents=[common],
-        help="run many problems (files, folders, lists) with several planners on Ray",
-        description="Run every problem found in the inputs (scenario or assembly YAML, "
-        "OMPL.app .cfg; folders are searched; a .txt lists paths) with each planner, "
-        "--runs times, one Ray task each, local or on a cluster. Writes DIR/results.jsonl "
-        "(a line per task as it finishes), DIR/summary.md and DIR/<problem>.log in OMPL's "
-        "benchmark log format. Exit 0: every task answered; 1: some tasks failed (error, "
-        "timeout, memory limit, crash: see summary.md); 2: bad input.",
-    )
-    b.add_argument("inputs", nargs="+", help="problem files, folders or .txt lists of them")
-    b.add_argument("--out", required=True, help="output directory (created if needed)")
-    b.add_argument("--planners", default="minkplan",
-                   help="comma-separated: minkplan, ompl:NAME (default minkplan; "
-                   "assemblies run with minkplan only)")
-    b.add_argument("--runs", type=int, default=1, help="runs per planning problem and "
-                   "planner; run k uses the problem's seed + k (default 1; an assembly runs "
-                   "once: its planner is deterministic)")
-    b.add_argument("--time-limit", type=float, default=None,
-                   help="planner seconds per run of a planning problem (default: each "
-                   "problem's own; assemblies have none, see --task-timeout)")
-    b.add_argument("--task-timeout", type=float, default=None,
-                   help="wall-clock seconds after which a task is killed (default: "
-                   "2 × --time-limit + 60, or 1800 without it)")
-    b.add_argument("--memory-limit", type=float, default=None,
-                   help="MB of resident memory after which a task is killed (default none)")
-    b.add_argument("--workers", type=int, default=None,
-                   help="local Ray workers (default: the machine's cores)")
-    b.add_argument("--address", default=None,
-                   help="an existing Ray cluster (auto, ray://head:10001, ...)")
-    b.add_argument("--resume", action="store_true",
-                   help="keep DIR/results.jsonl and run only the tasks it lacks")
-    b.add_argument("--hold-orientation", choices=("start", "goal"), default=None,
-                   help="read problems whose start and goal orientations differ "
-                   "translation-only, with this orientation throughout")
-    b.add_argument("--cache-dir", default=None, help="decomposition cache directory")
-    b.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 EXIT_INTERNAL = 3
@@ -344,34 +274,6 @@ def _cmd_minkowski(args) -> int:
         f"(grid {result.stats['grid_error_bound']:.4g} + decomposition "
         f"{result.stats['decomposition_excess']:.4g}), {result.stats['seconds']['total']:.2f} s\n"
     )
-    return 0
-
-
-def _cmd_depth(args) -> int:
-    for label, f in (("a", args.a), ("b", args.b)):
-        if Path(f).is_dir():
-            return _fail(f"{label}: {f!r} is a directory, not a mesh file")
-        if not Path(f).is_file():
-            return _fail(f"{label}: file {f!r} not found")
-    import planner
-
-    r = planner.penetration_depth(planner.load_mesh(args.a, name=args.a),
-                                  planner.load_mesh(args.b, name=args.b),
-                                  tolerance=args.tolerance)
-    if args.json:
-        sys.stdout.write(json.dumps({"a": args.a, "b": args.b, **r.describe()}) + "\n")
-        return 0
-    along = ", ".join(f"{x:.6g}" for x in r.direction)
-    checked = "FCL agrees" if r.validated else "FCL DISAGREES"
-    if r.separated:
-        what = f"separated: distance {r.distance:.9g} along ({along})"
-    else:
-        stuck = r.stats["smallest_cells"]
-        why = (f"{stuck} smallest cells unresolved" if stuck else "the cell budget ran out")
-        what = (f"penetration depth in [{r.lower:.9g}, {r.upper:.9g}] along ({along})"
-                + ("" if r.converged else f" (wider than the tolerance: {why})"))
-    sys.stdout.write(f"{args.a} into {args.b}: {what}; {checked}; {r.stats['cells']} cells, "
-                     f"{r.stats['seconds']['total']:.3f} s\n")
     return 0
 
 
@@ -492,100 +394,6 @@ def _cmd_assemble(args) -> int:
     return result.exit_code
 
 
-def _batch_settings(args):
-    import math
-
-    from planner.batch import BatchSettings, Limits
-
-    for flag, value in (("--runs", args.runs), ("--workers", args.workers)):
-        if value is not None and value < 1:
-            raise ValueError(f"{flag} {value}: must be at least 1")
-    for flag, value in (("--time-limit", args.time_limit),
-                        ("--task-timeout", args.task_timeout),
-                        ("--memory-limit", args.memory_limit)):
-        if value is not None and not (value > 0 and math.isfinite(value)):
-            raise ValueError(f"{flag} {value}: must be a positive finite number")
-    timeout = args.task_timeout or (2 * args.time_limit + 60 if args.time_limit else 1800.0)
-    return BatchSettings(Path(args.out), workers=args.workers, address=args.address,
-                         resume=args.resume, limits=Limits(timeout, args.memory_limit),
-                         progress=False if args.no_progress else None)
-
-
-def _planner_names(text: str) -> list[str]:
-    from planner.validation import available_planners
-
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    known = {n.lower(): n for n in available_planners()}
-    canonical: list[str] = []
-    for name in names:
-        if name != "minkplan" and not (name.startswith("ompl:")
-                                       and name[5:].lower() in known):
-            import difflib
-
-            every = ["minkplan", *(f"ompl:{n}" for n in available_planners())]
-            close = difflib.get_close_matches(name, every, n=1)
-            hint = f"did you mean {close[0]!r}? " if close else ""
-            raise ValueError(f"--planners: {name!r} is not minkplan or ompl:NAME; {hint}NAME "
-                             f"is one of {', '.join(available_planners())}")
-        spelled = name if name == "minkplan" else f"ompl:{known[name[5:].lower()]}"
-        if spelled not in canonical:  # ompl:prm and ompl:PRM are one planner, run once
-            canonical.append(spelled)
-    names = canonical
-    if not names:
-        raise ValueError("--planners: no planner named")
-    return names
-
-
-def _cmd_offset(args) -> int:
-    out = Path(args.output)
-    from planner.output import atomic_write, unwritable
-
-    problem = unwritable(out)
-    if problem:
-        return _fail(f"--output {out}: {problem}")
-    if not Path(args.mesh).is_file():
-        return _fail(f"mesh: file {args.mesh!r} not found")
-    import planner
-
-    how = planner.opening if args.opening else planner.closing if args.closing else \
-        planner.offset
-    result = how(planner.load_mesh(args.mesh, name=args.mesh), args.radius, eps=args.eps,
-                 name=args.mesh)
-    atomic_write(out, lambda tmp: result.mesh.export(tmp,
-                                                     file_type=out.suffix.lower().lstrip(".")))
-    sys.stdout.write(f"wrote {out}: {result.stats['triangles']} triangles, error bound "
-                     f"{result.error_bound:.4g}, {result.stats['seconds']:.2f} s\n")
-    return 0
-
-
-def _cmd_batch(args) -> int:
-    out = Path(args.out)
-    problem = _unwritable_folder(out)
-    if problem:
-        return _fail(f"--out {out}: {problem}")
-    try:
-        settings = _batch_settings(args)
-        planners = _planner_names(args.planners)
-    except ValueError as exc:
-        return _fail(str(exc))
-    from planner.batch import batch
-
-    try:
-        report = batch(args.inputs, settings, planners=planners, runs=args.runs,
-                       time_limit=args.time_limit, hold_orientation=args.hold_orientation,
-                       cache_dir=None if args.cache_dir is None
-                       else str(Path(args.cache_dir).resolve()))
-    except FileExistsError as exc:
-        return _fail(str(exc))
-    answered = len(report.records) - report.failed
-    sys.stdout.write(f"batch: {len(report.records)} tasks ({report.ran} run now, "
-                     f"{report.skipped} done before): {answered} answered, {report.failed} "
-                     f"failed; {report.seconds:.1f} s (Ray start-up "
-                     f"{report.startup_seconds:.1f} s); wrote {out}/results.jsonl, "
-                     f"summary.md and the OMPL logs\n")
-    return 1 if report.failed else 0
-
-
 def _cmd_view(args) -> int:
     scenario_path = Path(args.scenario)
     if not scenario_path.is_file():
@@ -682,7 +490,9 @@ def _main(argv: list[str] | None) -> int:
         if args.command == "minkowski":
             return _cmd_minkowski(args)
         if args.command == "depth":
-            return _cmd_depth(args)
+            from planner.cli_shapes import cmd_depth
+
+            return cmd_depth(args)
         if args.command == "plan":
             return _cmd_plan(args)
         if args.command == "view":
@@ -690,9 +500,13 @@ def _main(argv: list[str] | None) -> int:
         if args.command == "assemble":
             return _cmd_assemble(args)
         if args.command == "batch":
-            return _cmd_batch(args)
+            from planner.cli_batch import cmd_batch
+
+            return cmd_batch(args)
         if args.command == "offset":
-            return _cmd_offset(args)
+            from planner.cli_shapes import cmd_offset
+
+            return cmd_offset(args)
         return _fail(f"unknown command {args.command!r}")
     except MinkplanError as exc:
         return _fail(str(exc))

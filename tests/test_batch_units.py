@@ -159,7 +159,7 @@ def test_inputs_without_problems_and_broken_yaml_are_refused_by_name(tmp_path, c
 
 
 def test_one_planner_named_twice_runs_once_and_limits_must_be_finite(tmp_path, capsys):
-    from planner.cli import _planner_names
+    from planner.cli_batch import planner_names as _planner_names
 
     assert _planner_names("minkplan,ompl:prm,ompl:PRM,minkplan") == ["minkplan", "ompl:PRM"]
     code, err = _batch_cli([str(SCENARIOS / "bug_trap.yaml"), "--out", str(tmp_path),

@@ -228,7 +228,7 @@ def test_invalid_mesh_is_rejected_by_name(tmp_path):
 
 
 def test_checksum_catches_a_well_formed_but_altered_payload(bracket_cache, tmp_path, caplog):
-    from planner.decompose import _HEADER, _MAGIC, _encode
+    from planner.decompose_cache import _HEADER, _MAGIC, _encode
 
     directory, first = bracket_cache
     shutil.copytree(directory, tmp_path, dirs_exist_ok=True)
@@ -298,7 +298,7 @@ def test_a_cache_entry_that_is_no_regular_file_is_not_read(bracket_cache, tmp_pa
 @pytest.mark.parametrize("content", ["nan_point", "single_point", "far_outside"])
 def test_a_checksummed_entry_with_impossible_content_is_recomputed(bracket_cache, tmp_path,
                                                                    caplog, content):
-    from planner.decompose import _encode
+    from planner.decompose_cache import _encode
 
     directory, first = bracket_cache
     shutil.copytree(directory, tmp_path, dirs_exist_ok=True)
