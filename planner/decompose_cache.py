@@ -75,12 +75,13 @@ def _decode(data: bytes, key: str):
             meta = json.loads(bytes(archive["meta"]).decode())
     except Exception as exc:  # a checksummed payload should never fail to parse
         raise _CorruptEntry(f"unreadable payload ({type(exc).__name__})") from exc
-    if meta.get("key") != key:
+    if not isinstance(meta, dict) or meta.get("key") != key:
         raise _CorruptEntry("entry belongs to another key")
     if (
         points.ndim != 2
         or points.shape[1] != 3
         or offsets.ndim != 1
+        or offsets.size < 2
         or offsets[0] != 0
         or offsets[-1] != len(points)
         or np.any(np.diff(offsets) < 1)

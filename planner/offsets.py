@@ -7,8 +7,12 @@ sources of the native octree (:mod:`minkowski_core::offset`): cells classified b
 distances to ``P``'s triangles (never a sum with a polyhedral ball), the surface extracted
 with the grid's two-sided error bound, flat parts (prisms over faces) merged into their
 planes. ``opening(P, r)`` erodes then grows (removing features thinner than ``2 r``),
-``closing(P, r)`` grows then erodes (filling gaps narrower than ``2 r``); their bound is the
-sum of the two stages' (an offset moves a set's boundary by at most what its input's moved).
+``closing(P, r)`` grows then erodes (filling gaps narrower than ``2 r``). Their
+``error_bound`` is ``inf``: an erosion is not continuous in its input (a neck a hair
+thicker than ``2 r`` survives, a hair thinner vanishes), so the first stage's error has no
+bound through the second in general. ``stats["stage_bounds"]`` gives each stage's own
+bound; their sum bounds the result where no feature's thickness (opening) or gap
+(closing) lies within that sum of ``2 r``.
 
 Entry points: :func:`offset`, :func:`opening`, :func:`closing` -> :class:`OffsetResult`.
 """
@@ -40,7 +44,8 @@ class OffsetResult:
         radius: the offset radius (negative: an erosion); for an opening or closing, the
             radius of its two stages.
         error_bound: every point of ``mesh`` lies within this distance of the true
-            offset's boundary, and every point of that boundary within it of ``mesh``.
+            offset's boundary, and every point of that boundary within it of ``mesh``
+            (``inf`` for an opening or closing: see the module documentation).
         eps: the resolution asked for.
         stats: triangles, cells, seconds (per stage for an opening or closing).
     """
@@ -102,6 +107,9 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     raw = offset_surface(checked, radius, step,
                          max_cells=tol.max_cells if max_cells is None else int(max_cells))
     if len(raw["faces"]) == 0:
+        if not math.isfinite(raw["error_bound"]):
+            raise GeometryError(f"{name}: nothing was resolved of it offset by {radius:g} at "
+                                f"eps {step:g}; try a smaller eps")
         raise GeometryError(f"{name}: nothing is left of it eroded by {-radius:g} (its "
                             f"thickest part is thinner than {2 * -radius:g})")
     surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
@@ -116,9 +124,9 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     one = offset(mesh, first, eps=eps, max_cells=max_cells, name=name)
     two = offset(one.mesh, second, eps=eps, max_cells=max_cells, name=f"{name} ({kind})")
     stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
+             "stage_bounds": [one.error_bound, two.error_bound],
              "seconds": one.stats["seconds"] + two.stats["seconds"]}
-    return OffsetResult(two.mesh, abs(first), one.error_bound + two.error_bound, two.eps,
-                        stats)
+    return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
 
 
 def opening(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,

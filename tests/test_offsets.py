@@ -83,10 +83,14 @@ def test_an_opening_removes_a_fin_thinner_than_twice_the_radius():
     finned = trimesh.boolean.union([body, fin], engine="manifold")
     assert finned.bounds[1][0] == pytest.approx(1.05)
     opened = planner.opening(finned, 0.12, eps=0.05)
-    assert opened.mesh.bounds[1][0] <= 0.5 + opened.error_bound  # the fin is gone
+    # no feature's thickness is near 2 r = 0.24 (the fin 0.1, the body 1): the stages'
+    # bounds add up here (in general an opening's bound is unknown: error_bound is inf)
+    assert opened.error_bound == math.inf
+    slack = sum(opened.stats["stage_bounds"])
+    assert opened.mesh.bounds[1][0] <= 0.5 + slack  # the fin is gone
     assert opened.mesh.volume < 1.0  # and the body's edges are rounded off
     closed = planner.closing(finned, 0.12, eps=0.05)
-    assert closed.mesh.bounds[1][0] >= 1.05 - closed.error_bound  # closing keeps it
+    assert closed.mesh.bounds[1][0] >= 1.05 - sum(closed.stats["stage_bounds"])
 
 
 def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors():

@@ -20,8 +20,9 @@ use crate::exact::TriMesh;
 use crate::math::{Aabb, Vec3};
 use crate::octree::{merge_sorted, CellSource, Label};
 
-/// Bisection and golden-section steps along a segment (to about 1e-15 of its length).
-const STEPS: usize = 52;
+/// Bisection and golden-section steps along a segment: bisection to 2^-76 of its length,
+/// golden-section search to 0.618^76, about 1e-16.
+const STEPS: usize = 76;
 
 /// The offset of a closed solid by a radius (see the module documentation).
 pub struct OffsetSource<'a> {
@@ -176,6 +177,16 @@ fn crossing(f: &impl Fn(f64) -> f64, inside: f64, outside: f64) -> f64 {
     i
 }
 
+/// The point of segment `ab` nearest `p`.
+fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    if len2 == 0.0 {
+        return a;
+    }
+    a + ab * ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+}
+
 fn corner(cell: &Aabb, k: usize) -> Vec3 {
     Vec3::new(if k & 1 == 0 { cell.min.x } else { cell.max.x }, if k & 2 == 0 { cell.min.y } else { cell.max.y }, if k & 4 == 0 { cell.min.z } else { cell.max.z })
 }
@@ -184,6 +195,11 @@ fn corner(cell: &Aabb, k: usize) -> Vec3 {
 /// face; exact up to rounding).
 pub fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     let (ab, ac, ap) = (b - a, c - a, p - a);
+    if ab.cross(ac).length_squared() == 0.0 {
+        // degenerate: the triangle is its edges (the regions below divide by zero)
+        let on = [closest_on_segment(p, a, b), closest_on_segment(p, b, c), closest_on_segment(p, c, a)];
+        return on.into_iter().min_by(|x, y| (*x - p).length_squared().total_cmp(&(*y - p).length_squared())).unwrap_or(a);
+    }
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {
         return a;
@@ -195,7 +211,7 @@ pub fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
+        return if d1 - d3 > 0.0 { a + ab * (d1 / (d1 - d3)) } else { a };
     }
     let cp = p - c;
     let (d5, d6) = (ab.dot(cp), ac.dot(cp));
@@ -204,11 +220,12 @@ pub fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
+        return if d2 - d6 > 0.0 { a + ac * (d2 / (d2 - d6)) } else { a };
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        let span = (d4 - d3) + (d5 - d6);
+        return if span > 0.0 { b + (c - b) * ((d4 - d3) / span) } else { b };
     }
     let denom = va + vb + vc;
     if denom == 0.0 {
@@ -236,6 +253,9 @@ mod tests {
         assert!(near(Vec3::new(-1.0, -1.0, 0.0), a)); // a vertex
         assert!(near(Vec3::new(0.5, -2.0, 0.0), Vec3::new(0.5, 0.0, 0.0))); // an edge
         assert!(near(Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.5, 0.5, 0.0))); // the hypotenuse
+                                                                           // a triangle with two equal corners is its edge: no NaN from 0 / 0
+        let q = closest_on_triangle(Vec3::new(-0.5, 2.0, 0.0), a, a, c);
+        assert!(q.is_finite() && (q - Vec3::new(0.0, 1.0, 0.0)).length() < 1e-15, "{q}");
     }
 
     #[test]

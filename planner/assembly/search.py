@@ -291,9 +291,7 @@ class _Search:
                     continue
                 tried.add((members, dname))
                 outside = [n for n in remaining if n not in members]
-                box = exit_box(self.parts[members[0]], [self.parts[n] for n in remaining
-                                                        if n != members[0]], self.margin)
-                path = np.array([np.zeros(3), exit_point(vec, box, self.margin)])
+                path = np.array([np.zeros(3), self._group_exit(members, remaining, vec)])
                 checks = {n: validate_removal(self.parts[n], [self.parts[o] for o in outside],
                                               path, self.delta) for n in members}
                 if not all(c["valid"] for c in checks.values()):
@@ -353,12 +351,21 @@ class _Search:
             remaining = [n for n in remaining if n not in step.parts]
         return _Run(steps, list(remaining), [], {})
 
+    def _group_exit(self, members: tuple[str, ...], remaining: list[str],
+                    vec: np.ndarray) -> np.ndarray:
+        """The translation along ``vec`` that takes every member out of the remaining
+        parts' box: the longest of the members' own exits."""
+        exits = [exit_point(vec, exit_box(self.parts[m], [self.parts[n] for n in remaining
+                                                          if n != m], self.margin),
+                            self.margin) for m in members]
+        return max(exits, key=lambda e: float(np.linalg.norm(e)))
+
     def _inner_stuck(self, step: AssemblyStep) -> tuple[list[str], list[str], dict] | None:
         """For a group that leaves but cannot be taken apart: its remaining parts, its
         stuck parts and their attempts (as a stuck run reports them); else ``None``."""
-        if len(step.inner) >= len(step.members) - 1:
-            return None
         run = self.disassemble(list(step.members), None)  # cached: the same answers
+        if not run.stuck:
+            return None
         return list(run.remaining), list(run.stuck), dict(run.attempts)
 
     def irreducible(self, run: _Run, base: str | None) -> _Run:

@@ -49,12 +49,22 @@ class Limits:
     memory_limit_mb: float | None = None
 
 
+def _libc_prctl():
+    try:
+        return ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):  # not Linux: the worker's exit closes stdin instead
+        return None
+
+
+_PRCTL = _libc_prctl()
+"""``prctl`` looked up once here: between fork and exec (in a threaded Ray worker) the
+child must not load libraries."""
+
+
 def _die_with_parent() -> None:
     """In the child, before exec: be killed when the worker dies."""
-    try:
-        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
-    except (OSError, AttributeError):  # not Linux: the worker's exit closes stdin instead
-        pass
+    if _PRCTL is not None:
+        _PRCTL(_PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
 def _status_kb(pid: int, field: str) -> float:
@@ -192,8 +202,12 @@ def _wait(child: _Child, task: Task, limits: Limits, t0: float) -> dict[str, Any
             tail = child.last_error_line()
             code = child.kill()
             _CHILD = None
-            why = (f"killed by {signal.Signals(-code).name}" if code < 0
-                   else f"exited with code {code}")
+            why = f"exited with code {code}"
+            if code < 0:
+                try:
+                    why = f"killed by {signal.Signals(-code).name}"
+                except ValueError:
+                    why = f"killed by signal {-code}"
             return _failure(task, "crashed", f"the task's process {why}"
                             + (f": {tail}" if tail else ""), elapsed, peak)
         peak = max(peak, _rss_mb(child.process.pid))

@@ -80,7 +80,8 @@ def _partial(folder: Path, code: int | None) -> str:
                 document = json.loads(path.read_text())
             except (ValueError, UnicodeDecodeError):
                 return f"{path.name} does not parse"
-            if code == 2 and document.get("status") != "invalid_input":
+            if code == 2 and not (isinstance(document, dict)
+                                  and document.get("status") == "invalid_input"):
                 return f"{path.name} written by a bad-input exit"
     return ""
 
@@ -166,7 +167,7 @@ class Runner:
         stderr = (folder / "stderr.txt").read_text(errors="replace") \
             if (folder / "stderr.txt").exists() else ""
         if line is None or line in (b"", b"memory"):
-            code = self.process.poll()
+            code = self.process.wait() if line == b"" else self.process.poll()
             self._kill()
             if line is None:
                 return Result(case, "hang", None, seconds, f"over {self.timeout:g} s")
