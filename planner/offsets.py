@@ -29,7 +29,8 @@ import trimesh
 
 from planner.errors import GeometryError, InvalidParameterError
 
-from .meshes import load_mesh, validate_solid
+from .meshes import load_mesh
+from .meshes.kinds import classify
 from .tolerances import tol
 
 __all__ = ["OffsetResult", "closing", "offset", "opening"]
@@ -58,6 +59,8 @@ class OffsetResult:
 
 
 def _solid(obj, name: str) -> trimesh.Trimesh:
+    """The operand as a checked solid, made one as a part's mesh is (T-junctions split:
+    :func:`planner.meshes.kinds.classify`), else the reason it is none."""
     if isinstance(obj, trimesh.Trimesh):
         mesh = obj
     elif isinstance(obj, tuple) and len(obj) == 2:
@@ -65,7 +68,7 @@ def _solid(obj, name: str) -> trimesh.Trimesh:
                                np.asarray(obj[1], dtype=np.int64), process=False)
     else:
         mesh = load_mesh(obj, name=name)
-    return validate_solid(mesh, name=name)
+    return classify(mesh, name=name, kind="solid").mesh
 
 
 def _radius(r: float) -> float:
