@@ -32,7 +32,7 @@ from planner.output import schema_id
 
 from .tasks import Task
 
-__all__ = ["Limits", "run_task"]
+__all__ = ["Limits", "resident_mb", "run_task"]
 
 _POLL_SECONDS = 0.05
 _START_SECONDS = 300.0
@@ -79,7 +79,8 @@ def _status_kb(pid: int, field: str) -> float:
     return 0.0
 
 
-def _rss_mb(pid: int) -> float:
+def resident_mb(pid: int) -> float:
+    """The resident memory of process ``pid`` in MB (0 when it cannot be read)."""
     try:
         with open(f"/proc/{pid}/statm", encoding="ascii") as statm:
             return int(statm.read().split()[1]) * _PAGE / 2**20
@@ -109,7 +110,7 @@ class _Child:
             cwd=tempfile.gettempdir())
         self.buffer = b""
         self._wait_ready()
-        self.idle_mb = _rss_mb(self.process.pid)
+        self.idle_mb = resident_mb(self.process.pid)
 
     def _wait_ready(self) -> None:
         deadline = time.perf_counter() + _START_SECONDS
@@ -210,7 +211,7 @@ def _wait(child: _Child, task: Task, limits: Limits, t0: float) -> dict[str, Any
                     why = f"killed by signal {-code}"
             return _failure(task, "crashed", f"the task's process {why}"
                             + (f": {tail}" if tail else ""), elapsed, peak)
-        peak = max(peak, _rss_mb(child.process.pid))
+        peak = max(peak, resident_mb(child.process.pid))
         over = limits.memory_limit_mb is not None and peak > limits.memory_limit_mb
         late = limits.task_timeout is not None and elapsed > limits.task_timeout
         if over or late:

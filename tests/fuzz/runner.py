@@ -32,12 +32,13 @@ from pathlib import Path
 
 from cases import Case
 
+from planner.batch.worker import resident_mb
+
 __all__ = ["OUTCOMES", "Result", "Runner"]
 
 OUTCOMES = ("clean", "warning", "internal", "traceback", "signal", "hang", "memory",
             "partial")
 CHILD = Path(__file__).resolve().parent / "child.py"
-_PAGE = os.sysconf("SC_PAGE_SIZE")
 
 
 @dataclass(frozen=True)
@@ -47,14 +48,6 @@ class Result:
     code: int | None
     seconds: float
     detail: str
-
-
-def _rss_mb(pid: int) -> float:
-    try:
-        with open(f"/proc/{pid}/statm", encoding="ascii") as statm:
-            return int(statm.read().split()[1]) * _PAGE / 2**20
-    except (OSError, IndexError, ValueError):
-        return 0.0
 
 
 def _write(case: Case, folder: Path) -> None:
@@ -135,7 +128,7 @@ class Runner:
                 if not chunk:
                     return b""
                 self.buffer += chunk
-            elif _rss_mb(process.pid) > self.memory_mb:
+            elif resident_mb(process.pid) > self.memory_mb:
                 return b"memory"
         line, self.buffer = self.buffer.split(b"\n", 1)
         return line
