@@ -62,6 +62,10 @@ pub struct Facet {
     pub k: u32,
 }
 
+/// The half-spaces `(d, w)` (`d · x <= w`) of a flat facet, and how many of the six are
+/// used: what [`Facet::contains_point`] and [`Facet::clip`] test without a margin.
+pub type FlatPlanes = ([(Vec3, f64); 6], usize);
+
 /// Test directions of a facet: its normal, its in-plane edge normals, the axes and edge ×
 /// axis — every facet normal of the facet grown by a cube and of facet − box.
 struct Dirs {
@@ -170,7 +174,7 @@ impl Facet {
     /// The half-spaces of the flat facet (no margin) thickened by the rounding slack: its
     /// plane from both sides and its edges; `None` for a degenerate facet.
     #[inline]
-    fn flat_planes(&self) -> Option<([(Vec3, f64); 6], usize)> {
+    pub(crate) fn flat_planes(&self) -> Option<FlatPlanes> {
         let k = self.n as usize;
         let (e0, e1) = (self.p[1] - self.p[0], self.p[2] - self.p[1]);
         let n = e0.cross(e1);

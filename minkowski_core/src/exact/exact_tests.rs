@@ -612,3 +612,25 @@ fn faces_buried_in_another_shell_give_no_facets() {
     let c = boxes_mesh(&[([0.0, 0.0, 0.0], [2.0, 1.0, 1.0]), ([1.0, 0.0, 0.0], [3.0, 1.0, 1.5])]);
     assert_eq!(convolution(&c, &b, 0).len(), 2 * (1 + 1 + 2 + 2 + 2 + 2 + 1));
 }
+
+#[test]
+fn cells_inside_the_sum_are_full_above_the_finest_level_where_interior_facets_cross() {
+    // two non-convex parts (a U block and an L): their reduced convolution has facets
+    // inside the sum, and cells those cross but that lie in the sum are not split
+    let (u, _) = u_block();
+    let ell = voxel_mesh(|x, y, z| (0..3).contains(&x) && (0..2).contains(&y) && z == 0 || x == 0 && y == 0 && (0..3).contains(&z), "L");
+    let src = ExactSource::new(vec![u], ell.negated(), 0.0, None);
+    let oct = Octree::build(&src, &src.aabb, 0.04, 10_000_000).unwrap();
+    let mut rng = Lcg(5);
+    let mut culled = 0;
+    for l in oct.leaves.iter().filter(|l| l.label == Label::Full && l.level > 0) {
+        let b = oct.cell_box(l);
+        if src.facets.iter().any(|f| f.overlaps_box(&b, 0.0)) {
+            culled += 1;
+            for _ in 0..4 {
+                assert!(src.contains_point(rng.point(&b)), "FULL cell {b:?} has a free point");
+            }
+        }
+    }
+    assert!(culled > 0, "no cell crossed by an interior facet was culled");
+}

@@ -49,7 +49,7 @@ pub mod winding;
 mod winding_tests;
 mod witness;
 
-pub use convolution::{convolution, convolution_within, Facet};
+pub use convolution::{convolution, convolution_within, Facet, FlatPlanes};
 #[cfg(test)]
 use convolution::{convolution_scan, planar_regions};
 pub use depth::{facet_nearest, Depth};
@@ -95,8 +95,9 @@ fn records(cand: &[u32]) -> impl Iterator<Item = Rec> + '_ {
     })
 }
 
-/// Memory of one facet with its box and its share of the BVH (bytes), for budgets.
-pub const FACET_BYTES: usize = 256;
+/// Memory of one facet with its box, its share of the BVH and (without a margin) its
+/// precomputed half-spaces (bytes), for budgets.
+pub const FACET_BYTES: usize = 464;
 
 /// Longest record list [`ExactSource::carry`] scans; beyond it a point query is cheaper.
 const CARRY_MAX: usize = 256;
@@ -123,8 +124,13 @@ pub struct ExactSource {
     pub facets: Vec<Facet>,
     /// BVH over the facets' boxes (grown by `margin`).
     fbvh: Bvh,
-    /// Whether MIXED cells inside one triangle-pair piece are relabelled FULL (the planner
-    /// wants FULL walls for its certificates; the surface does not need them).
+    /// Each facet's half-spaces, computed once (only without a margin, where the tests
+    /// use them; empty otherwise).
+    flat: Vec<Option<FlatPlanes>>,
+    /// Whether finest MIXED cells inside the solid (one triangle-pair piece, or a vertex of
+    /// one part nested in the other) are relabelled FULL: the planner wants FULL walls for
+    /// its certificates, the surface does not need them. Coarser cells always are
+    /// (interior culling: they are never split).
     pub full_witness: bool,
 }
 
@@ -187,7 +193,26 @@ impl ExactSource {
         }
         let boxes: Vec<Aabb> = facets.iter().map(|f| f.aabb(margin)).collect();
         let fbvh = Bvh::build(&boxes);
-        Ok(ExactSource { full_witness: walls.is_some(), obstacles, b, surface_pairs, margin, walls, aabb, max_piece, facets, fbvh })
+        let flat = if margin == 0.0 { facets.iter().map(Facet::flat_planes).collect() } else { Vec::new() };
+        Ok(ExactSource { full_witness: walls.is_some(), obstacles, b, surface_pairs, margin, walls, aabb, max_piece, facets, fbvh, flat })
+    }
+
+    /// Whether `p` lies in facet `i` grown by `m` (its precomputed half-spaces when `m` is 0).
+    #[inline]
+    fn facet_contains(&self, i: usize, p: Vec3, m: f64) -> bool {
+        match self.flat.get(i) {
+            Some(Some((pl, n))) if m == 0.0 => pl[..*n].iter().all(|&(d, w)| d.dot(p) <= w),
+            _ => self.facets[i].contains_point(p, m),
+        }
+    }
+
+    /// The parameter interval of `a → b` in facet `i` grown by `m` (as [`Facet::clip`]).
+    #[inline]
+    fn facet_clip(&self, i: usize, a: Vec3, b: Vec3, m: f64) -> Option<(f64, f64)> {
+        match self.flat.get(i) {
+            Some(Some((pl, n))) if m == 0.0 => crate::polytope::clip_planes(pl[..*n].iter().copied(), a, b),
+            _ => self.facets[i].clip(a, b, m),
+        }
     }
 
     /// Whether `p` lies in the exact (ungrown) solid, walls excluded.
@@ -367,7 +392,7 @@ impl ExactSource {
             // within the margin of the boundary: in a grown facet
             let mut hit = None;
             self.fbvh.for_each_at_point(p, |i| {
-                if hit.is_none() && self.facets[i].contains_point(p, self.margin) {
+                if hit.is_none() && self.facet_contains(i, p, self.margin) {
                     hit = Some(Witness::Nested { k: self.facets[i].k as usize });
                 }
             });
@@ -387,7 +412,7 @@ impl ExactSource {
         if self.margin > 0.0 {
             self.fbvh.for_each_at_point(p, |i| {
                 let k = self.facets[i].k as usize;
-                if !out.contains(&k) && self.facets[i].contains_point(p, self.margin) {
+                if !out.contains(&k) && self.facet_contains(i, p, self.margin) {
                     out.push(k);
                 }
             });
@@ -484,10 +509,7 @@ impl ExactSource {
         for rec in records(cand) {
             let crossed = match rec {
                 Rec::Wall(side) => self.wall_gap(side, q) <= 0.0 || self.wall_gap(side, p) <= 0.0,
-                Rec::Facet(i) => {
-                    let f = &self.facets[i];
-                    f.aabb(self.margin).overlaps(&seg) && f.clip(q, p, self.margin).is_some()
-                }
+                Rec::Facet(i) => self.facets[i].aabb(self.margin).overlaps(&seg) && self.facet_clip(i, q, p, self.margin).is_some(),
                 Rec::Pair(k, a, b) => self.pieces_meet_segment(k, [a, b], self.margin, q, p),
             };
             if crossed {
@@ -579,7 +601,7 @@ impl ExactSource {
         let q = Aabb::new(a.min(b), a.max(b)).inflated(extra);
         let mut hit = false;
         self.fbvh.for_each_overlapping(&q, |i| {
-            hit = hit || self.facets[i].clip(a, b, m).is_some();
+            hit = hit || self.facet_clip(i, a, b, m).is_some();
         });
         hit = hit || self.surface_pairs.iter().any(|&k| self.pieces_meet_segment(k, [0, 0], m, a, b));
         // no grown boundary candidate meets the segment: all of it is inside or all outside
@@ -609,7 +631,7 @@ impl CellSource for ExactSource {
         Some(known.and_then(|(q, s)| self.carry(cand, q, s, c)).unwrap_or_else(|| self.cell_contains(own, c)))
     }
 
-    fn classify_near(&self, cell: &Aabb, cand: &[u32], _finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
+    fn classify_near(&self, cell: &Aabb, cand: &[u32], finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
         for rec in records(cand) {
             match rec {
                 Rec::Wall(side) => {
@@ -642,14 +664,17 @@ impl CellSource for ExactSource {
             let inside = known.and_then(|(q, s)| self.carry(cand, q, s, c)).unwrap_or_else(|| self.exact_point(c));
             return if inside { Label::Full } else { Label::Empty };
         }
-        if self.full_witness && cell.extent().max_element() <= self.max_piece && self.piece_contains_box(cell).is_some() {
+        // interior culling: a cell inside the solid is FULL and never split; the surface
+        // needs that only above the finest level, the planner's certificates everywhere
+        let witness = self.full_witness || !finest;
+        if witness && cell.extent().max_element() <= self.max_piece && self.piece_contains_box(cell).is_some() {
             out.clear();
             return Label::Full;
         }
         // deep in a C-obstacle, where no single piece covers the cell: a vertex of one part
         // inside the other, solid, part at every translation of the cell (exact, and the
         // walls of certificates of surfaces need it: their interiors are unions of pieces)
-        if self.full_witness && (0..self.obstacles.len()).any(|k| self.vertex_nested(k, cell)) {
+        if witness && (0..self.obstacles.len()).any(|k| self.vertex_nested(k, cell)) {
             out.clear();
             return Label::Full;
         }
@@ -660,7 +685,7 @@ impl CellSource for ExactSource {
         for rec in records(cand) {
             let inside = match rec {
                 Rec::Wall(side) => self.in_wall(side, p, 0.0),
-                Rec::Facet(i) => self.facets[i].contains_point(p, self.margin),
+                Rec::Facet(i) => self.facet_contains(i, p, self.margin),
                 Rec::Pair(k, a, b) => {
                     let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
                     self.any_pair_under(k, [a, b], self.margin, |bx| bx.contains_point(p), |i, j| pair_contains_point(&ta[i], &tb[j], self.margin, p))
@@ -689,7 +714,7 @@ impl CellSource for ExactSource {
                     }
                 }
                 Rec::Facet(i) => {
-                    if let Some(t) = self.facets[i].clip(a, b, self.margin) {
+                    if let Some(t) = self.facet_clip(i, a, b, self.margin) {
                         out.push(t);
                     }
                 }

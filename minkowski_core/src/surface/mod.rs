@@ -169,6 +169,50 @@ fn case_table() -> &'static Vec<Vec<Vec<TriEdges>>> {
     T.get_or_init(|| tets().iter().map(|&t| (0..16u8).map(|m| tet_case(t, m)).collect()).collect())
 }
 
+/// Edges taken together in one parallel task when their intervals are gathered.
+const EDGE_CHUNK: usize = 4096;
+
+/// Every edge's boundary intervals in one flat array (no allocation per edge): edge `n`'s
+/// are `data[ends[n - 1]..ends[n]]`.
+struct EdgeIntervals {
+    data: Vec<(f64, f64)>,
+    ends: Vec<usize>,
+}
+
+impl EdgeIntervals {
+    /// Gather `fill(edge, out)` (which clears and fills `out`) over `edges`, in parallel chunks.
+    fn collect<E: Sync>(edges: &[E], fill: impl Fn(&E, &mut Vec<(f64, f64)>) + Sync) -> EdgeIntervals {
+        let chunks: Vec<(Vec<(f64, f64)>, Vec<u32>)> = edges
+            .par_chunks(EDGE_CHUNK)
+            .map(|chunk| {
+                let (mut data, mut lens, mut iv) = (Vec::new(), Vec::with_capacity(chunk.len()), Vec::new());
+                for e in chunk {
+                    fill(e, &mut iv);
+                    data.extend_from_slice(&iv);
+                    lens.push(iv.len() as u32);
+                }
+                (data, lens)
+            })
+            .collect();
+        let mut out = EdgeIntervals { data: Vec::with_capacity(chunks.iter().map(|c| c.0.len()).sum()), ends: Vec::with_capacity(edges.len()) };
+        for (data, lens) in chunks {
+            out.data.extend_from_slice(&data);
+            for l in lens {
+                let end = out.ends.last().copied().unwrap_or(0) + l as usize;
+                out.ends.push(end);
+            }
+        }
+        out
+    }
+
+    /// The intervals of edge `n`.
+    #[inline]
+    fn of(&self, n: usize) -> &[(f64, f64)] {
+        let start = if n == 0 { 0 } else { self.ends[n - 1] };
+        &self.data[start..self.ends[n]]
+    }
+}
+
 /// Extract the surface of the solid of `src` over the finest MIXED cells of `oct` (built
 /// over `src`).
 pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
@@ -234,18 +278,14 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
     s.edges = edges.len();
 
     // where the boundary may cross each edge; an edge it cannot cross joins its ends' signs
-    let bnd: Vec<Vec<(f64, f64)>> = edges
-        .par_iter()
-        .map_init(Vec::new, |iv: &mut Vec<(f64, f64)>, &(ka, kb, li, _, _)| {
-            src.boundary_intervals(oct.records(&oct.leaves[li as usize]), point_of(ka), point_of(kb), iv);
-            iv.clone()
-        })
-        .collect();
+    let bnd = EdgeIntervals::collect(&edges, |&(ka, kb, li, _, _), iv| {
+        src.boundary_intervals(oct.records(&oct.leaves[li as usize]), point_of(ka), point_of(kb), iv);
+    });
 
     // signs: one point query per set of lattice points joined by such edges
     let mut joined = UnionFind::new(pts.len());
-    for (e, iv) in edges.iter().zip(&bnd) {
-        if iv.is_empty() {
+    for (n, e) in edges.iter().enumerate() {
+        if bnd.of(n).is_empty() {
             joined.union(e.3 / 7, e.4 as usize);
         }
     }
@@ -272,8 +312,9 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
     // ends: a thin feature or a clipped convex edge)
     let results: Vec<EdgeInfo> = edges
         .par_iter()
-        .zip(&bnd)
-        .map_init(Vec::new, |merged: &mut Vec<(f64, f64)>, (&(ka, kb, _, slot, ib), iv)| {
+        .enumerate()
+        .map_init(Vec::new, |merged: &mut Vec<(f64, f64)>, (n, &(ka, kb, _, slot, ib))| {
+            let iv = bnd.of(n);
             let (pa, pb) = (point_of(ka), point_of(kb));
             let (sa, sb) = (inside[slot / 7], inside[ib as usize]);
             src.solid_intervals(pa, pb, sa, sb, iv, merged);
