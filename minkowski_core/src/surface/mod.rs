@@ -172,6 +172,9 @@ fn case_table() -> &'static Vec<Vec<Vec<TriEdges>>> {
 /// Edges taken together in one parallel task when their intervals are gathered.
 const EDGE_CHUNK: usize = 4096;
 
+/// One parallel task's intervals and the count per edge.
+type IntervalChunk = (Vec<(f64, f64)>, Vec<u32>);
+
 /// Every edge's boundary intervals in one flat array (no allocation per edge): edge `n`'s
 /// are `data[ends[n - 1]..ends[n]]`.
 struct EdgeIntervals {
@@ -182,7 +185,7 @@ struct EdgeIntervals {
 impl EdgeIntervals {
     /// Gather `fill(edge, out)` (which clears and fills `out`) over `edges`, in parallel chunks.
     fn collect<E: Sync>(edges: &[E], fill: impl Fn(&E, &mut Vec<(f64, f64)>) + Sync) -> EdgeIntervals {
-        let chunks: Vec<(Vec<(f64, f64)>, Vec<u32>)> = edges
+        let chunks: Vec<IntervalChunk> = edges
             .par_chunks(EDGE_CHUNK)
             .map(|chunk| {
                 let (mut data, mut lens, mut iv) = (Vec::new(), Vec::with_capacity(chunk.len()), Vec::new());
