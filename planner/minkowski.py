@@ -298,8 +298,15 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
         "unresolved_cells": int(surf["unresolved_cells"]),
         "complex_edges": int(surf["complex_edges"]),
         "refinements": int(surf["refinements"]),
+        "planar_cells": int(surf["planar_cells"]),
+        "planar_pieces": int(surf["planar_pieces"]),
+        "planes_fallback_edges": int(surf["planes_fallback_edges"]),
         "threads": core.num_threads(),
     }
+    if stats["planes_fallback_edges"]:
+        log.info("%s ⊕ %s: the exact polygons of plane-resolved cells left %d edges open "
+                 "against the sampled band; sampled everywhere instead",
+                 names[0], names[1], stats["planes_fallback_edges"])
     seconds = {key: float(surf[f"seconds_{key}"]) for key in ("octree", "surface", "simplify")}
     return mesh, stats, seconds
 

@@ -229,3 +229,45 @@ def nonconvex_part_2k() -> trimesh.Trimesh:
     box_ = part.bounding_box()
     centre = [(box_[i] + box_[i + 3]) / 2 for i in range(3)]
     return from_manifold(part.translate([-c for c in centre]), "nonconvex_part_2k")
+
+
+def jack(length: float = 3.0, width: float = 0.5) -> trimesh.Trimesh:
+    """A jack of three orthogonal ``length`` x ``width`` x ``width`` bars centred on the
+    origin (:func:`cross_of_bars` at a small scale)."""
+    m = cross_of_bars(length, width)
+    m.metadata["name"] = "jack"
+    return m
+
+
+def tetrahedron(size: float = 1.0) -> trimesh.Trimesh:
+    """The corner tetrahedron of edge ``size`` along the axes, its centroid at the origin."""
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float) * size
+    return trimesh.convex.convex_hull(v - v.mean(axis=0))
+
+
+def comb(teeth: int = 8, length: float = 4.0, tooth: float = 1.0, thickness: float = 0.25
+         ) -> trimesh.Trimesh:
+    """A comb: a ``length`` x ``thickness`` back with ``teeth`` teeth ``tooth`` long and
+    ``thickness`` wide along y, ``thickness`` deep in z; centred on the origin."""
+    M = manifold3d.Manifold
+    back = M.cube([length, thickness, thickness], True)
+    pitch = length / teeth
+    parts = [back] + [
+        M.cube([thickness, tooth, thickness], True).translate(
+            [-length / 2 + pitch * (i + 0.5), (tooth + thickness) / 2 - 0.01, 0.0])
+        for i in range(teeth)]
+    m = reduce(lambda a, b: a + b, parts)
+    box_ = m.bounding_box()
+    return from_manifold(m.translate([-(box_[i] + box_[i + 3]) / 2 for i in range(3)]), "comb")
+
+
+def grate(holes: int, size: float, thickness: float, bar: float) -> trimesh.Trimesh:
+    """A square plate ``size`` wide and ``thickness`` thick, centred on the origin, with
+    ``holes`` x ``holes`` square through-holes separated by bars ``bar`` wide."""
+    plate = manifold3d.Manifold.cube([size, size, thickness], True)
+    pitch = size / holes
+    cutters = [
+        manifold3d.Manifold.cube([pitch - bar, pitch - bar, 2 * thickness], True).translate(
+            [-size / 2 + pitch * (i + 0.5), -size / 2 + pitch * (j + 0.5), 0.0])
+        for i in range(holes) for j in range(holes)]
+    return from_manifold(plate - reduce(lambda a, b: a + b, cutters), f"grate{holes}")

@@ -277,7 +277,7 @@ mod tests {
         let cube = unit_cube();
         let r = 0.25;
         let src = OffsetSource::new(&cube, r);
-        let params = UnionParams { eps: 0.02, max_cells: 4_000_000, max_refinements: 0, simplify: false };
+        let params = UnionParams { eps: 0.02, max_cells: 4_000_000, max_refinements: 0, simplify: false, planes: true };
         let result = approximate_solid(&src, &src.aabb, &params).expect("a surface");
         let volume = signed_volume(&result.surface.vertices, &result.surface.faces);
         let exact = 1.0 + 6.0 * r + 3.0 * std::f64::consts::PI * r * r + 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);

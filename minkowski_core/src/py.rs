@@ -150,7 +150,7 @@ impl Primitives {
 #[pyo3(signature = (prims, eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
 fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
     let set = prims.inner.clone();
-    let params = UnionParams { eps, max_cells, max_refinements, simplify };
+    let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };
     let r = py.detach(move || approximate_union(&set, &params))?;
     surface_dict(py, &r)
 }
@@ -169,7 +169,7 @@ fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f6
         return Err(InvalidParameterError::new_err("mesh: checked as a surface; an offset needs a solid".to_string()));
     }
     let solid = mesh.inner.clone();
-    let params = UnionParams { eps, max_cells, max_refinements, simplify };
+    let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };
     let r = py.detach(move || {
         let src = crate::offset::OffsetSource::new(solid.as_ref(), radius);
         approximate_solid(&src, &src.aabb, &params)
@@ -198,6 +198,9 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("seconds_surface", r.seconds_surface)?;
     d.set_item("seconds_simplify", r.seconds_simplify)?;
     d.set_item("triangles_extracted", r.triangles_extracted)?;
+    d.set_item("planar_cells", s.planar_cells)?;
+    d.set_item("planar_pieces", s.planar_pieces)?;
+    d.set_item("planes_fallback_edges", r.planes_fallback_edges)?;
     Ok(d)
 }
 
@@ -456,7 +459,7 @@ impl ExactSum {
     #[pyo3(signature = (eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
     fn surface<'py>(&self, py: Python<'py>, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
         let src = self.inner.clone();
-        let params = UnionParams { eps, max_cells, max_refinements, simplify };
+        let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };
         let r = py.detach(move || approximate_solid(src.as_ref(), &src.aabb, &params))?;
         surface_dict(py, &r)
     }

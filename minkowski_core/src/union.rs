@@ -5,7 +5,7 @@ use crate::error::{CoreError, CoreResult};
 use crate::math::Aabb;
 use crate::minkowski::PolytopeSet;
 use crate::octree::{CellSource, LevelCounts, Octree};
-use crate::surface::{extract, merge_coplanar, Surface, EDGE_CLAMP};
+use crate::surface::{extract, merge_coplanar, Surface, EDGE_CLAMP, MAX_OPEN_REPORTED};
 use std::time::Instant;
 
 /// Parameters of [`approximate_union`].
@@ -20,6 +20,12 @@ pub struct UnionParams {
     /// Collapse interior vertices of planar patches ([`merge_coplanar`]): same surface,
     /// far fewer triangles on flat facets.
     pub simplify: bool,
+    /// Keep cells the source resolves by at most three planes as exact polygons at their
+    /// size ([`Octree::build_resolving_planes`]); the sampled band is left only where the
+    /// boundary is not that simple. Where the polygons and the band do not join into a
+    /// closed surface, the grid is rebuilt sampling around those edges (up to
+    /// `MAX_JOIN_RETRIES` times, then everywhere).
+    pub planes: bool,
 }
 
 /// What [`approximate_union`] produced.
@@ -45,7 +51,14 @@ pub struct UnionResult {
     pub seconds_simplify: f64,
     /// Triangles before simplification.
     pub triangles_extracted: usize,
+    /// Open edges seen where plane-resolved cells met the band, over the rebuilds that then
+    /// sampled around them (0: none).
+    pub planes_fallback_edges: usize,
 }
+
+/// Rebuilds sampling around the edges where plane-resolved cells failed to join the band,
+/// before sampling everywhere.
+const MAX_JOIN_RETRIES: u32 = 3;
 
 /// Finest cell size whose grid bound is `eps`.
 pub fn cell_size_for_eps(eps: f64) -> f64 {
@@ -101,9 +114,14 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
     let mut h = cell_size_for_eps(params.eps);
     let mut best: Option<UnionResult> = None;
     let (mut t_oct, mut t_surf) = (0.0, 0.0);
-    for round in 0..=params.max_refinements {
+    let mut planes = params.planes;
+    let mut sampled: Vec<Aabb> = Vec::new();
+    let (mut open_seen, mut retries) = (0, 0);
+    let mut round = 0;
+    while round <= params.max_refinements {
         let t0 = Instant::now();
-        let oct = match Octree::build(set, region, h, params.max_cells) {
+        let built = if planes { Octree::build_resolving_planes(set, region, h, params.max_cells, &sampled) } else { Octree::build(set, region, h, params.max_cells) };
+        let oct = match built {
             Ok(o) => o,
             Err(e) => match best {
                 Some(b) => return Ok(b), // the finer grid does not fit: keep what we have
@@ -114,6 +132,17 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         let t1 = Instant::now();
         let surface = extract(&oct, set);
         t_surf += t1.elapsed().as_secs_f64();
+        if surface.open_edges > 0 {
+            // the exact polygons did not join the band there: sample around those edges
+            // (a few times), then everywhere
+            open_seen += surface.open_edges;
+            retries += 1;
+            if retries > MAX_JOIN_RETRIES || surface.open_edges > MAX_OPEN_REPORTED {
+                planes = false;
+            }
+            sampled.extend(surface.open_at.iter().map(|b| b.inflated(4.0 * h)));
+            continue;
+        }
         let bound = surface_error_bound(&surface, h);
         let done = bound.is_finite();
         let next_fits = 4 * (oct.leaves.len() + surface.band_cells) <= params.max_cells;
@@ -127,11 +156,13 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
             seconds_surface: t_surf,
             seconds_simplify: 0.0,
             triangles_extracted: 0,
+            planes_fallback_edges: open_seen,
         });
         if done || !next_fits {
             break;
         }
         h *= 0.5;
+        round += 1;
     }
     let mut r = best.expect("at least one round");
     r.triangles_extracted = r.surface.faces.len();

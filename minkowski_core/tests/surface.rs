@@ -49,7 +49,7 @@ fn euler(s: &Surface) -> i64 {
 }
 
 fn run(set: &PolytopeSet, eps: f64) -> UnionResult {
-    approximate_union(set, &UnionParams { eps, max_cells: 20_000_000, max_refinements: 2, simplify: false }).unwrap()
+    approximate_union(set, &UnionParams { eps, max_cells: 20_000_000, max_refinements: 2, simplify: false, planes: true }).unwrap()
 }
 
 #[test]
@@ -89,10 +89,10 @@ fn thin_slot_is_detected_as_complex_then_refined_open() {
     // two blocks 0.06 apart: at eps 0.25 (h ≈ 0.144) no lattice point falls in the slot,
     // the samples join the blocks, and the cells across the slot must be flagged
     let set = set_of(&[([0.0, 0.0, 0.0], [1.0, 2.0, 2.0]), ([1.06, 0.0, 0.0], [2.06, 2.0, 2.0])]);
-    let coarse = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 0, simplify: false }).unwrap();
+    let coarse = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 0, simplify: false, planes: true }).unwrap();
     assert!(coarse.surface.complex_cells > 0, "the slot must be flagged");
     assert_eq!(euler(&coarse.surface), 2, "unrefined, the slot is closed (one sphere)");
-    let fine = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 4, simplify: false }).unwrap();
+    let fine = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 4, simplify: false, planes: true }).unwrap();
     assert_eq!(fine.surface.complex_cells, 0);
     assert!(fine.refinements > 0);
     check_closed_oriented(&fine.surface);
@@ -117,10 +117,10 @@ fn minkowski_of_boxes_is_the_box_of_summed_extents() {
 fn bad_eps_is_an_error() {
     let set = set_of(&[([0.0; 3], [1.0; 3])]);
     for eps in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        let r = approximate_union(&set, &UnionParams { eps, max_cells: 1000, max_refinements: 0, simplify: false });
+        let r = approximate_union(&set, &UnionParams { eps, max_cells: 1000, max_refinements: 0, simplify: false, planes: true });
         assert!(matches!(r, Err(CoreError::InvalidParameter { .. })), "eps {eps}");
     }
-    let r = approximate_union(&set, &UnionParams { eps: 1e-4, max_cells: 1000, max_refinements: 0, simplify: false });
+    let r = approximate_union(&set, &UnionParams { eps: 1e-4, max_cells: 1000, max_refinements: 0, simplify: false, planes: true });
     assert!(matches!(r, Err(CoreError::ResourceLimit { .. })));
 }
 
@@ -141,7 +141,7 @@ fn set_queries() {
 #[test]
 fn simplification_keeps_the_surface_and_drops_flat_interiors() {
     let set = set_of(&[([0.0, 0.0, 0.0], [3.0, 1.0, 1.0]), ([0.0, 0.0, 0.0], [1.0, 3.0, 1.0])]);
-    let p = |simplify| UnionParams { eps: 0.05, max_cells: 20_000_000, max_refinements: 1, simplify };
+    let p = |simplify| UnionParams { eps: 0.05, max_cells: 20_000_000, max_refinements: 1, simplify, planes: true };
     let raw = approximate_union(&set, &p(false)).unwrap();
     let simple = approximate_union(&set, &p(true)).unwrap();
     check_closed_oriented(&simple.surface);

@@ -276,7 +276,7 @@ fn surface_of_exact_sum_is_closed_and_within_bound() {
             ConvexPolytope::from_points(&pts)
         })
         .collect();
-    let params = UnionParams { eps: 0.08, max_cells: 20_000_000, max_refinements: 2, simplify: true };
+    let params = UnionParams { eps: 0.08, max_cells: 20_000_000, max_refinements: 2, simplify: true, planes: true };
     let r = approximate_solid(&src, &src.aabb, &params).unwrap();
     assert!(r.error_bound.is_finite());
     assert_eq!(r.surface.inconsistent_edges, 0);
@@ -633,4 +633,46 @@ fn cells_inside_the_sum_are_full_above_the_finest_level_where_interior_facets_cr
         }
     }
     assert!(culled > 0, "no cell crossed by an interior facet was culled");
+}
+
+/// Each directed edge once and its reverse once.
+fn assert_closed(s: &crate::surface::Surface) {
+    assert!(crate::surface::stitch::open_edges(&s.faces).is_empty(), "{} open edges", crate::surface::stitch::open_edges(&s.faces).len());
+}
+
+fn volume_of(s: &crate::surface::Surface) -> f64 {
+    s.faces.iter().map(|f| s.vertices[f[0] as usize].dot(s.vertices[f[1] as usize].cross(s.vertices[f[2] as usize])) / 6.0).sum()
+}
+
+#[test]
+fn flat_cells_of_a_box_sum_are_exact_polygons_at_their_size() {
+    let a = box_mesh([0.0, 0.0, 0.0], [2.0, 1.0, 1.5]);
+    let b = box_mesh([-0.3, -0.2, -0.1], [0.3, 0.2, 0.1]);
+    let src = ExactSource::new(vec![a], b, 0.0, None);
+    let run = |eps, planes| approximate_solid(&src, &src.aabb, &UnionParams { eps, max_cells: 20_000_000, max_refinements: 0, simplify: true, planes }).unwrap();
+    let (exact, sampled) = (run(0.01, true), run(0.03, false));
+    for r in [&exact, &sampled] {
+        assert_closed(&r.surface);
+        assert_eq!(r.planes_fallback_edges, 0);
+    }
+    assert!(exact.surface.planar_cells > 0 && exact.surface.planar_pieces > 0);
+    assert_eq!(exact.surface.band_cells, 0, "every boundary cell is resolved by at most three planes");
+    assert!(sampled.surface.band_cells > 10_000);
+    // six faces, two triangles each: creases and flat interiors collapse away
+    assert_eq!(exact.surface.faces.len(), 12);
+    let truth = 2.6 * 1.4 * 1.7;
+    assert!((volume_of(&exact.surface) - truth).abs() < 1e-12 * truth, "exact to rounding");
+    assert!((volume_of(&sampled.surface) - truth).abs() < 0.02 * truth);
+    let (sum_min, sum_max) = (Vec3::new(-0.3, -0.2, -0.1), Vec3::new(2.3, 1.2, 1.6));
+    // every vertex is a corner of the sum, to rounding
+    for v in &exact.surface.vertices {
+        assert!((0..3).all(|k| (v[k] - sum_min[k]).abs() < 1e-12 || (v[k] - sum_max[k]).abs() < 1e-12), "{v:?}");
+    }
+    // the sampled surface's vertices lie on the true boundary or within the bound of it
+    let sum = Aabb::new(sum_min, sum_max);
+    for v in &sampled.surface.vertices {
+        let outside = sum.distance_to_point(*v);
+        let inside = (0..3).map(|k| (v[k] - sum.min[k]).min(sum.max[k] - v[k])).fold(f64::INFINITY, f64::min);
+        assert!(outside <= sampled.error_bound && inside <= sampled.error_bound, "{v:?}");
+    }
 }

@@ -60,6 +60,7 @@ use crate::bvh::Bvh;
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
 use crate::octree::{merge_sorted, CellSource, Label};
+use crate::surface::planar::Cut;
 
 /// Records at or above this are walls (`WALL + side`, side = 2 · axis + upper); below
 /// [`PAIR`], facet indices.
@@ -737,6 +738,21 @@ impl CellSource for ExactSource {
             }
         }
         merge_sorted(out);
+    }
+
+    /// Only facets, each flat with its half-spaces known (no margin), on at most three planes.
+    fn plane_cut(&self, own: &[u32]) -> Option<Cut> {
+        let mut cut = Cut::new();
+        for rec in records(own) {
+            let Rec::Facet(i) = rec else { return None };
+            let Some(Some((pl, _))) = self.flat.get(i) else { return None };
+            // the plane from both sides, each thickened by the facet's slack
+            let (n, w, slack) = (pl[0].0, 0.5 * (pl[0].1 - pl[1].1), 0.5 * (pl[0].1 + pl[1].1));
+            if !cut.add(n, w, 100.0 * slack) {
+                return None;
+            }
+        }
+        Some(cut)
     }
 
     fn solid_intervals(&self, a: Vec3, b: Vec3, sa: bool, sb: bool, bnd: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {

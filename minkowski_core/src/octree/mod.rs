@@ -16,6 +16,7 @@ mod octree_tests;
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
 use crate::polytope::ConvexPolytope;
+use crate::surface::planar::Cut;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
@@ -70,6 +71,16 @@ pub trait CellSource: Sync {
     /// intervals of `[0, 1]`, given its [`CellSource::boundary_intervals`] `bnd` and the
     /// known memberships `sa`, `sb` of its ends.
     fn solid_intervals(&self, a: Vec3, b: Vec3, sa: bool, sb: bool, bnd: &[(f64, f64)], out: &mut Vec<(f64, f64)>);
+    /// The planes of the boundary candidates of a MIXED cell with records `own`, when
+    /// every candidate is flat and they lie on at most [`planar::MAX_PLANES`] planes (the
+    /// cell is then resolved exactly at its size, see [`planar`]). Default: `None`.
+    ///
+    /// [`planar`]: crate::surface::planar
+    /// [`planar::MAX_PLANES`]: crate::surface::planar::MAX_PLANES
+    fn plane_cut(&self, own: &[u32]) -> Option<Cut> {
+        let _ = own;
+        None
+    }
 }
 
 impl CellSource for crate::minkowski::PolytopeSet {
@@ -134,7 +145,8 @@ pub enum Label {
     Empty = 0,
     /// Inside one primitive: exactly blocked.
     Full = 1,
-    /// Meets a primitive boundary (conservatively); always at the finest level.
+    /// Meets a primitive boundary (conservatively); at the finest level, or above it when
+    /// resolved by planes ([`Octree::build_resolving_planes`]).
     Mixed = 2,
 }
 
@@ -177,6 +189,9 @@ struct Ctx<'a> {
     h: f64,
     budget: usize,
     max_words: usize,
+    /// Stop at MIXED cells the source resolves by planes ([`CellSource::plane_cut`]),
+    /// except those meeting one of these boxes.
+    planar: Option<&'a [Aabb]>,
     count: AtomicUsize,
     words: AtomicUsize,
     abort: AtomicBool,
@@ -198,6 +213,21 @@ impl Octree {
 
     /// [`Octree::build`] with at most `max_words` candidate-record words.
     pub(crate) fn build_within<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, max_words: usize) -> CoreResult<Octree> {
+        Self::build_with(source, region, h, max_cells, max_words, None)
+    }
+
+    /// [`Octree::build`] that keeps MIXED cells the source resolves by planes
+    /// ([`CellSource::plane_cut`]) as leaves at their size: such leaves are MIXED above
+    /// the finest level. Cells meeting a box of `sampled` are split as usual (where joining their polygons
+    /// to the band failed before).
+    ///
+    /// # Errors
+    /// As [`Octree::build`].
+    pub fn build_resolving_planes<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, sampled: &[Aabb]) -> CoreResult<Octree> {
+        Self::build_with(source, region, h, max_cells, MAX_RECORD_WORDS, Some(sampled))
+    }
+
+    fn build_with<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, max_words: usize, planar: Option<&[Aabb]>) -> CoreResult<Octree> {
         if h <= 0.0 || !h.is_finite() {
             return Err(CoreError::InvalidParameter { name: "cell size".into(), value: h, detail: "must be positive and finite".into() });
         }
@@ -212,7 +242,7 @@ impl Octree {
                 detail: format!("the region is {n:.0} cells wide; the lattice addresses at most 2^{MAX_DEPTH}"),
             });
         }
-        let ctx = Ctx { src: source, origin, h, budget: max_cells, max_words, count: AtomicUsize::new(0), words: AtomicUsize::new(0), abort: AtomicBool::new(false) };
+        let ctx = Ctx { src: source, origin, h, budget: max_cells, max_words, planar, count: AtomicUsize::new(0), words: AtomicUsize::new(0), abort: AtomicBool::new(false) };
         let root = source.root_records();
         let (leaves, cands) = ctx.node([0, 0, 0], depth as u8, &root, None);
         if ctx.words.load(Ordering::Relaxed) > max_words {
@@ -366,6 +396,11 @@ impl Ctx<'_> {
         self.src.classify_near(cell, cand, finest, known, out)
     }
 
+    /// Whether a MIXED cell above the finest level stays a leaf: resolved by planes.
+    fn resolved(&self, cell: &Aabb, own: &[u32]) -> bool {
+        self.planar.is_some_and(|sampled| !sampled.iter().any(|b| b.overlaps(cell))) && self.src.plane_cut(own).is_some_and(|cut| cut.pieces(cell).is_some())
+    }
+
     fn leaf(&self, ijk: [u32; 3], level: u8, label: Label, cand_len: usize) -> Leaf {
         if self.count.fetch_add(1, Ordering::Relaxed) >= self.budget {
             self.abort.store(true, Ordering::Relaxed);
@@ -379,7 +414,7 @@ impl Ctx<'_> {
             let mut own = Vec::with_capacity(cand.len());
             let cell = self.cell(ijk, level);
             let label = self.classify(&cell, cand, level == 0, known, &mut own);
-            if label != Label::Mixed || level == 0 {
+            if label != Label::Mixed || level == 0 || self.resolved(&cell, &own) {
                 self.push_leaf(&mut out, ijk, level, label, &own);
                 return out;
             }
@@ -414,7 +449,7 @@ impl Ctx<'_> {
         let mut own = Vec::with_capacity(cand.len());
         let cell = self.cell(ijk, level);
         let label = self.classify(&cell, cand, level == 0, known, &mut own);
-        if label != Label::Mixed || level == 0 {
+        if label != Label::Mixed || level == 0 || self.resolved(&cell, &own) {
             self.push_leaf(out, ijk, level, label, &own);
             return;
         }

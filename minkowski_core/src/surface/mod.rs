@@ -13,13 +13,15 @@
 //!
 //! Entry point: [`extract`].
 
+pub mod planar;
 mod simplify;
+pub mod stitch;
 #[cfg(test)]
 mod surface_tests;
 
 pub use simplify::merge_coplanar;
 
-use crate::math::Vec3;
+use crate::math::{Aabb, Vec3};
 use crate::octree::{CellSource, Label, Octree};
 use crate::util::UnionFind;
 use rayon::prelude::*;
@@ -65,6 +67,15 @@ pub struct Surface {
     pub complex_cells: usize,
     /// Edges whose clipped crossings disagreed with the lattice signs (rounding); should be 0.
     pub inconsistent_edges: usize,
+    /// MIXED cells above the finest level, resolved by planes: their surface is exact.
+    pub planar_cells: usize,
+    /// Exact polygons those cells gave.
+    pub planar_pieces: usize,
+    /// Edges left open (or used twice) where those polygons met the band: 0 for a closed
+    /// surface (the caller samples there instead when not).
+    pub open_edges: usize,
+    /// The boxes of those edges (at most [`MAX_OPEN_REPORTED`]).
+    pub open_at: Vec<Aabb>,
 }
 
 #[inline]
@@ -218,7 +229,86 @@ impl EdgeIntervals {
 
 /// Extract the surface of the solid of `src` over the finest MIXED cells of `oct` (built
 /// over `src`).
+///
+/// MIXED cells above the finest level (an octree from [`Octree::build_resolving_planes`])
+/// give their exact polygons ([`planar`]), joined to the band's triangles ([`stitch`]).
 pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
+    let planar_polys = planar_polygons(oct, src);
+    let mut s = sample_band(oct, src, &planar_polys.1);
+    s.planar_cells = planar_polys.2;
+    s.planar_pieces = planar_polys.0.len();
+    if !planar_polys.0.is_empty() {
+        stitch::join(&mut s, &planar_polys.0, STITCH_TOL * oct.h, (oct.origin, oct.h));
+        let open = stitch::open_edges(&s.faces);
+        s.open_edges = open.len();
+        s.open_at = open.iter().take(MAX_OPEN_REPORTED).map(|&(a, b)| Aabb::from_points(&[s.vertices[a as usize], s.vertices[b as usize]])).collect();
+    }
+    s
+}
+
+/// Most open edges whose boxes [`Surface::open_at`] keeps.
+pub const MAX_OPEN_REPORTED: usize = 10_000;
+
+/// Welding and T-junction tolerance where plane-resolved cells meet the band, in finest
+/// cells: above the band's vertex clamp off lattice points ([`EDGE_CLAMP`] of an edge of
+/// at most `sqrt(3) h`), far below any feature the band resolves.
+const STITCH_TOL: f64 = 4.0 * EDGE_CLAMP;
+
+/// Plane-resolved cells with a surface, by `(level, lattice key of their lower corner)`.
+type PlanarSet = std::collections::HashSet<(u8, u64)>;
+
+/// The exact polygons of the MIXED cells above the finest level (outward, counter-clockwise),
+/// the cells that have some, and how many such cells there are.
+fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> (Vec<Vec<Vec3>>, PlanarSet, usize) {
+    let cells: Vec<usize> = (0..oct.leaves.len()).filter(|&i| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level > 0).collect();
+    let per_cell: Vec<(usize, Vec<Vec<Vec3>>)> = cells
+        .par_iter()
+        .map(|&li| {
+            let leaf = &oct.leaves[li];
+            let (recs, cell) = (oct.records(leaf), oct.cell_box(leaf));
+            let Some((cut, pieces)) = src.plane_cut(recs).and_then(|cut| Some((cut, cut.pieces(&cell)?))) else {
+                return (li, Vec::new()); // not resolvable after all: the stitch check sees the hole
+            };
+            // one point query per region of the cut (pieces share them)
+            let mut region_inside: [Option<bool>; 1 << planar::MAX_PLANES] = [None; 1 << planar::MAX_PLANES];
+            let mut inside = |p: Vec3| *region_inside[cut.region(p)].get_or_insert_with(|| src.cell_contains(recs, p));
+            let polys = pieces
+                .into_iter()
+                .filter_map(|p| {
+                    let (front, behind) = (inside(p.sides[0]), inside(p.sides[1]));
+                    match (front, behind) {
+                        (false, true) => Some(p.polygon),
+                        (true, false) => Some(p.polygon.into_iter().rev().collect()),
+                        _ => None, // the same on both sides: no boundary there
+                    }
+                })
+                .collect();
+            (li, polys)
+        })
+        .collect();
+    let mut with_surface = PlanarSet::new();
+    let mut polys = Vec::new();
+    for (li, p) in per_cell {
+        if !p.is_empty() {
+            let l = &oct.leaves[li];
+            with_surface.insert((l.level, key(l.ijk[0], l.ijk[1], l.ijk[2])));
+            polys.extend(p);
+        }
+    }
+    (polys, with_surface, cells.len())
+}
+
+/// Whether the finest cell at `(x, y, z)` lies in a plane-resolved cell with a surface.
+fn in_planar(planar: &PlanarSet, x: u32, y: u32, z: u32, max_level: u8) -> bool {
+    (1..=max_level).any(|lv| {
+        let m = !((1u32 << lv) - 1);
+        planar.contains(&(lv, key(x & m, y & m, z & m)))
+    })
+}
+
+/// Marching tetrahedra over the finest MIXED cells (see the module docs); `planar`: the
+/// plane-resolved cells with a surface, which count as neighbours with a sign change.
+fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarSet) -> Surface {
     let band: Vec<usize> = (0..oct.leaves.len()).filter(|&i| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level == 0).collect();
     let mut s = Surface { band_cells: band.len(), ..Default::default() };
     if band.is_empty() {
@@ -409,7 +499,7 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
                     if x < 0 || y < 0 || z < 0 {
                         continue;
                     }
-                    if resolved.binary_search(&key(x as u32, y as u32, z as u32)).is_ok() {
+                    if resolved.binary_search(&key(x as u32, y as u32, z as u32)).is_ok() || in_planar(planar, x as u32, y as u32, z as u32, oct.depth) {
                         near = true;
                         break 'n;
                     }

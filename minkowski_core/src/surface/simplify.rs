@@ -1,13 +1,15 @@
 //! Geometry-preserving simplification of an extracted surface: interior vertices of planar
-//! patches are collapsed away.
+//! patches, and vertices inside straight creases, are collapsed away.
 //!
-//! A vertex whose star (all triangles around it) lies in one plane is collapsed onto a
-//! neighbour when the link condition holds (the mesh stays a closed 2-manifold) and no
-//! triangle of the new star flips or degenerates in that plane. Every new triangle lies in
-//! the plane and the star's polygon is unchanged, so the surface is the same point set: the
-//! error bound, closedness and orientation are kept. Marching tetrahedra samples a flat
-//! facet with O(area / h²) triangles; afterwards only its boundary (O(perimeter / h))
-//! remains.
+//! A vertex `v` is collapsed onto a neighbour `u` when `u` lies in the plane of every
+//! triangle of `v`'s star that survives (so each keeps its plane), the link condition holds
+//! (the mesh stays a closed 2-manifold) and no surviving triangle flips or degenerates in
+//! its plane. A star in one plane collapses onto any such neighbour; a star in two planes
+//! only along their common line (`u` must lie in both), where `v` lies between `u` and the
+//! crease's other neighbour; a corner of three planes never. The surface is the same point
+//! set: the error bound, closedness and orientation are kept. Marching tetrahedra samples a
+//! flat facet with O(area / h²) triangles, plane-resolved cells split a straight edge at
+//! every cell; afterwards only corners and the sampled (curved or chamfered) band remain.
 
 use super::Surface;
 use crate::math::Vec3;
@@ -86,28 +88,16 @@ fn try_collapse(
     let mut star_buf = [0u32; STAR_CAP];
     star_buf[..inc[v].len()].copy_from_slice(&inc[v]);
     let star = &star_buf[..inc[v].len()];
-    // the star's plane: normal of its largest triangle
-    let mut best = (0.0, Vec3::ZERO);
-    for &fi in star {
+    // each star triangle's unit normal (a degenerate one stops the collapse)
+    let mut normals = [Vec3::ZERO; STAR_CAP];
+    for (k, &fi) in star.iter().enumerate() {
         let f = faces[fi as usize];
         let n = (pos[f[1] as usize] - pos[f[0] as usize]).cross(pos[f[2] as usize] - pos[f[0] as usize]);
         let a = n.length();
-        if a > best.0 {
-            best = (a, n / a);
+        if a <= 0.0 {
+            return None;
         }
-    }
-    if best.0 <= 0.0 {
-        return None;
-    }
-    let n = best.1;
-    let d = n.dot(pos[v]);
-    // all star vertices on the plane
-    for &fi in star {
-        for &w in &faces[fi as usize] {
-            if (n.dot(pos[w as usize]) - d).abs() > plane_tol {
-                return None;
-            }
-        }
+        normals[k] = n / a;
     }
     // the link of v: neighbours
     let mut nbr_buf = [0u32; 3 * STAR_CAP];
@@ -133,15 +123,17 @@ fn try_collapse(
         if inc[u as usize].len() > MAX_TARGET_DEGREE {
             continue;
         }
-        // new star: faces of v not containing u, with v -> u; none may flip or degenerate
-        let flips = star.iter().any(|&fi| {
+        // new star: faces of v not containing u, with v -> u; each must stay in its plane
+        // (u lies in it) and none may flip or degenerate there
+        let moved_off = |k: usize| (pos[u as usize] - pos[v]).dot(normals[k]).abs() > plane_tol;
+        let flips = star.iter().enumerate().any(|(k, &fi)| {
             let f = faces[fi as usize];
             if f.contains(&u) {
                 return false;
             }
             let g = f.map(|w| if w as usize == v { u } else { w });
             let m = (pos[g[1] as usize] - pos[g[0] as usize]).cross(pos[g[2] as usize] - pos[g[0] as usize]);
-            m.dot(n) <= 2.0 * min_area
+            moved_off(k) || m.dot(normals[k]) <= 2.0 * min_area
         });
         if flips {
             continue;

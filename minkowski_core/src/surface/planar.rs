@@ -1,0 +1,236 @@
+//! Cells whose boundary lies on at most three planes: the exact surface pieces there.
+//!
+//! When every boundary candidate that meets a closed cell lies on one of `k <= 3` planes,
+//! the boundary inside the cell lies on those planes, so each open region of the cell cut
+//! by them holds no boundary point: it is wholly inside or wholly outside the solid, and one
+//! point decides it. The surface in the cell is then the set of plane pieces (the plane
+//! clipped to the cell and to one side of each other plane) whose two sides differ: a flat
+//! cell gives one polygon, an edge two, a corner three — exact, at any cell size, so such
+//! cells are never split. A cell whose pieces are too thin or whose planes nearly coincide
+//! to decide a side safely is not resolved this way (it is split, and at the finest level
+//! sampled like any other).
+//!
+//! Entry points: [`Cut`], [`Cut::pieces`].
+
+use crate::math::{Aabb, Vec3};
+
+/// Most planes a resolved cell may have.
+pub const MAX_PLANES: usize = 3;
+
+/// Pieces thinner than this fraction of the cell (from their centre to any plane or cell
+/// face), or planes closer to parallel than this (`1 − |n_i · n_j|`), are not resolved.
+const THIN: f64 = 1e-6;
+
+/// The distinct planes `(n, w)` (`n · x = w`, `n` unit) of the boundary candidates in one cell.
+#[derive(Clone, Copy, Debug)]
+pub struct Cut {
+    /// The planes; the first `n` are used.
+    pub planes: [(Vec3, f64); MAX_PLANES],
+    /// How many.
+    pub n: usize,
+}
+
+/// One piece of a plane in a cell: a convex polygon (counter-clockwise about the plane's
+/// normal) and a point on either side of it, in the regions it separates.
+#[derive(Clone, Debug)]
+pub struct Piece {
+    /// Corners, counter-clockwise about `normal`.
+    pub polygon: Vec<Vec3>,
+    /// The plane's unit normal.
+    pub normal: Vec3,
+    /// A point just in front of the piece (along `normal`) and one just behind it.
+    pub sides: [Vec3; 2],
+}
+
+impl Cut {
+    /// An empty cut.
+    pub fn new() -> Cut {
+        Cut { planes: [(Vec3::ZERO, 0.0); MAX_PLANES], n: 0 }
+    }
+
+    /// Add the plane `(n, w)` unless one of the cut's planes is the same (within `tol` in
+    /// offset, either orientation); `false` when that would make more than [`MAX_PLANES`].
+    pub fn add(&mut self, n: Vec3, w: f64, tol: f64) -> bool {
+        for &(m, v) in &self.planes[..self.n] {
+            let c = n.dot(m);
+            if c.abs() >= 1.0 - 1e-12 && (w - c.signum() * v).abs() <= tol {
+                return true;
+            }
+        }
+        if self.n == MAX_PLANES {
+            return false;
+        }
+        self.planes[self.n] = (n, w);
+        self.n += 1;
+        true
+    }
+
+    /// The region of the cut holding `p` (off every plane): bit `i` set in front of plane `i`.
+    pub fn region(&self, p: Vec3) -> usize {
+        self.planes[..self.n].iter().enumerate().fold(0, |r, (i, &(n, w))| r | (((n.dot(p) > w) as usize) << i))
+    }
+
+    /// The pieces of every plane in `cell`, or `None` when the cell cannot be resolved
+    /// safely (nearly parallel planes, a piece too thin to tell its sides).
+    pub fn pieces(&self, cell: &Aabb) -> Option<Vec<Piece>> {
+        let size = cell.extent().max_element();
+        let planes = &self.planes[..self.n];
+        for i in 0..planes.len() {
+            for j in 0..i {
+                if 1.0 - planes[i].0.dot(planes[j].0).abs() < THIN {
+                    return None;
+                }
+            }
+        }
+        let mut out = Vec::new();
+        for (i, &(n, w)) in planes.iter().enumerate() {
+            let section = plane_section(cell, n, w);
+            if section.len() < 3 {
+                continue;
+            }
+            let others: Vec<(Vec3, f64)> = planes.iter().enumerate().filter(|&(j, _)| j != i).map(|(_, &p)| p).collect();
+            for signs in 0..(1u32 << others.len()) {
+                let mut poly = section.clone();
+                for (b, &(m, v)) in others.iter().enumerate() {
+                    // keep the side `m · x - v` has the sign bit `b` says
+                    let s = if signs >> b & 1 == 1 { 1.0 } else { -1.0 };
+                    poly = clip(&poly, m * s, v * s);
+                    if poly.len() < 3 {
+                        break;
+                    }
+                }
+                if poly.len() < 3 {
+                    continue;
+                }
+                out.push(piece(cell, &poly, n, planes, size)?);
+            }
+        }
+        Some(out)
+    }
+}
+
+impl Default for Cut {
+    fn default() -> Self {
+        Cut::new()
+    }
+}
+
+/// A piece for the polygon `poly` on the plane with normal `n`, with its side points;
+/// `None` when it is too thin for them.
+fn piece(cell: &Aabb, poly: &[Vec3], n: Vec3, planes: &[(Vec3, f64)], size: f64) -> Option<Piece> {
+    let c = poly.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / poly.len() as f64;
+    // room around the centre: to every other plane and every cell face
+    let mut room = f64::INFINITY;
+    for &(m, v) in planes {
+        if 1.0 - m.dot(n).abs() >= THIN {
+            room = room.min((m.dot(c) - v).abs());
+        }
+    }
+    for a in 0..3 {
+        room = room.min(c[a] - cell.min[a]).min(cell.max[a] - c[a]);
+    }
+    // a polygon whose corners all hug its centre is a sliver
+    let reach = poly.iter().map(|&p| (p - c).length()).fold(0.0f64, f64::max);
+    if room < THIN * size || reach < THIN * size {
+        return None;
+    }
+    let d = 0.5 * room;
+    Some(Piece { polygon: poly.to_vec(), normal: n, sides: [c + n * d, c - n * d] })
+}
+
+/// The convex polygon where the plane `n · x = w` crosses the closed box, counter-clockwise
+/// about `n` (fewer than three corners when it misses or only touches it).
+fn plane_section(cell: &Aabb, n: Vec3, w: f64) -> Vec<Vec3> {
+    let corner = |k: usize| Vec3::new([cell.min.x, cell.max.x][k & 1], [cell.min.y, cell.max.y][(k >> 1) & 1], [cell.min.z, cell.max.z][(k >> 2) & 1]);
+    let mut pts: Vec<Vec3> = Vec::with_capacity(6);
+    for a in 0..8usize {
+        for bit in [1usize, 2, 4] {
+            if a & bit != 0 {
+                continue;
+            }
+            let (p, q) = (corner(a), corner(a | bit));
+            let (fp, fq) = (n.dot(p) - w, n.dot(q) - w);
+            if (fp < 0.0) != (fq < 0.0) {
+                let t = fp / (fp - fq);
+                pts.push(p + (q - p) * t);
+            }
+        }
+    }
+    if pts.len() < 3 {
+        return pts;
+    }
+    let c = pts.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / pts.len() as f64;
+    let u = (pts[0] - c).normalize_or_zero();
+    let v = n.cross(u);
+    pts.sort_by(|&p, &q| {
+        let (a, b) = ((p - c).dot(v).atan2((p - c).dot(u)), (q - c).dot(v).atan2((q - c).dot(u)));
+        a.total_cmp(&b)
+    });
+    pts
+}
+
+/// The part of the convex polygon `poly` where `m · x <= v` (Sutherland–Hodgman).
+fn clip(poly: &[Vec3], m: Vec3, v: f64) -> Vec<Vec3> {
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for i in 0..poly.len() {
+        let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (fp, fq) = (m.dot(p) - v, m.dot(q) - v);
+        if fp <= 0.0 {
+            out.push(p);
+        }
+        if (fp < 0.0 && fq > 0.0) || (fp > 0.0 && fq < 0.0) {
+            out.push(p + (q - p) * (fp / (fp - fq)));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_plane_through_a_cube_is_one_square_with_a_point_on_each_side() {
+        let cell = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let mut cut = Cut::new();
+        assert!(cut.add(Vec3::Z, 0.3, 1e-12));
+        assert!(cut.add(-Vec3::Z, -0.3, 1e-12), "the same plane facing the other way");
+        assert_eq!(cut.n, 1);
+        let pieces = cut.pieces(&cell).unwrap();
+        assert_eq!(pieces.len(), 1);
+        let p = &pieces[0];
+        assert_eq!(p.polygon.len(), 4);
+        assert!(p.polygon.iter().all(|q| (q.z - 0.3).abs() < 1e-15));
+        let e = (p.polygon[1] - p.polygon[0]).cross(p.polygon[2] - p.polygon[1]);
+        assert!(e.dot(Vec3::Z) > 0.0, "counter-clockwise about the normal");
+        assert!(p.sides[0].z > 0.3 && p.sides[1].z < 0.3);
+    }
+
+    #[test]
+    fn an_edge_gives_four_pieces_and_a_corner_twelve() {
+        let cell = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let mut cut = Cut::new();
+        cut.add(Vec3::X, 0.4, 1e-12);
+        cut.add(Vec3::Y, 0.6, 1e-12);
+        assert_eq!(cut.pieces(&cell).unwrap().len(), 4);
+        cut.add(Vec3::Z, 0.5, 1e-12);
+        assert!(!cut.add(Vec3::new(1.0, 1.0, 0.0).normalize(), 0.7, 1e-12), "a fourth plane");
+        let pieces = cut.pieces(&cell).unwrap();
+        assert_eq!(pieces.len(), 12);
+        let area: f64 =
+            pieces.iter().map(|p| (1..p.polygon.len() - 1).map(|i| 0.5 * (p.polygon[i] - p.polygon[0]).cross(p.polygon[i + 1] - p.polygon[0]).length()).sum::<f64>()).sum();
+        assert!((area - 3.0).abs() < 1e-12, "three unit squares, {area}");
+    }
+
+    #[test]
+    fn thin_or_nearly_parallel_cuts_are_not_resolved() {
+        let cell = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let mut cut = Cut::new();
+        cut.add(Vec3::Z, 1e-9, 1e-15);
+        assert!(cut.pieces(&cell).is_none(), "a plane hugging a face");
+        let mut cut = Cut::new();
+        cut.add(Vec3::Z, 0.5, 1e-15);
+        cut.add(Vec3::new(0.0, 1e-4, 1.0).normalize(), 0.2, 1e-15);
+        assert!(cut.pieces(&cell).is_none(), "nearly parallel planes");
+    }
+}

@@ -1,0 +1,332 @@
+//! Joining the exact polygons of plane-resolved cells to the sampled triangles of the band.
+//!
+//! Where a plane-resolved cell meets a neighbour (sampled, or resolved at another size),
+//! both sides trace the same segments of the same planes on their shared face, but split
+//! them at different points: T-junctions. The polygons are triangulated, their corners
+//! welded to vertices within a tolerance, and every edge used once (its reverse missing)
+//! is split at the vertices of other such edges lying on it, the triangle becoming a fan
+//! about its centroid. Nothing is moved, so the surface is the same point set; the
+//! caller checks that every edge then has its reverse exactly once (closed, manifold).
+//!
+//! Entry points: [`join`], [`open_edges`].
+
+use super::Surface;
+use crate::bvh::Bvh;
+use crate::math::{Aabb, Vec3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Add the convex polygons `polys` (each counter-clockwise about its outward normal) to
+/// `s`, welding corners within `tol` and splitting edges at T-junctions (see the module
+/// docs).
+pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], tol: f64, lattice: (Vec3, f64)) {
+    if polys.is_empty() {
+        return;
+    }
+    // the band's own open edges end where the polygons begin: weld to their vertices
+    let mut grid = Grid::new(4.0 * tol);
+    for (a, b) in open_edges(&s.faces) {
+        for v in [a, b] {
+            grid.insert(v, s.vertices[v as usize]);
+        }
+    }
+    for poly in polys {
+        let ids: Vec<u32> = poly.iter().map(|&p| grid.weld(p, tol, &mut s.vertices)).collect();
+        let c = poly.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / poly.len() as f64;
+        let centre = s.vertices.len() as u32;
+        s.vertices.push(c);
+        for i in 0..ids.len() {
+            let (a, b) = (ids[i], ids[(i + 1) % ids.len()]);
+            if a != b {
+                s.faces.push([centre, a, b]);
+            }
+        }
+    }
+    split_t_junctions(s, tol);
+    fill_face_gaps(s, tol, lattice);
+}
+
+/// Directed edges used by one triangle whose reverse no triangle uses, and directed edges
+/// used more than once (both break a closed manifold).
+pub fn open_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let mut e: Vec<u64> = faces.par_iter().flat_map_iter(|f| (0..3).map(move |i| ((f[i] as u64) << 32) | f[(i + 1) % 3] as u64)).collect();
+    e.par_sort_unstable();
+    let reversed = |k: u64| k.rotate_right(32);
+    let mut out = Vec::new();
+    for (i, &k) in e.iter().enumerate() {
+        let twice = (i > 0 && e[i - 1] == k) || (i + 1 < e.len() && e[i + 1] == k);
+        if twice || e.binary_search(&reversed(k)).is_err() {
+            out.push(((k >> 32) as u32, k as u32));
+        }
+    }
+    out
+}
+
+/// Split every open edge at the ends of other open edges that lie on it (within `tol`).
+fn split_t_junctions(s: &mut Surface, tol: f64) {
+    let open = open_edges(&s.faces);
+    if open.is_empty() {
+        return;
+    }
+    let boxes: Vec<Aabb> = open.iter().map(|&(a, b)| Aabb::from_points(&[s.vertices[a as usize], s.vertices[b as usize]]).inflated(tol)).collect();
+    let bvh = Bvh::build(&boxes);
+    let mut ends: Vec<u32> = open.iter().flat_map(|&(a, b)| [a, b]).collect();
+    ends.sort_unstable();
+    ends.dedup();
+    // per open edge: (parameter, vertex) of the points on it
+    let mut on: HashMap<(u32, u32), Vec<(f64, u32)>> = HashMap::new();
+    for &v in &ends {
+        let p = s.vertices[v as usize];
+        bvh.for_each_at_point(p, |i| {
+            let (a, b) = open[i];
+            if v == a || v == b {
+                return;
+            }
+            let (pa, pb) = (s.vertices[a as usize], s.vertices[b as usize]);
+            let d = pb - pa;
+            let t = (p - pa).dot(d) / d.length_squared();
+            if t > 0.0 && t < 1.0 && (pa + d * t - p).length() <= tol {
+                on.entry((a, b)).or_default().push((t, v));
+            }
+        });
+    }
+    if on.is_empty() {
+        return;
+    }
+    let mut faces = Vec::with_capacity(s.faces.len() + 4 * on.len());
+    for f in std::mem::take(&mut s.faces) {
+        let edges = [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])];
+        if !edges.iter().any(|e| on.contains_key(e)) {
+            faces.push(f);
+            continue;
+        }
+        // the triangle's ring with the split points in order, as a fan about its centroid
+        let mut ring = Vec::new();
+        for e in edges {
+            ring.push(e.0);
+            if let Some(pts) = on.get_mut(&e) {
+                pts.sort_by(|x, y| x.0.total_cmp(&y.0));
+                ring.extend(pts.iter().map(|&(_, v)| v));
+            }
+        }
+        let c = (s.vertices[f[0] as usize] + s.vertices[f[1] as usize] + s.vertices[f[2] as usize]) / 3.0;
+        let centre = s.vertices.len() as u32;
+        s.vertices.push(c);
+        for i in 0..ring.len() {
+            faces.push([centre, ring[i], ring[(i + 1) % ring.len()]]);
+        }
+    }
+    s.faces = faces;
+}
+
+/// A lattice plane: the axis it is normal to and its index along it.
+type LatticePlane = (usize, i64);
+
+/// Close the gaps left in cell faces where a sharp edge of a plane-resolved cell leaves it
+/// into a sampled cell: on the shared face the exact trace bends at the edge, the sampled
+/// one cuts across, and between the two a small polygon of the face is open. Per lattice
+/// plane (`lattice`: the position of lattice point 0 and the spacing), the open edges lying
+/// in it form loops; each is triangulated there (ear clipping). Its points lie in a band
+/// cell's face that the true boundary crosses, so within the band's bound of it; loops that
+/// are not simple are left (the caller sees them open).
+fn fill_face_gaps(s: &mut Surface, tol: f64, lattice: (Vec3, f64)) {
+    let open = open_edges(&s.faces);
+    if open.is_empty() {
+        return;
+    }
+    let (origin, h) = lattice;
+    // the lattice planes (axis, index) each vertex lies in
+    let on_plane = |v: u32, axis: usize| -> Option<i64> {
+        let x = (s.vertices[v as usize][axis] - origin[axis]) / h;
+        let c = x.round();
+        ((x - c).abs() * h <= tol).then_some(c as i64)
+    };
+    let mut by_plane: HashMap<LatticePlane, Vec<(u32, u32)>> = HashMap::new();
+    for &(a, b) in &open {
+        for axis in 0..3 {
+            if let (Some(ca), Some(cb)) = (on_plane(a, axis), on_plane(b, axis)) {
+                if ca == cb {
+                    by_plane.entry((axis, ca)).or_default().push((a, b));
+                }
+            }
+        }
+    }
+    let mut planes: Vec<(LatticePlane, Vec<(u32, u32)>)> = by_plane.into_iter().collect();
+    planes.sort_unstable_by_key(|p| p.0);
+    let mut filled = std::collections::HashSet::new();
+    for ((axis, _), edges) in planes {
+        // the fill runs each open edge backwards: b -> a
+        let mut next: HashMap<u32, Vec<u32>> = HashMap::new();
+        for &(a, b) in edges.iter().filter(|e| !filled.contains(*e)) {
+            next.entry(b).or_default().push(a);
+        }
+        for ring in cycles(&mut next) {
+            if let Some(tris) = ring_triangles(&ring, &s.vertices, axis) {
+                for i in 0..ring.len() {
+                    filled.insert((ring[(i + 1) % ring.len()], ring[i]));
+                }
+                s.faces.extend(tris);
+            }
+        }
+    }
+    // what is left bends over a lattice edge (two faces of band cells): a fan about the
+    // centroid of each small loop, whose points are within the loop's span (at most two
+    // cell faces, a face diagonal) of its corners, which lie on the boundary
+    let mut next: HashMap<u32, Vec<u32>> = HashMap::new();
+    for &(a, b) in open.iter().filter(|e| !filled.contains(*e)) {
+        next.entry(b).or_default().push(a);
+    }
+    for ring in cycles(&mut next) {
+        let pts: Vec<Vec3> = ring.iter().map(|&v| s.vertices[v as usize]).collect();
+        if Aabb::from_points(&pts).diagonal() > 2.0 * h {
+            continue;
+        }
+        let centre = s.vertices.len() as u32;
+        s.vertices.push(pts.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / pts.len() as f64);
+        for i in 0..ring.len() {
+            s.faces.push([centre, ring[i], ring[(i + 1) % ring.len()]]);
+        }
+    }
+}
+
+/// The simple cycles of the directed graph `next` (each edge used once; a walk that comes
+/// back to a vertex of its own path cuts the loop there), at least three vertices each.
+fn cycles(next: &mut HashMap<u32, Vec<u32>>) -> Vec<Vec<u32>> {
+    let mut starts: Vec<u32> = next.keys().copied().collect();
+    starts.sort_unstable();
+    let mut out = Vec::new();
+    for start in starts {
+        let mut path = vec![start];
+        let mut at: HashMap<u32, usize> = HashMap::from([(start, 0)]);
+        while let Some(&v) = path.last() {
+            let Some(w) = next.get_mut(&v).and_then(|outs| outs.pop()) else { break };
+            if let Some(&i) = at.get(&w) {
+                let ring: Vec<u32> = path.split_off(i + 1);
+                let ring = [vec![w], ring].concat();
+                for x in &ring[1..] {
+                    at.remove(x);
+                }
+                if ring.len() >= 3 {
+                    out.push(ring);
+                }
+            } else {
+                at.insert(w, path.len());
+                path.push(w);
+            }
+        }
+    }
+    out
+}
+
+/// Triangles filling the ring `ring` (in order), which lies in a plane normal to `axis`;
+/// by ear clipping in that plane.
+fn ring_triangles(ring: &[u32], pos: &[Vec3], axis: usize) -> Option<Vec<[u32; 3]>> {
+    let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+    let p2 = |v: u32| (pos[v as usize][u], pos[v as usize][w]);
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0);
+    let area: f64 = (0..ring.len()).map(|i| cross((0.0, 0.0), p2(ring[i]), p2(ring[(i + 1) % ring.len()]))).sum();
+    let turn = area.signum();
+    let mut poly: Vec<u32> = ring.to_vec();
+    let mut out = Vec::with_capacity(ring.len());
+    while poly.len() > 3 {
+        let n = poly.len();
+        let ear = (0..n).find(|&i| {
+            let (a, b, c) = (poly[(i + n - 1) % n], poly[i], poly[(i + 1) % n]);
+            let (pa, pb, pc) = (p2(a), p2(b), p2(c));
+            if cross(pa, pb, pc) * turn <= 0.0 {
+                return false; // reflex or flat corner
+            }
+            // no other corner inside the ear
+            poly.iter().all(|&q| {
+                if q == a || q == b || q == c {
+                    return true;
+                }
+                let pq = p2(q);
+                !(cross(pa, pb, pq) * turn >= 0.0 && cross(pb, pc, pq) * turn >= 0.0 && cross(pc, pa, pq) * turn >= 0.0)
+            })
+        })?;
+        out.push([poly[(ear + n - 1) % n], poly[ear], poly[(ear + 1) % n]]);
+        poly.remove(ear);
+    }
+    out.push([poly[0], poly[1], poly[2]]);
+    Some(out)
+}
+
+/// A hash grid of vertices for welding.
+struct Grid {
+    cell: f64,
+    buckets: HashMap<[i64; 3], Vec<(u32, Vec3)>>,
+}
+
+impl Grid {
+    fn new(cell: f64) -> Grid {
+        Grid { cell, buckets: HashMap::new() }
+    }
+
+    fn key(&self, p: Vec3) -> [i64; 3] {
+        let q = p / self.cell;
+        [q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64]
+    }
+
+    fn insert(&mut self, v: u32, p: Vec3) {
+        let k = self.key(p);
+        let b = self.buckets.entry(k).or_default();
+        if !b.iter().any(|&(w, _)| w == v) {
+            b.push((v, p));
+        }
+    }
+
+    /// The nearest vertex within `tol` of `p`, or a new one appended to `vertices`.
+    fn weld(&mut self, p: Vec3, tol: f64, vertices: &mut Vec<Vec3>) -> u32 {
+        let k = self.key(p);
+        let mut best: Option<(f64, u32)> = None;
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    if let Some(b) = self.buckets.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                        for &(v, q) in b {
+                            let d = (q - p).length();
+                            if d <= tol && best.is_none_or(|(bd, _)| d < bd) {
+                                best = Some((d, v));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if let Some((_, v)) = best {
+            return v;
+        }
+        let v = vertices.len() as u32;
+        vertices.push(p);
+        self.insert(v, p);
+        v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_square_next_to_two_half_squares_is_closed_after_splitting() {
+        // a flat "pillow": the top is one square, the bottom two rectangles meeting in the
+        // middle of the square's edges' plane: T-junctions at (0.5, 0) and (0.5, 1)
+        let mut s = Surface::default();
+        let v = |x: f64, y: f64| Vec3::new(x, y, 0.0);
+        let top = vec![v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)];
+        let left = vec![v(0.0, 0.0), v(0.0, 1.0), v(0.5, 1.0), v(0.5, 0.0)];
+        let right = vec![v(0.5, 0.0), v(0.5, 1.0), v(1.0, 1.0), v(1.0, 0.0)];
+        join(&mut s, &[top, left, right], 1e-9, (Vec3::splat(0.25), 1.0));
+        assert!(open_edges(&s.faces).is_empty(), "{:?}", open_edges(&s.faces));
+    }
+
+    #[test]
+    fn open_edges_finds_a_missing_triangle() {
+        let faces = vec![[0, 1, 2], [0, 2, 3], [0, 3, 1]];
+        assert_eq!(open_edges(&faces).len(), 3, "the missing face's three edges");
+        let mut closed = faces.clone();
+        closed.push([1, 3, 2]);
+        assert!(open_edges(&closed).is_empty());
+    }
+}
