@@ -27,7 +27,10 @@ is what the result reports.
 Contact: assembled parts touch face to face. One contact tolerance ``delta`` (the file's
 ``contact_tolerance``, else :data:`~planner.problem.DEFAULT_CONTACT_REL` times the
 assembly's diagonal) is used by the straight-line checks, the planner
-(``planner.contact_tolerance``) and the final FCL validation of every reported path.
+(``planner.contact_tolerance``) and the final FCL validation of every reported path. An
+interference tolerance the user states (``interference``: parts that overlap a little in
+the assembled pose) is added to it everywhere (:attr:`Assembly.tolerance`): a penetration
+up to it counts as contact.
 """
 
 from __future__ import annotations
@@ -62,7 +65,8 @@ log = logging.getLogger(__name__)
 
 
 def validate_removal(part: Part, others: list[Part], path: np.ndarray, delta: float) -> dict:
-    """FCL's check of a removal path with ``others`` present, at the contact tolerance."""
+    """FCL's check of a removal path with ``others`` present, allowing a penetration of
+    ``delta`` (the contact tolerance, plus the interference tolerance if one was given)."""
     checker = FclChecker.for_parts(part, others, contact_tolerance=delta)
     check = checker.check_path(path)
     return {"valid": bool(check.valid), "min_clearance": check.min_clearance,
@@ -124,7 +128,7 @@ class _Search:
         self.progress = progress
         self.plan_parts = plan_parts
         self.groups = groups
-        self.delta = assembly.contact_tolerance
+        self.delta = assembly.tolerance
         self.margin = ESCAPE_MARGIN_REL * assembly.diagonal
         self.pairs = PairCache(assembly, cache_dir)
         self.source = self.pairs.source
