@@ -74,6 +74,17 @@ def validate_removal(part: Part, others: list[Part], path: np.ndarray, delta: fl
             "obstacle": check.obstacle}
 
 
+def _planner_validation(outcome, delta: float) -> dict | None:
+    """The planner's own FCL check of the path it returned (the same part, obstacles and
+    tolerance as :func:`validate_removal`'s), in that form; ``None`` when it has none
+    that passed at ``delta`` (then the path is checked again)."""
+    fcl = (outcome.validation or {}).get("fcl") or {}
+    if not (fcl.get("valid") is True and fcl.get("contact_tolerance") == delta):
+        return None
+    return {"valid": True, "min_clearance": fcl["min_clearance"], "n_checks": fcl["checks"],
+            "contact_tolerance": delta, "obstacle": None, "by": "planner"}
+
+
 GOAL_SIDE = "+z"
 """Default side of the exit box for :func:`removal_scenario`'s goal."""
 
@@ -230,7 +241,8 @@ class _Search:
             sides.append(side)
             if outcome.status == FOUND:
                 path = np.asarray(outcome.waypoints, dtype=np.float64)
-                validation = validate_removal(body, bodies, path, self.delta)
+                validation = (_planner_validation(outcome, self.delta)
+                              or validate_removal(body, bodies, path, self.delta))
                 if validation["valid"]:
                     step = AssemblyStep(part, "planned", dname, path, list(others),
                                         time.perf_counter() - t0, validation)
