@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from test_assembly import _box, _revalidate, _union
 
-from planner.assembly import plan_assembly
+from planner.assembly import plan_assembly, removal_problems
 from planner.cli import main
 from planner.errors import ScenarioError
 from planner.io import load_assembly
@@ -68,6 +68,10 @@ def test_three_piece_burr_first_move_is_a_pair():
     assert len(first.inner) == 1  # and the pair comes apart on its own
     assert result.order[0] == "z"
     _revalidate(result)
+    # the benchmark's problems: the group's step, then its own step among its members
+    (inner,) = first.inner
+    assert [(p["part"], p["method"], p["obstacles"]) for p in removal_problems(result)] == [
+        ("[x + y]", "group", ["z"]), (inner.part, inner.method, list(inner.obstacles))]
     # one part at a time, neither x nor y can leave (x proved by a certificate; y's
     # play is walled by C-obstacles of x and z that meet face to face, seams the octree
     # leaves MIXED down to its floor, so y's is not proved)

@@ -457,15 +457,22 @@ def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=No
 
 def removal_problems(result: AssemblyResult) -> list[dict[str, Any]]:
     """The removal problems a result was decided on: every removal step (expected
-    ``found``; the goal on the side it left by, or along its straight direction) and,
+    ``found``; the goal on the side it left by, or along its straight direction; a
+    group's step, then its own steps among its members) and,
     for an interlocked result, each movable part of the interlocked set with the rest of
     the set present (expected ``no_path`` when that was proved)."""
     problems = []
-    for step in result.removal:
-        end = np.asarray(step.removal[-1], dtype=np.float64)
-        direction = step.direction if step.direction in DIRECTIONS else end
-        problems.append({"part": step.part, "obstacles": list(step.obstacles),
-                         "direction": direction, "expected": FOUND, "method": step.method})
+
+    def add(steps: list[AssemblyStep]) -> None:
+        for step in steps:
+            end = np.asarray(step.removal[-1], dtype=np.float64)
+            direction = step.direction if step.direction in DIRECTIONS else end
+            problems.append({"part": step.part, "obstacles": list(step.obstacles),
+                             "direction": direction, "expected": FOUND,
+                             "method": step.method})
+            add(step.inner)  # a group's own steps, among its members
+
+    add(result.removal)
     for name in result.interlocked:
         attempt = result.core_attempts.get(name)
         if name == result.base or not attempt:
