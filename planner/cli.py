@@ -178,6 +178,10 @@ def _parser() -> argparse.ArgumentParser:
     asm.add_argument("--html", action="store_true",
                      help="also write DIR/assembly.html: the parts moving in one after "
                      "another (self-contained, opens offline)")
+    asm.add_argument("--interference", type=float, default=None, metavar="DEPTH",
+                     help="accept parts that overlap by up to DEPTH (units) in the "
+                     "assembled pose, and plan with that much penetration allowed "
+                     "(replaces the file's 'interference')")
     from planner import cli_batch, cli_shapes
 
     cli_shapes.add_parsers(sub, common)
@@ -372,7 +376,7 @@ def _cmd_assemble(args) -> int:
     from planner.output import schema_id, write_json
 
     try:
-        assembly = load_assembly(args.assembly)
+        assembly = load_assembly(args.assembly, interference=args.interference)
     except ScenarioError as exc:
         if exc.details:  # e.g. an overlap in the assembled pose, with its penetration depth
             write_json(out / "report.json", {"schema": schema_id("assembly_error"),
@@ -383,8 +387,11 @@ def _cmd_assemble(args) -> int:
                            progress=False if args.no_progress else None)
     write_json(out / "sequence.json", result.sequence_json())
     write_json(out / "report.json", result.report_json())
+    fits = "" if not assembly.interference else (
+        f", interference {assembly.interference:.3g}: {len(assembly.overlaps)} overlapping "
+        f"pair(s) accepted")
     sys.stdout.write(f"{assembly.name}: {result.message} (contact tolerance "
-                     f"{result.contact_tolerance:.3g}); {result.seconds:.2f} s; "
+                     f"{result.contact_tolerance:.3g}{fits}); {result.seconds:.2f} s; "
                      f"wrote {out}/sequence.json, report.json\n")
     if args.html:
         from planner.viz import scene_for_assembly, write_html

@@ -325,8 +325,13 @@ class Assembly:
         base: name of the fixed part (never removed), or ``None``.
         contact_tolerance: ``delta`` in units (given or default).
         settings: planner settings for the full planning steps (``contact_tolerance``
-            set to ``delta``).
+            set to :attr:`tolerance`).
         path: the file it came from, or ``None``.
+        interference: overlap the user accepts in the assembled pose (export
+            imprecision, interference fits), in units; ``0`` unless asked for.
+        overlaps: the pairs of parts that overlap in the assembled pose by more than the
+            contact tolerance but within :attr:`tolerance` (``part``, ``other``,
+            ``penetration_depth``), found only when ``interference > 0``.
     """
 
     name: str
@@ -336,6 +341,14 @@ class Assembly:
     contact_tolerance: float
     settings: PlannerSettings
     path: Path | None = None
+    interference: float = 0.0
+    overlaps: tuple[dict, ...] = ()
+
+    @property
+    def tolerance(self) -> float:
+        """The penetration allowed everywhere (straight-line checks, the planner, the
+        validation): the contact tolerance plus the interference tolerance."""
+        return self.contact_tolerance + self.interference
 
     @property
     def diagonal(self) -> float:

@@ -34,9 +34,10 @@ def _cache(tmp_path_factory, monkeypatch):
 
 def _revalidate(result) -> None:
     """Replay the removal: each path, checked by a fresh FclChecker against the parts
-    still present, at the result's contact tolerance; insertion = removal reversed."""
+    still present, at the result's contact tolerance (plus its interference tolerance,
+    if one was given); insertion = removal reversed."""
     parts = {p.name: p for p in result.assembly.parts}
-    _replay(result.removal, parts, set(parts), result.contact_tolerance)
+    _replay(result.removal, parts, set(parts), result.assembly.tolerance)
 
 
 def _replay(steps, parts, present: set[str], delta: float) -> None:

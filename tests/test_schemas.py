@@ -68,6 +68,25 @@ def test_the_report_of_an_overlapping_assembly_validates(tmp_path):
     assert report["overlap"]["penetration_depth"] is not None
 
 
+def test_the_files_of_an_interference_fit_validate(tmp_path):
+    fit = tmp_path / "fit.yaml"
+    fit.write_text("parts:\n  - {name: a, box: [2, 2, 2]}\n"
+                   "  - {name: b, box: [1, 1, 1], position: [0, 0, 1.48]}\n")
+    assert main(["assemble", str(fit), "--out", str(tmp_path / "short"), "--no-progress",
+                 "--interference", "0.01"]) == 2
+    refused = _read(tmp_path / "short" / "report.json")
+    _valid("assembly_error", refused)
+    assert refused["overlap"]["interference"] == 0.01
+    assert main(["assemble", str(fit), "--out", str(tmp_path / "ok"), "--no-progress",
+                 "--interference", "0.03"]) == 0
+    sequence, report = _read(tmp_path / "ok" / "sequence.json"), _read(tmp_path / "ok" /
+                                                                       "report.json")
+    _valid("sequence", sequence)
+    _valid("assembly_report", report)
+    assert sequence["interference"] == report["interference"] == 0.03
+    assert [o["other"] for o in report["overlaps"]] == ["b"]
+
+
 def test_minkowski_stats_validate(tmp_path):
     block = ROOT / "scenarios" / "_schema_examples" / "block.stl"
     peg = ROOT / "scenarios" / "_schema_examples" / "peg.stl"

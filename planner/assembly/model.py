@@ -164,6 +164,14 @@ class AssemblyResult:
             text += f"; also stuck: {', '.join(others)}"
         return text
 
+    def interference_json(self) -> dict[str, Any]:
+        """The interference tolerance the user gave (``0``: none), the penetration every
+        check allowed (``tolerance``: contact plus interference) and the overlaps of the
+        assembled pose it accepted."""
+        a = self.assembly
+        return {"interference": a.interference, "tolerance": a.tolerance,
+                "overlaps": list(a.overlaps)}
+
     def sequence_json(self) -> dict[str, Any]:
         """``sequence.json``: parts in assembly order, each with its insertion path."""
         steps = {s.part: s for s in self.removal}
@@ -182,8 +190,8 @@ class AssemblyResult:
         return jsonable({
             "schema": schema_id("sequence"),
             "name": self.assembly.name, "units": self.assembly.units, "status": self.status,
-            "contact_tolerance": self.contact_tolerance, "base": self.base,
-            "parts": parts, "interlocked": self.interlocked, "stuck": self.stuck,
+            "contact_tolerance": self.contact_tolerance, **self.interference_json(),
+            "base": self.base, "parts": parts, "interlocked": self.interlocked, "stuck": self.stuck,
             "proved": self.proved, "message": self.message,
         })
 
@@ -192,7 +200,8 @@ class AssemblyResult:
         return jsonable({
             "schema": schema_id("assembly_report"),
             "name": self.assembly.name, "status": self.status, "message": self.message,
-            "contact_tolerance": self.contact_tolerance, "seconds": self.seconds,
+            "contact_tolerance": self.contact_tolerance, **self.interference_json(),
+            "seconds": self.seconds,
             "removal": [{"part": s.part, "method": s.method, "direction": s.direction,
                          "waypoints": s.removal, "obstacles": s.obstacles,
                          "seconds": s.seconds, "validation": s.validation,

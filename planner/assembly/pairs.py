@@ -73,7 +73,7 @@ class PairCache:
     def __init__(self, assembly: Assembly, cache_dir=None, source: Source | None = None) -> None:
         self.assembly = assembly
         self.parts = {p.name: p for p in assembly.parts}
-        self.delta = assembly.contact_tolerance
+        self.delta = assembly.tolerance  # contact (+ interference) tolerance
         self.margin = ESCAPE_MARGIN_REL * assembly.diagonal
         self.source = source or choose_for(assembly.parts, assembly.settings,
                                            cache_dir=cache_dir)

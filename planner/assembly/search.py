@@ -27,7 +27,10 @@ is what the result reports.
 Contact: assembled parts touch face to face. One contact tolerance ``delta`` (the file's
 ``contact_tolerance``, else :data:`~planner.problem.DEFAULT_CONTACT_REL` times the
 assembly's diagonal) is used by the straight-line checks, the planner
-(``planner.contact_tolerance``) and the final FCL validation of every reported path.
+(``planner.contact_tolerance``) and the final FCL validation of every reported path. An
+interference tolerance the user states (``interference``: parts that overlap a little in
+the assembled pose) is added to it everywhere (:attr:`Assembly.tolerance`): a penetration
+up to it counts as contact.
 """
 
 from __future__ import annotations
@@ -62,12 +65,24 @@ log = logging.getLogger(__name__)
 
 
 def validate_removal(part: Part, others: list[Part], path: np.ndarray, delta: float) -> dict:
-    """FCL's check of a removal path with ``others`` present, at the contact tolerance."""
+    """FCL's check of a removal path with ``others`` present, allowing a penetration of
+    ``delta`` (the contact tolerance, plus the interference tolerance if one was given)."""
     checker = FclChecker.for_parts(part, others, contact_tolerance=delta)
     check = checker.check_path(path)
     return {"valid": bool(check.valid), "min_clearance": check.min_clearance,
             "n_checks": check.n_checks, "contact_tolerance": delta,
             "obstacle": check.obstacle}
+
+
+def _planner_validation(outcome, delta: float) -> dict | None:
+    """The planner's own FCL check of the path it returned (the same part, obstacles and
+    tolerance as :func:`validate_removal`'s), in that form; ``None`` when it has none
+    that passed at ``delta`` (then the path is checked again)."""
+    fcl = (outcome.validation or {}).get("fcl") or {}
+    if not (fcl.get("valid") is True and fcl.get("contact_tolerance") == delta):
+        return None
+    return {"valid": True, "min_clearance": fcl["min_clearance"], "n_checks": fcl["checks"],
+            "contact_tolerance": delta, "obstacle": None, "by": "planner"}
 
 
 GOAL_SIDE = "+z"
@@ -124,7 +139,7 @@ class _Search:
         self.progress = progress
         self.plan_parts = plan_parts
         self.groups = groups
-        self.delta = assembly.contact_tolerance
+        self.delta = assembly.tolerance
         self.margin = ESCAPE_MARGIN_REL * assembly.diagonal
         self.pairs = PairCache(assembly, cache_dir)
         self.source = self.pairs.source
@@ -226,7 +241,8 @@ class _Search:
             sides.append(side)
             if outcome.status == FOUND:
                 path = np.asarray(outcome.waypoints, dtype=np.float64)
-                validation = validate_removal(body, bodies, path, self.delta)
+                validation = (_planner_validation(outcome, self.delta)
+                              or validate_removal(body, bodies, path, self.delta))
                 if validation["valid"]:
                     step = AssemblyStep(part, "planned", dname, path, list(others),
                                         time.perf_counter() - t0, validation)
@@ -441,15 +457,22 @@ def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=No
 
 def removal_problems(result: AssemblyResult) -> list[dict[str, Any]]:
     """The removal problems a result was decided on: every removal step (expected
-    ``found``; the goal on the side it left by, or along its straight direction) and,
+    ``found``; the goal on the side it left by, or along its straight direction; a
+    group's step, then its own steps among its members) and,
     for an interlocked result, each movable part of the interlocked set with the rest of
     the set present (expected ``no_path`` when that was proved)."""
     problems = []
-    for step in result.removal:
-        end = np.asarray(step.removal[-1], dtype=np.float64)
-        direction = step.direction if step.direction in DIRECTIONS else end
-        problems.append({"part": step.part, "obstacles": list(step.obstacles),
-                         "direction": direction, "expected": FOUND, "method": step.method})
+
+    def add(steps: list[AssemblyStep]) -> None:
+        for step in steps:
+            end = np.asarray(step.removal[-1], dtype=np.float64)
+            direction = step.direction if step.direction in DIRECTIONS else end
+            problems.append({"part": step.part, "obstacles": list(step.obstacles),
+                             "direction": direction, "expected": FOUND,
+                             "method": step.method})
+            add(step.inner)  # a group's own steps, among its members
+
+    add(result.removal)
     for name in result.interlocked:
         attempt = result.core_attempts.get(name)
         if name == result.base or not attempt:

@@ -91,6 +91,8 @@ def load_scenario(path: str | os.PathLike[str], *,
     return read_scenario(path, hold_orientation=hold_orientation)
 
 
-def load_assembly(path: str | os.PathLike[str]) -> Assembly:
-    """An assembly YAML file (see ``docs/assembly.md``)."""
-    return read_assembly(path)
+def load_assembly(path: str | os.PathLike[str], *,
+                  interference: float | None = None) -> Assembly:
+    """An assembly YAML file (see ``docs/assembly.md``); ``interference`` replaces the
+    file's interference tolerance."""
+    return read_assembly(path, interference=interference)

@@ -4,8 +4,10 @@ Entry points: :func:`read_assembly` (a file) and :func:`parse_assembly` (text or
 mapping), both to a validated :class:`~planner.problem.Assembly`: parts read like a
 scenario's obstacles (:mod:`planner.io.parts`), posed at their assembled pose, the
 contact tolerance given or defaulted, and the assembled pose checked for overlaps beyond
-it (FCL; an overlap is reported with its penetration depth, also in the error's
-``details`` for ``report.json``). Errors as for scenarios: ``"<file>:<line>: <field>: <problem>"``.
+it plus the ``interference`` tolerance the user may state (FCL; an overlap is reported
+with its penetration depth, also in the error's ``details`` for ``report.json``; the
+overlaps an interference tolerance accepts are listed in ``Assembly.overlaps``). Errors
+as for scenarios: ``"<file>:<line>: <field>: <problem>"``.
 """
 
 from __future__ import annotations
@@ -44,29 +46,49 @@ log = logging.getLogger(__name__)
 _DEPTH_CELLS = 100_000
 
 
-TOP_LEVEL_KEYS = ("name", "units", "parts", "base", "contact_tolerance", "planner")
+TOP_LEVEL_KEYS = ("name", "units", "parts", "base", "contact_tolerance", "interference",
+                  "planner")
 
 
-def read_assembly(path: str | os.PathLike[str]) -> Assembly:
+def read_assembly(path: str | os.PathLike[str], *,
+                  interference: float | None = None) -> Assembly:
     """Read and validate an assembly YAML file (mesh paths relative to its folder).
+    ``interference`` (units, ``>= 0``) replaces the file's ``interference``.
 
     Raises:
         ScenarioError: one line, ``"<file>:<line>: <field>: <problem>"``.
     """
     path = Path(path)
     return parse_document(read_text(path, "assembly"), Document(str(path)),
-                          lambda data: _build(data, path.parent, path.resolve(), path.stem))
+                          lambda data: _build(data, path.parent, path.resolve(), path.stem,
+                                              interference))
 
 
 def parse_assembly(source: str | Mapping[str, Any], base_dir: str | os.PathLike[str] | None = None,
-                   *, filename: str | None = None) -> Assembly:
+                   *, filename: str | None = None,
+                   interference: float | None = None) -> Assembly:
     """An :class:`Assembly` from YAML text or a mapping (see :func:`read_assembly`)."""
     base = Path(base_dir) if base_dir is not None else Path.cwd()
     return parse_document(source, Document(filename or "<assembly>"),
-                          lambda data: _build(data, base, None, "assembly"))
+                          lambda data: _build(data, base, None, "assembly", interference))
 
 
-def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> Assembly:
+def _interference(top: Mapping[str, Any], given: float | None) -> float:
+    """The interference tolerance: ``given`` (the command line's), else the file's, else
+    ``0``."""
+    if given is not None:
+        value, where = float(given), "--interference"
+    elif top.get("interference") is not None:
+        value, where = real(top["interference"], "interference"), "interference"
+    else:
+        return 0.0
+    if not (math.isfinite(value) and value >= 0):
+        raise field_error(where, f"must be a finite number >= 0, got {value:g}")
+    return value
+
+
+def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
+           given_interference: float | None = None) -> Assembly:
     if data is None:
         raise field_error("", "the assembly is empty; it needs a list of parts")
     if isinstance(data, Mapping) and "robot" in data and "parts" not in data:
@@ -98,6 +120,7 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> A
                          f"{settings.contact_tolerance:g} differs from contact_tolerance "
                          f"{delta:g}; give it once")
         delta = settings.contact_tolerance
+    interference = _interference(top, given_interference)
     cache: dict = {}
     parts = [build_part(spec, part_name, cache, spec.pose.matrix)
              for spec, part_name in zip(specs, names, strict=True)]
@@ -105,20 +128,24 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str) -> A
         bounds = np.array([p.mesh.bounds for p in parts])
         delta = DEFAULT_CONTACT_REL * float(np.linalg.norm(bounds[:, 1].max(axis=0)
                                                            - bounds[:, 0].min(axis=0)))
-    settings = dataclasses.replace(settings, contact_tolerance=delta)
-    _check_assembled_pose(parts, delta)
+    settings = dataclasses.replace(settings, contact_tolerance=delta + interference)
+    _check_assembled_pose(parts, delta, interference)
+    overlaps = _accepted_overlaps(parts, delta) if interference > 0 else ()
     return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
-                    settings=settings, path=path)
+                    settings=settings, path=path, interference=interference,
+                    overlaps=overlaps)
 
 
-def _check_assembled_pose(parts: list[Part], delta: float) -> None:
-    """The assembled pose must be valid: no part overlaps another beyond the tolerance. An
-    overlap is reported with its penetration depth (computed for that pair only)."""
+def _check_assembled_pose(parts: list[Part], delta: float, interference: float = 0.0) -> None:
+    """The assembled pose must be valid: no part overlaps another beyond the contact
+    tolerance plus the interference tolerance. An overlap is reported with its
+    penetration depth (computed for that pair only)."""
+    allowed = delta + interference
     for i, part in enumerate(parts):
         others = parts[i + 1:]
         if not others:
             continue
-        checker = FclChecker.for_parts(part, others, contact_tolerance=delta)
+        checker = FclChecker.for_parts(part, others, contact_tolerance=allowed)
         if checker.is_valid(np.zeros(3)):
             continue
         hit = checker.colliding_obstacle(np.zeros(3))
@@ -128,13 +155,42 @@ def _check_assembled_pose(parts: list[Part], delta: float) -> None:
         said = "" if depth is None else (
             f"; penetration depth in [{depth['lower']:.6g}, {depth['upper']:.6g}] along "
             f"({', '.join(f'{x:.4g}' for x in depth['direction'])})")
+        beyond = (f"contact tolerance {delta:g}" if interference == 0 else
+                  f"contact tolerance {delta:g} + interference {interference:g}")
+        hint = "" if depth is None else (
+            f"; to accept it as an interference fit, give interference: "
+            f"{_round_up(depth['upper'])} or more (assemble --interference)")
         error = field_error(f"parts[{i}]", f"part '{part.name}' collides with '{name}' in "
-                                           f"the assembled pose (overlap beyond contact "
-                                           f"tolerance {delta:g}, or clamped between faces "
-                                           f"on opposite sides){said}")
+                                           f"the assembled pose (overlap beyond {beyond}, "
+                                           f"or clamped between faces on opposite "
+                                           f"sides){said}{hint}")
         error.details = {"overlap": {"part": part.name, "other": name,
-                                     "contact_tolerance": delta, "penetration_depth": depth}}
+                                     "contact_tolerance": delta,
+                                     "interference": interference,
+                                     "penetration_depth": depth}}
         raise error
+
+
+def _round_up(x: float) -> str:
+    """``x`` rounded up to two significant digits (a tolerance to suggest)."""
+    if x <= 0:
+        return "0"
+    step = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return f"{math.ceil(x / step * (1 - 1e-12)) * step:.2g}"
+
+
+def _accepted_overlaps(parts: list[Part], delta: float) -> tuple[dict, ...]:
+    """The pairs that overlap beyond the contact tolerance (the interference tolerance
+    accepted them), each with its penetration depth."""
+    found = []
+    for i, part in enumerate(parts):
+        for other in parts[i + 1:]:
+            checker = FclChecker.for_parts(part, [other], contact_tolerance=delta)
+            if checker.is_valid(np.zeros(3)):
+                continue
+            found.append({"part": part.name, "other": other.name,
+                          "penetration_depth": _overlap_depth(part, other)})
+    return tuple(found)
 
 
 def _overlap_depth(part: Part, other: Part) -> dict | None:

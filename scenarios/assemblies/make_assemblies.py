@@ -3,6 +3,11 @@
 Run from anywhere: ``python scenarios/assemblies/make_assemblies.py``. Writes small STL
 files into ``scenarios/assemblies/meshes/``; the YAML files are written by hand.
 
+The burr puzzles (``six_piece_burr``, ``three_piece_burr``) are notched square sticks on a
+unit lattice, each one closed manifold shell (its voxels unioned with manifold3d), every
+piece eroded by half the clearance so neighbours keep ``BURR_GAP`` between them; see
+:func:`burr_piece`. The other demos are described below.
+
 Every part is a union of axis-aligned boxes stored as separate closed shells in one mesh
 file, in world coordinates of the assembled pose (so the YAML poses are the identity).
 Boxes of one part overlap in volume and share no vertex position, so every shell is
@@ -17,6 +22,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import manifold3d
 import numpy as np
 import trimesh
 
@@ -121,9 +127,113 @@ PARTS = {
 }
 
 
+# ------------------------------------------------------------------ burr puzzles
+#
+# Lattice: voxel index i spans [i - 2, i - 1] along each axis, so the 4 x 4 x 4 core of
+# the six-piece burr is [-2, 2]^3 (indices 0..3) and a stick of length 8 runs over
+# indices -2..5. A stick is named by its axis and its two indices across it.
+
+BURR_GAP = 0.02
+"""Clearance between neighbouring burr pieces (each piece is eroded by half of it)."""
+
+
+def _stick(axis: int, across: tuple[tuple[int, int], tuple[int, int]],
+           length: range) -> set[tuple[int, int, int]]:
+    cells = set()
+    for t in length:
+        for u in across[0]:
+            for v in across[1]:
+                c = [u, v]
+                c.insert(axis, t)
+                cells.add((c[0], c[1], c[2]))
+    return cells
+
+
+def _cube(cell, grow: float = 0.0) -> manifold3d.Manifold:
+    lo = np.asarray(cell, dtype=float) - 2.0 - grow
+    return manifold3d.Manifold.cube([1.0 + 2 * grow] * 3).translate(tuple(lo))
+
+
+def burr_piece(cells: set[tuple[int, int, int]], gap: float = BURR_GAP) -> trimesh.Trimesh:
+    """One closed manifold mesh: the union of the voxels ``cells``, eroded by ``gap / 2``
+    (the voxels around it, grown by ``gap / 2``, cut away: an exact erosion of a union of
+    boxes, which shrinking each box would not be)."""
+    solid = manifold3d.Manifold.batch_boolean([_cube(c) for c in sorted(cells)],
+                                              manifold3d.OpType.Add)
+    near = {(c[0] + dx, c[1] + dy, c[2] + dz) for c in cells
+            for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)} - cells
+    cut = manifold3d.Manifold.batch_boolean([_cube(c, gap / 2) for c in sorted(near)],
+                                            manifold3d.OpType.Add)
+    mesh = (solid - cut).to_mesh()
+    out = trimesh.Trimesh(np.asarray(mesh.vert_properties, dtype=float)[:, :3],
+                          np.asarray(mesh.tri_verts, dtype=np.int64), process=True)
+    assert out.is_watertight and out.is_volume, "a burr piece must be one closed solid"
+    return out
+
+
+# Six-piece burr: two sticks along each axis (2 x 2 x 8), side by side; every cell of the
+# core claimed by two or three sticks belongs to one of them (or, one cell, to none).
+# Found by a search over those assignments on the lattice (each piece one face-connected
+# solid; with every piece present only the key x1 can leave, straight along +x; then z1
+# must step sideways before it can leave; then y0, x0, y1 lift out straight). The notches
+# below are the cells each full stick gives up.
+SIX_STICKS = {
+    "x0": (0, ((0, 1), (1, 2))), "x1": (0, ((2, 3), (1, 2))),
+    "y0": (1, ((1, 2), (0, 1))), "y1": (1, ((1, 2), (2, 3))),
+    "z0": (2, ((0, 1), (1, 2))), "z1": (2, ((2, 3), (1, 2))),
+}
+SIX_NOTCHES = {
+    "x0": [(0, 1, 1), (0, 1, 2), (1, 1, 1), (1, 1, 2), (2, 1, 1), (2, 1, 2), (3, 1, 1),
+           (3, 1, 2)],
+    "x1": [(1, 2, 2)],
+    "y0": [(1, 0, 1), (1, 1, 0), (1, 1, 1), (1, 2, 0), (1, 2, 1), (1, 3, 1), (2, 0, 1),
+           (2, 2, 1), (2, 3, 1)],
+    "y1": [(1, 0, 2), (1, 2, 2), (1, 3, 2), (2, 0, 2), (2, 1, 2), (2, 2, 2), (2, 3, 2)],
+    "z0": [(0, 2, 1), (0, 2, 2), (1, 1, 2), (1, 1, 3), (1, 2, 1), (1, 2, 2), (1, 2, 3)],
+    "z1": [(2, 1, 0), (2, 1, 1), (2, 1, 3), (2, 2, 0), (2, 2, 1), (2, 2, 2), (2, 2, 3),
+           (3, 2, 1), (3, 2, 2)],
+}
+
+# Three-piece burr: three orthogonal sticks (2 x 2 x 8) crossing near the middle; z is the
+# base. Neither x nor y can leave alone, but together they slide off z along -y, and
+# then come apart (x steps out of y's notch).
+THREE_STICKS = {"x": (0, ((0, 1), (1, 2))), "y": (1, ((1, 2), (0, 1))),
+                "z": (2, ((0, 1), (1, 2)))}
+THREE_NOTCHES = {
+    "x": [(0, 1, 1), (0, 1, 2), (1, 1, 1), (2, 0, 1)],
+    "y": [(1, 0, 1), (1, 1, 0), (1, 1, 1), (1, 2, 1), (2, 1, 1)],
+    "z": [(1, 1, 0), (1, 1, 1), (1, 1, 2), (1, 2, 0), (1, 2, 1)],
+}
+
+
+def burr_cells(sticks: dict, notches: dict) -> dict[str, set[tuple[int, int, int]]]:
+    """Each piece's cells: its full stick minus its notches (checked to be disjoint)."""
+    cells = {}
+    for name, (axis, across) in sticks.items():
+        full = _stick(axis, across, range(-2, 6))
+        notch = set(notches[name])
+        assert notch <= full, name
+        cells[name] = full - notch
+    names = list(cells)
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            assert not cells[a] & cells[b], (a, b)
+    return cells
+
+
+def burr_parts() -> dict[str, trimesh.Trimesh]:
+    """The burr puzzles' meshes, by file stem."""
+    out = {}
+    for prefix, sticks, notches in (("burr6", SIX_STICKS, SIX_NOTCHES),
+                                    ("burr3", THREE_STICKS, THREE_NOTCHES)):
+        for name, cells in burr_cells(sticks, notches).items():
+            out[f"{prefix}_{name}"] = burr_piece(cells)
+    return out
+
+
 def main() -> None:
     OUT.mkdir(exist_ok=True)
-    for name, mesh in PARTS.items():
+    for name, mesh in {**PARTS, **burr_parts()}.items():
         mesh.export(OUT / f"{name}.stl")
         sys.stdout.write(f"wrote {OUT / (name + '.stl')}\n")
 

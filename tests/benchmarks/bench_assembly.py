@@ -6,8 +6,11 @@ Opt-in (pytest never collects tests/benchmarks). Run from the repository root::
     python tests/benchmarks/bench_assembly.py [--quick] [--runs N] [--time-limit S]
         [--assemblies a,b] [--planners minkplan,ompl:RRTConnect] [--out DIR]
 
-For every demo under ``scenarios/assemblies/``:
+For every demo under ``scenarios/assemblies/`` (the burr puzzles included):
 
+0. ``load_assembly`` and ``plan_assembly`` in a fresh interpreter (as ``minkplan
+   assemble`` runs): seconds (loading, search), peak resident memory, and the steps by
+   method (straight / planned / group, a group's own steps included);
 1. ``plan_assembly`` once (cold decomposition cache): the sequence (or the interlocked
    set), the whole search's time and what its pair cache computed and reused;
 2. its removal problems (``planner.assembly.removal_problems``): every removal step of
@@ -18,7 +21,8 @@ For every demo under ``scenarios/assemblies/``:
 3. each problem with each planner, N runs (default 5; ``--quick``: 3 runs, 5 s limit);
    OMPL run k uses seed k; minkplan is deterministic (decompositions cached and warm).
 
-Reported per problem and planner: runs with the expected answer, median and maximum
+A group's step is not planned by the planners (they move one part); its members' own
+steps are. Reported per problem and planner: runs with the expected answer, median and maximum
 planning seconds (``plan``'s total without its path validation, as in
 bench_planning.py), and the ratio of RRTConnect's median to minkplan's. Every found path
 is re-validated by FCL at the assembly's contact tolerance. Ratios, not absolute times,
@@ -36,6 +40,7 @@ import logging
 import os
 import platform
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -51,7 +56,37 @@ from planner import load_assembly, plan_assembly  # noqa: E402
 
 log = logging.getLogger("bench_assembly")
 
-ASSEMBLIES = ("peg_in_block", "pegs_and_holes", "latched_box", "linked_rings")
+ASSEMBLIES = ("peg_in_block", "pegs_and_holes", "latched_box", "linked_rings",
+              "six_piece_burr", "three_piece_burr")
+
+# run in a fresh interpreter: one assembly's seconds and peak memory, as the CLI sees them
+_FRESH = """
+import json, resource, sys, time
+t0, c0 = time.perf_counter(), time.process_time()
+from planner import load_assembly, plan_assembly
+assembly = load_assembly(sys.argv[1])
+t1 = time.perf_counter()
+result = plan_assembly(assembly, cache_dir=sys.argv[2])
+t2 = time.perf_counter()
+counts = {"straight": 0, "planned": 0, "group": 0}
+def count(steps):
+    for s in steps:
+        counts[s.method] += 1
+        count(s.inner)
+count(result.removal)
+print(json.dumps({"load_seconds": t1 - t0, "search_seconds": t2 - t1,
+                  "total_seconds": t2 - t0, "cpu_seconds": time.process_time() - c0,
+                  "status": result.status,
+                  "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                  "steps_by_method": counts}))
+"""
+
+
+def fresh_run(path: Path, cache_dir: Path) -> dict:
+    """Load and plan ``path`` in a new interpreter (cold decomposition cache)."""
+    out = subprocess.run([sys.executable, "-c", _FRESH, str(path), str(cache_dir)],
+                         check=True, capture_output=True, text=True, cwd=ROOT)
+    return json.loads(out.stdout.strip().splitlines()[-1])
 PLANNERS = ("minkplan", "ompl:RRTConnect")
 
 
@@ -77,7 +112,12 @@ def fmt(x, spec=".3f") -> str:
 
 def bench(name: str, planners: list[str], runs: int, time_limit: float,
           cache_dir: Path) -> dict:
-    assembly = load_assembly(ROOT / "scenarios" / "assemblies" / f"{name}.yaml")
+    path = ROOT / "scenarios" / "assemblies" / f"{name}.yaml"
+    fresh = fresh_run(path, Path(tempfile.mkdtemp(prefix="minkplan-bench-fresh-")))
+    log.info("%s: fresh run %.2f s (load %.2f s), peak %.0f MB, steps %s", name,
+             fresh["total_seconds"], fresh["load_seconds"], fresh["peak_mb"],
+             fresh["steps_by_method"])
+    assembly = load_assembly(path)
     t0 = time.perf_counter()
     result = plan_assembly(assembly, cache_dir=cache_dir)
     search_seconds = time.perf_counter() - t0
@@ -99,7 +139,7 @@ def bench(name: str, planners: list[str], runs: int, time_limit: float,
         problem["summary"] = {p: summarize(r) for p, r in problem["planners"].items()}
     return {"assembly": name, "status": result.status, "message": result.message,
             "order": result.order, "interlocked": result.interlocked,
-            "search_seconds": search_seconds, "reuse": result.reuse,
+            "search_seconds": search_seconds, "reuse": result.reuse, "fresh": fresh,
             "steps": [{"part": s.part, "method": s.method, "direction": s.direction,
                        "seconds": s.seconds} for s in result.removal],
             "problems": problems}
@@ -128,6 +168,15 @@ def table(results: list[dict], planners: list[str]) -> list[str]:
                     f"{s['correct']:>3d}/{s['runs']:<3d} {fmt(s['median_seconds']):>9s} "
                     f"{fmt(s['max_seconds']):>8s} {fmt(s['median_length'], '.2f'):>7s} "
                     f"{fmt(ratio, '.1f'):>7s}")
+    lines += ["", f"{'assembly':17s} {'fresh run s':>11s} {'load s':>7s} {'cpu s':>7s} "
+              f"{'peak MB':>8s}  steps straight/planned/group"]
+    for entry in results:
+        f = entry["fresh"]
+        c = f["steps_by_method"]
+        lines.append(f"{entry['assembly']:17s} {f['total_seconds']:>11.2f} "
+                     f"{f['load_seconds']:>7.2f} {f['cpu_seconds']:>7.2f} "
+                     f"{f['peak_mb']:>8.0f}  "
+                     f"{c['straight']}/{c['planned']}/{c['group']}")
     lines += ["", f"{'assembly':15s} {'search s':>9s} "
               + " ".join(f"{'sum ' + p:>22s}" for p in planners)
               + "  " + " ".join(f"{'ratio ' + p:>22s}" for p in others)

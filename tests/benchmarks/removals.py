@@ -28,7 +28,8 @@ def benchmark_removals(result: AssemblyResult, planners=("minkplan", "ompl:RRTCo
                        *, cache_dir=None, runs: int = 1,
                        time_limit: float | None = None) -> list[dict[str, Any]]:
     """Per-step planning time of several planners on the removal problems of a result
-    (:func:`removal_problems`, each as a :func:`removal_scenario`).
+    (:func:`removal_problems`, each as a :func:`removal_scenario`). A group's step is
+    left out (the planners move one part).
 
     Args:
         result: from :func:`plan_assembly`.
@@ -43,13 +44,16 @@ def benchmark_removals(result: AssemblyResult, planners=("minkplan", "ompl:RRTCo
         ``direction``, ``expected``, ``planner``, ``run``, ``seed``, ``status``,
         ``seconds`` (wall clock of :func:`planner.planning.plan`), ``planning_seconds``
         (the same without its validation), ``length`` and FCL ``valid`` (at the
-        assembly's contact tolerance; ``None`` when no path was found).
+        assembly's contact tolerance, plus its interference tolerance; ``None`` when no
+        path was found).
     """
     if runs < 1:
         raise InvalidParameterError(f"runs = {runs}: must be >= 1")
     parts = {p.name: p for p in result.assembly.parts}
     rows = []
     for problem in removal_problems(result):
+        if problem["method"] == "group":
+            continue
         scenario = removal_scenario(result.assembly, problem["part"], problem["obstacles"],
                                     problem["direction"])
         direction = direction_vector(problem["direction"])[0]
@@ -69,7 +73,7 @@ def benchmark_removals(result: AssemblyResult, planners=("minkplan", "ompl:RRTCo
                     valid = validate_removal(parts[problem["part"]],
                                       [parts[n] for n in problem["obstacles"]],
                                       np.asarray(outcome.waypoints),
-                                      result.contact_tolerance)["valid"]
+                                      result.assembly.tolerance)["valid"]
                 rows.append({
                     "part": problem["part"], "method": problem["method"],
                     "obstacles": problem["obstacles"], "direction": direction,
