@@ -32,6 +32,7 @@ __version__ = _minkowski_core.__version__
 
 _EXPORTS = {
     "AssemblyResult": "assembly", "plan_assembly": "assembly",
+    "memory_limit": "budget", "set_memory_limit": "budget",
     "Decomposition": "decompose", "decompose": "decompose",
     "PenetrationDepth": "depth", "penetration_depth": "depth",
     "OffsetResult": "offsets", "offset": "offsets", "opening": "offsets",
@@ -70,6 +71,7 @@ def __getattr__(name: str):
 
 if TYPE_CHECKING:
     from .assembly import AssemblyResult, plan_assembly
+    from .budget import memory_limit, set_memory_limit
     from .decompose import Decomposition, decompose
     from .depth import PenetrationDepth, penetration_depth
     from .errors import (
@@ -119,6 +121,7 @@ __all__ = [
     "load_mesh",
     "load_problem",
     "load_scenario",
+    "memory_limit",
     "minkowski_sum",
     "mirror",
     "offset",
@@ -127,6 +130,7 @@ __all__ = [
     "plan",
     "plan_assembly",
     "repair_mesh",
+    "set_memory_limit",
     "tol",
     "validate_solid",
 ]

@@ -13,11 +13,13 @@ __all__ = [
     "ExactSum",
     "Primitives",
     "__version__",
+    "budget_units",
     "build_octree",
     "crossing_windings",
     "front_windings",
     "num_threads",
     "offset_surface",
+    "set_record_budget",
     "union_surface",
     "winding_numbers",
 ]
@@ -61,6 +63,10 @@ def build_octree(
     max_cells: int = 40000000,
 ) -> dict[str, Any]: ...
 def num_threads() -> int: ...
+def set_record_budget(bytes: int) -> int:
+    """Set the octree's candidate-record budget (bytes) for what follows; the previous."""
+def budget_units() -> dict[str, int]:
+    """Bytes of the units the budgets count: leaf, record_word, facet; max_record_words."""
 def front_windings(
     vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
 ) -> npt.NDArray[np.int64]:

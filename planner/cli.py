@@ -66,6 +66,10 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
+_MEMORY_HELP = ("memory budget in GiB (default: half of this machine's memory); work that "
+                "would need more is refused before it starts (exit 2)")
+
+
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="minkplan",
@@ -75,14 +79,20 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument("-v", "--verbose", action="count", default=0, help="more logging (-vv: debug)")
     p.add_argument("--version", action="version", version=f"minkplan {_version()}")
+    p.add_argument("--memory-limit", dest="memory_limit_gib", metavar="GB", default=None,
+                   help=_MEMORY_HELP)
     sub = p.add_subparsers(dest="command", required=True)
     # the global options are accepted after the subcommand too (minkplan plan ... -v)
     common = _Parser(add_help=False)
     common.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
                         help="more logging (-vv: debug)")
+    # ... and the memory limit on every command that computes (batch has its own, in MB)
+    computing = _Parser(add_help=False, parents=[common])
+    computing.add_argument("--memory-limit", dest="memory_limit_gib", metavar="GB",
+                           default=argparse.SUPPRESS, help=_MEMORY_HELP)
 
     m = sub.add_parser(
-        "minkowski", parents=[common],
+        "minkowski", parents=[computing],
         help="Minkowski sum A ⊕ B (or C-obstacle A ⊕ −B) of two closed meshes",
         description="Compute A ⊕ B of two closed meshes and write it as a mesh file. "
         "With --mirror-b, compute A ⊕ (−B): the C-obstacle of obstacle A for robot B.",
@@ -120,7 +130,7 @@ def _parser() -> argparse.ArgumentParser:
     m.add_argument("--no-progress", action="store_true", help="no progress bar")
 
     pl = sub.add_parser(
-        "plan", parents=[common],
+        "plan", parents=[computing],
         help="plan a translational path for a scenario (YAML or OMPL.app .cfg)",
         description="Plan a collision-free translation of the robot from start to goal. "
         "Writes DIR/path.json (status, waypoints, length, clearance, timings, validation) "
@@ -162,9 +172,9 @@ def _parser() -> argparse.ArgumentParser:
         help="also write DIR/scene.html: the scene, C-obstacles, cells, roadmap and path "
         "(self-contained, opens offline)",
     )
-    _add_viz_parsers(sub, common)
+    _add_viz_parsers(sub, computing)
     asm = sub.add_parser(
-        "assemble", parents=[common],
+        "assemble", parents=[computing],
         help="find an assembly sequence (and insertion paths) for an assembly YAML",
         description="Take the assembly apart one part at a time (straight removals "
         "first, then the planner) and reverse it. Writes DIR/sequence.json (parts in "
@@ -184,7 +194,7 @@ def _parser() -> argparse.ArgumentParser:
                      "(replaces the file's 'interference')")
     from planner import cli_batch, cli_shapes
 
-    cli_shapes.add_parsers(sub, common)
+    cli_shapes.add_parsers(sub, computing)
     cli_batch.add_parser(sub, common)
     return p
 
@@ -479,6 +489,23 @@ def main(argv: list[str] | None = None) -> int:
             signal.signal(signal.SIGTERM, previous)
 
 
+def _memory_limit(args) -> str | None:
+    """Set the process's memory budget from ``--memory-limit`` (the default without it);
+    what is wrong with the value, if anything."""
+    from planner import budget
+    from planner.errors import InvalidParameterError
+
+    value = getattr(args, "memory_limit_gib", None)
+    if args.command == "batch":
+        return (None if value is None else "--memory-limit GB goes with the commands that "
+                "compute; batch has its own --memory-limit MB per task, after 'batch'")
+    try:
+        budget.set_memory_limit(value)
+    except InvalidParameterError as exc:
+        return str(exc)
+    return None
+
+
 def _main(argv: list[str] | None) -> int:
     args = _parser().parse_args(argv)
     level = (
@@ -494,6 +521,9 @@ def _main(argv: list[str] | None) -> int:
     except ImportError as exc:  # the native module is missing: a broken install
         return _fail(f"minkplan is not installed correctly: {exc}")
     try:
+        problem = _memory_limit(args)
+        if problem:
+            return _fail(problem)
         if args.command == "minkowski":
             return _cmd_minkowski(args)
         if args.command == "depth":

@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from .errors import InvalidMeshError, InvalidParameterError
+from .errors import InvalidMeshError, InvalidParameterError, ResourceLimitError
 from .problem import Part
 from .sources import ExactSource, Source, SourceSettings
 from .tolerances import tol
@@ -163,7 +163,8 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
             or a :class:`~planner.problem.Part`; posed in one frame.
         tolerance: the widest interval wanted (absolute); default ``tol.depth_rel`` (1e-3)
             of the pair's size (the diagonal of the box around both).
-        max_cells: cells the search may classify (default ``tol.depth_max_cells``); a
+        max_cells: cells the search may classify (default ``tol.depth_max_cells``, else
+            from the memory limit: :meth:`planner.budget.MemoryBudget.depth_cells`); a
             search stopped by it returns a wider, still proved, interval
             (``converged=False``, with a warning).
         validate: check the answer with FCL (see :attr:`PenetrationDepth.validated`).
@@ -182,14 +183,27 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
     if not (part_a.solid and part_b.solid):
         raise InvalidMeshError("penetration depth: both parts must be solids (a surface has "
                                "no inside to penetrate)")
-    cells = tol.depth_max_cells if max_cells is None else int(max_cells)
+    if max_cells is not None:
+        cells = int(max_cells)
+    elif tol.depth_max_cells is not None:
+        cells = int(tol.depth_max_cells)
+    else:
+        from . import budget  # noqa: PLC0415
+
+        cells = budget.current().depth_cells()
     if cells < 1:
         raise InvalidParameterError(f"max_cells = {max_cells!r}: must be >= 1")
     if source is not None and source.kind != "exact":
         raise InvalidParameterError(f"source: the depth is computed on the exact source, got "
                                     f"the {source.kind} source")
     source = source or ExactSource(SourceSettings(exact=True), "penetration depth")
-    pair = source.pair(part_b, part_a, mirror_b=True)  # B ⊕ (−A)
+    try:
+        pair = source.pair(part_b, part_a, mirror_b=True)  # B ⊕ (−A)
+    except ResourceLimitError as exc:
+        from . import budget  # noqa: PLC0415
+
+        raise budget.explain(exc, f"penetration depth of {part_a.name} into "
+                                  f"{part_b.name}") from exc
     bounds = np.vstack([part_a.mesh.bounds, part_b.mesh.bounds])
     size = float(np.linalg.norm(bounds.max(axis=0) - bounds.min(axis=0)))
     width = _tolerance(tolerance, size)

@@ -70,8 +70,9 @@ class InvalidParameterError(MinkplanError, ValueError):
 
 class ResourceLimitError(MinkplanError, MemoryError):
     """The requested work would not fit in the memory or time budget (e.g. an ``eps``
-    so small that the grid exceeds ``tol.max_cells``). The message says which limit and
-    how to stay within it (usually: a larger eps)."""
+    so small that the grid exceeds the memory limit's share, see :mod:`planner.budget`).
+    The message names the input, the limit and how to stay within it (``--memory-limit``,
+    a larger eps, the decomposition source)."""
 
 
 class GeometryError(MinkplanError, RuntimeError):

@@ -26,6 +26,7 @@ import numpy as np
 import trimesh
 
 from . import _minkowski_core as core
+from . import budget
 from .decompose import check_threshold
 from .errors import GeometryError, InvalidMeshError, InvalidParameterError, ResourceLimitError
 from .problem import Part
@@ -133,17 +134,16 @@ def _estimate_cells(box: np.ndarray, eps: float) -> float:
     return float(_CELLS_PER_AREA * area / (h * h))
 
 
-def _grid_eps(box: np.ndarray, diag: float, eps, max_cells: int) -> float:
+def _grid_eps(box: np.ndarray, diag: float, eps, max_cells: int, *, from_memory: bool = False,
+              names: tuple[str, str] = ("a", "b")) -> float:
     """``eps`` (default ``tol.eps_rel`` of the diagonal), refused before any work when the
-    grid would not fit the cell budget."""
+    grid would not fit the cell budget (``from_memory``: the memory limit's)."""
     eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
     estimate = _estimate_cells(box, eps_value)
     if estimate > max_cells:
         floor = eps_value * math.sqrt(estimate / max_cells)
-        raise ResourceLimitError(
-            f"eps = {eps_value:.3g}: the grid would need about {estimate:.2g} cells, over the "
-            f"budget of {max_cells:.2g}; use eps >= {floor:.3g} or raise max_cells"
-        )
+        raise budget.refuse_cells(f"{names[0]} ⊕ {names[1]} at eps = {eps_value:.3g}",
+                                  estimate, max_cells, from_memory, f"use eps >= {floor:.3g}")
     return eps_value
 
 
@@ -172,13 +172,14 @@ def _sum(a, b, *, mirror_b: bool, eps, threshold: float, seed: int, cache_dir, p
     check_threshold(threshold)
     parts = (_as_part(a, names[0]), _as_part(b, names[1]))
     names = (parts[0].name, parts[1].name)
-    max_cells = tol.max_cells if max_cells is None else int(max_cells)
+    max_cells, from_memory = budget.surface_cells(max_cells)
     if max_refinements < 0:
         raise InvalidParameterError(f"max_refinements = {max_refinements}: must be >= 0")
     if source is None:
         source = choose(parts, SourceSettings(exact=exact, threshold=threshold, seed=seed,
                                               cache_dir=cache_dir, progress=False))
-    grid = dict(eps=eps, max_cells=max_cells, max_refinements=max_refinements,
+    grid = dict(eps=eps, max_cells=max_cells, from_memory=from_memory,
+                max_refinements=max_refinements,
                 simplify=simplify, names=names, t_start=t_start, warn_complex=warn_complex)
     if source.kind == "exact":
         chosen = "asked" if exact is True else "auto"
@@ -187,7 +188,7 @@ def _sum(a, b, *, mirror_b: bool, eps, threshold: float, seed: int, cache_dir, p
 
 
 def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
-                       max_cells: int, max_refinements: int, simplify: bool,
+                       max_cells: int, from_memory: bool, max_refinements: int, simplify: bool,
                        names: tuple[str, str], t_start: float, progress,
                        warn_complex: bool) -> MinkowskiResult:
     bar = _progress_bar(progress, 4, "minkowski")
@@ -205,13 +206,16 @@ def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bo
         step(f"decomposed {names[1]}")
         box = _result_box(parts[0].mesh, parts[1].mesh, mirror_b)
         diag = float(np.linalg.norm(box[1] - box[0]))
-        eps_value = _grid_eps(box, diag, eps, max_cells)
+        eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory, names=names)
         t0 = time.perf_counter()
         pair = source.pair(*parts, mirror_b=mirror_b)
         t_pairs = time.perf_counter() - t0
         step("pairwise sums")
-        surf = core.union_surface(pair.native, eps_value, max_cells=max_cells,
-                                  max_refinements=max_refinements, simplify=simplify)
+        try:
+            surf = core.union_surface(pair.native, eps_value, max_cells=max_cells,
+                                      max_refinements=max_refinements, simplify=simplify)
+        except ResourceLimitError as exc:
+            raise budget.explain(exc, f"{names[0]} ⊕ {names[1]}") from exc
         step("surface")
     finally:
         if bar is not None:
@@ -312,16 +316,24 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
 
 
 def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
-               max_cells: int, max_refinements: int, simplify: bool, names: tuple[str, str],
-               t_start: float, chosen: str, warn_complex: bool) -> MinkowskiResult:
+               max_cells: int, from_memory: bool, max_refinements: int, simplify: bool,
+               names: tuple[str, str], t_start: float, chosen: str, warn_complex: bool
+               ) -> MinkowskiResult:
     t0 = time.perf_counter()
-    pair = source.pair(*parts, mirror_b=mirror_b)
+    what = f"{names[0]} ⊕ {names[1]}"
+    try:
+        pair = source.pair(*parts, mirror_b=mirror_b)
+    except ResourceLimitError as exc:
+        raise budget.explain(exc, what) from exc
     t_source = time.perf_counter() - t0
     box = np.asarray(pair.native.bounds)
     diag = float(np.linalg.norm(box[1] - box[0]))
-    eps_value = _grid_eps(box, diag, eps, max_cells)
-    surf = pair.native.surface(eps_value, max_cells=max_cells, max_refinements=max_refinements,
-                               simplify=simplify)
+    eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory, names=names)
+    try:
+        surf = pair.native.surface(eps_value, max_cells=max_cells,
+                                   max_refinements=max_refinements, simplify=simplify)
+    except ResourceLimitError as exc:
+        raise budget.explain(exc, what) from exc
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     stats = {
         "source": "exact",
@@ -369,7 +381,8 @@ def minkowski_sum(
         cache_dir: decomposition cache; default ``$MINKPLAN_CACHE_DIR`` or
             ``~/.cache/minkplan/decompositions``.
         progress: stage progress bar on stderr (default: when stderr is a terminal).
-        max_cells: octree leaf budget (default ``tol.max_cells``).
+        max_cells: octree leaf budget (default ``tol.max_cells``, else derived from the
+            memory limit: :mod:`planner.budget`).
         max_refinements: how often the grid may be halved while complex cells remain.
         simplify: collapse the interiors of flat patches (the same surface with far fewer
             triangles; the bound is unchanged).

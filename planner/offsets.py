@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from planner.errors import GeometryError, InvalidParameterError
+from planner.errors import GeometryError, InvalidParameterError, ResourceLimitError
 
 from .meshes import load_mesh
 from .meshes.kinds import classify
@@ -86,7 +86,8 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     Args:
         eps: resolution (default ``tol.eps_rel`` of the result's diagonal); the error bound
             is of this order.
-        max_cells: octree cell budget (default ``tol.max_cells``).
+        max_cells: octree cell budget (default ``tol.max_cells``, else from the memory
+            limit: :mod:`planner.budget`).
 
     Raises:
         InvalidMeshError: ``mesh`` is not a closed solid.
@@ -107,8 +108,13 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
         raise InvalidParameterError(f"eps = {eps!r}: must be a positive finite number")
     checked = CheckedMesh(np.asarray(solid.vertices, dtype=np.float64),
                           np.asarray(solid.faces, dtype=np.int64), name=name)
-    raw = offset_surface(checked, radius, step,
-                         max_cells=tol.max_cells if max_cells is None else int(max_cells))
+    from . import budget  # noqa: PLC0415
+
+    cells, _ = budget.surface_cells(max_cells)
+    try:
+        raw = offset_surface(checked, radius, step, max_cells=cells)
+    except ResourceLimitError as exc:
+        raise budget.explain(exc, f"{name} offset by {radius:g}") from exc
     if len(raw["faces"]) == 0:
         if not math.isfinite(raw["error_bound"]):
             raise GeometryError(f"{name}: nothing was resolved of it offset by {radius:g} at "

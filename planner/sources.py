@@ -265,8 +265,9 @@ class Source:
 
     def cspace(self, obstacles: Sequence[Part], robot: Part, bounds: np.ndarray,
                floor: float, coarse: float, *, margin: float = 0.0,
-               max_leaves: int = 20_000_000) -> CSpace:
-        """The planner's native C-space of ``robot`` among ``obstacles``."""
+               max_leaves: int | None = None) -> CSpace:
+        """The planner's native C-space of ``robot`` among ``obstacles`` (``max_leaves``:
+        default from the memory limit, :func:`planner.budget.leaves`)."""
         raise NotImplementedError
 
     def owners(self, obstacles: Sequence[Part], robot: Part) -> np.ndarray:
@@ -304,14 +305,17 @@ class ExactSource(Source):
         return 0.0
 
     def cspace(self, obstacles, robot, bounds, floor, coarse, *, margin=0.0,
-               max_leaves=20_000_000):
+               max_leaves=None):
+        from . import budget  # noqa: PLC0415
         from ._minkowski_core import CSpace  # noqa: PLC0415
 
         native = self.parts.native
         return CSpace.exact([native(o) for o in obstacles], native(robot),
                             np.asarray(bounds, dtype=np.float64), floor, coarse,
-                            margin=margin, max_leaves=max_leaves,
-                            solid=[o.solid for o in obstacles], robot_solid=robot.solid)
+                            margin=margin,
+                            max_leaves=budget.leaves() if max_leaves is None else max_leaves,
+                            solid=[o.solid for o in obstacles], robot_solid=robot.solid,
+                            max_facets=budget.facets())
 
     def owners(self, obstacles, robot):
         return np.arange(len(obstacles), dtype=np.int64)
@@ -322,7 +326,10 @@ class ExactSource(Source):
         mesh_b = self.parts.native(b)
         if mirror_b:  # −B: negated vertices, triangles reversed so that normals stay outward
             mesh_b = mesh_b.negated()
-        native = core.ExactSum(self.parts.native(a), mesh_b, a.solid, b.solid)
+        from . import budget  # noqa: PLC0415
+
+        native = core.ExactSum(self.parts.native(a), mesh_b, a.solid, b.solid,
+                               max_facets=budget.facets())
         stats = {"triangles_a": int(native.triangles[0]), "triangles_b": int(native.triangles[1]),
                  "facets": int(native.facets)}
         return PairCObstacle(native, exact=True, excess=0.0, stats=stats)
@@ -389,9 +396,12 @@ class DecompositionSource(Source):
             (getattr(self.decomposition(o), which) for o in obstacles), default=0.0)
 
     def cspace(self, obstacles, robot, bounds, floor, coarse, *, margin=0.0,
-               max_leaves=20_000_000):
+               max_leaves=None):
+        from . import budget  # noqa: PLC0415
         from ._minkowski_core import CSpace, Primitives  # noqa: PLC0415
 
+        if max_leaves is None:
+            max_leaves = budget.leaves()
         pieces = [p for o in obstacles for p in self._pieces(o)]
         prims = (Primitives.pairwise_sums(pieces, self._pieces(robot), subtract=True)
                  if pieces else None)

@@ -43,8 +43,10 @@ class Tolerances:
             :func:`~planner.meshes.validate_solid` rejects it.
         coplanar_rel: distance, relative to the scale, under which two faces count
             as lying in the same plane for that check.
-        max_cells: budget of grid/octree cells used to estimate memory before heavy
-            work; exceeding it raises :class:`~planner.errors.ResourceLimitError`.
+        max_cells: budget of grid/octree cells of one surface (a sum, an offset), used to
+            estimate memory before heavy work; exceeding it raises
+            :class:`~planner.errors.ResourceLimitError`. ``None`` (the default): derived
+            from the memory limit (:mod:`planner.budget`, ``--memory-limit``).
         coacd_threshold: default CoACD concavity threshold (CoACD normalises the mesh,
             so this is relative; smaller is finer and slower; CoACD accepts 0.01 .. 1).
         excess_samples: number of surface samples used to estimate a decomposition's
@@ -64,7 +66,8 @@ class Tolerances:
             ``planar_rel`` times the loop's size is planar.
         depth_rel: default width of a penetration-depth interval
             (:func:`~planner.depth.penetration_depth`) as a fraction of the pair's size.
-        depth_max_cells: budget of cells one penetration-depth search may classify.
+        depth_max_cells: budget of cells one penetration-depth search may classify
+            (``None``: :meth:`planner.budget.MemoryBudget.depth_cells`).
     """
 
     eps_rel: float = 0.005
@@ -74,7 +77,7 @@ class Tolerances:
     merge_rel: float = 1e-9
     fold_angle: float = 1e-3
     coplanar_rel: float = 1e-5
-    max_cells: int = 40_000_000
+    max_cells: int | None = None
     coacd_threshold: float = 0.05
     excess_samples: int = 20_000
     sample_seed: int = 0
@@ -84,7 +87,7 @@ class Tolerances:
     flat_rel: float = 1e-9
     planar_rel: float = 1e-6
     depth_rel: float = 1e-3
-    depth_max_cells: int = 1_000_000
+    depth_max_cells: int | None = None
 
     def __post_init__(self) -> None:
         for field in (
@@ -110,6 +113,8 @@ class Tolerances:
                 )
         for field in ("max_cells", "excess_samples", "depth_max_cells"):
             value = getattr(self, field)
+            if value is None and field != "excess_samples":
+                continue
             if int(value) != value or value < 1:
                 raise InvalidParameterError(
                     f"Tolerances.{field} = {value!r}: must be an integer >= 1"

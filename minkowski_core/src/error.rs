@@ -31,8 +31,8 @@ pub enum CoreError {
         detail: String,
     },
     /// The grid would need more cells than the budget allows. Fix: a larger eps, or raise
-    /// the cell budget if the memory is there.
-    #[error("the octree needs more than {budget} cells at cell size {cell_size:.3e} ({detail}); use a larger eps or raise the cell budget")]
+    /// the memory limit the cell budget comes from, if the memory is there.
+    #[error("the octree needs more than {budget} cells at cell size {cell_size:.3e} ({detail}); use a larger eps or raise the memory limit")]
     ResourceLimit {
         /// The cell budget that was exceeded.
         budget: usize,
@@ -42,8 +42,9 @@ pub enum CoreError {
         detail: String,
     },
     /// The octree's candidate records (what each boundary cell keeps of the parts) would
-    /// need more memory than allowed. Fix: a larger cell size, or the decomposition source.
-    #[error("the octree's boundary cells would keep more than {gib:.1} GiB of candidate records at cell size {cell_size:.3e} ({detail}); use a larger cell size or the decomposition source (exact: false)")]
+    /// need more memory than allowed. Fix: a larger cell size, a larger memory limit, or the
+    /// decomposition source.
+    #[error("the octree's boundary cells would keep more than {gib:.2} GiB of candidate records at cell size {cell_size:.3e} ({detail}); raise the memory limit, use a larger cell size or the decomposition source (exact: false)")]
     RecordLimit {
         /// The memory budget of the records, in GiB.
         gib: f64,
@@ -63,8 +64,8 @@ pub enum CoreError {
     },
     /// The exact source would hold more boundary candidates (reduced-convolution facets)
     /// than its budget allows, so more memory than allowed. Fix: the decomposition
-    /// source, simpler meshes, or a larger budget if the memory is there.
-    #[error("{what}: the exact source's boundary convolution has more than {budget} facets (found {found} before stopping, about {bytes_per_facet} bytes each); use the decomposition source (exact: false) or simpler meshes, or raise the facet budget")]
+    /// source, simpler meshes, or a larger memory limit if the memory is there.
+    #[error("{what}: the boundary convolution needs more than {:.2} GiB (more than {budget} facets of about {bytes_per_facet} bytes; {found} found before stopping); raise the memory limit, or use the decomposition source (exact: false) or simpler meshes", (*.budget as f64) * (*.bytes_per_facet as f64) / 1_073_741_824.0)]
     FacetLimit {
         /// Which pair.
         what: String,

@@ -373,8 +373,9 @@ impl ExactSum {
     /// false (a surface: any triangles, containment does not count); or as
     /// [`CheckedMesh`]es, not checked again.
     #[new]
-    // max_facets: boundary candidates held at most (8 M: about 2 GB at FACET_BYTES each);
-    // beyond it the construction stops with a ResourceLimitError, not out of memory
+    // max_facets: boundary candidates held at most (planner.limits derives it from the
+    // memory limit at FACET_BYTES each); beyond it the construction stops with a
+    // ResourceLimitError, not out of memory
     #[pyo3(signature = (a, b, a_solid=true, b_solid=true, max_facets=8_000_000))]
     fn new(py: Python<'_>, a: MeshArg<'_>, b: MeshArg<'_>, a_solid: bool, b_solid: bool, max_facets: usize) -> PyResult<Self> {
         let ma = a.mesh("a", a_solid)?;
@@ -471,6 +472,25 @@ fn num_threads() -> usize {
     rayon::current_num_threads()
 }
 
+/// Set the octree's candidate-record budget (bytes; the caller's memory limit's share, see
+/// planner.limits) for every build and refinement that follows; returns the previous one.
+#[pyfunction]
+fn set_record_budget(bytes: usize) -> usize {
+    let word = std::mem::size_of::<u32>();
+    crate::octree::set_record_budget(bytes / word) * word
+}
+
+/// Bytes of the fixed-size records the budgets count: {"leaf", "record_word", "facet"}.
+#[pyfunction]
+fn budget_units(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("leaf", std::mem::size_of::<crate::octree::Leaf>())?;
+    d.set_item("record_word", std::mem::size_of::<u32>())?;
+    d.set_item("facet", crate::exact::FACET_BYTES)?;
+    d.set_item("max_record_words", crate::octree::MAX_RECORD_WORDS)?;
+    Ok(d)
+}
+
 #[pymodule]
 fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -479,6 +499,8 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(offset_surface, m)?)?;
     m.add_function(wrap_pyfunction!(build_octree, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(set_record_budget, m)?)?;
+    m.add_function(wrap_pyfunction!(budget_units, m)?)?;
     m.add_function(wrap_pyfunction!(front_windings, m)?)?;
     m.add_function(wrap_pyfunction!(crossing_windings, m)?)?;
     m.add_function(wrap_pyfunction!(winding_numbers, m)?)?;

@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.errors import InvalidParameterError, MinkplanError, ScenarioError
+from planner.errors import InvalidParameterError, MinkplanError, ResourceLimitError, ScenarioError
 from planner.problem import Assembly, Part, Scenario
 from planner.roles import FOUND, NO_PATH
 from planner.validation import FclChecker
@@ -228,8 +228,8 @@ class _Search:
             try:
                 outcome = plan(scenario, planner=self.planner, cache_dir=self.cache_dir,
                                progress=self.progress, source=self.source)
-            except (InvalidParameterError, ScenarioError):
-                raise  # bad settings: the user's to fix
+            except (InvalidParameterError, ScenarioError, ResourceLimitError):
+                raise  # bad settings, or over the memory limit: the user's to fix
             except MinkplanError as error:  # e.g. geometry the native core rejects
                 sides.append({"direction": dname, "status": "error", "reason": "error",
                               "message": str(error),

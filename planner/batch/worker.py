@@ -100,14 +100,19 @@ def _reset_peak(pid: int) -> None:
 class _Child:
     """The child process and its pipes."""
 
-    def __init__(self) -> None:
+    def __init__(self, memory_limit_mb: float | None = None) -> None:
+        self.memory_limit_mb = memory_limit_mb
+        env = dict(os.environ)
+        if memory_limit_mb is not None:  # the planner refuses (exit 2) before it is killed
+            env["MINKPLAN_MEMORY_LIMIT"] = repr(max(CHILD_BUDGET_SHARE * memory_limit_mb / 1024,
+                                                    1 / 1024))
         self.stderr: IO[bytes] = tempfile.TemporaryFile()
         # -P and a neutral folder: a source tree in the worker's folder must not shadow
         # the installed planner
         self.process = subprocess.Popen(
             [sys.executable, "-P", "-m", "planner.batch.child"], stdin=subprocess.PIPE,
             stdout=subprocess.PIPE, stderr=self.stderr, preexec_fn=_die_with_parent,
-            cwd=tempfile.gettempdir())
+            cwd=tempfile.gettempdir(), env=env)
         self.buffer = b""
         self._wait_ready()
         self.idle_mb = resident_mb(self.process.pid)
@@ -171,14 +176,19 @@ class _Child:
 
 _CHILD: _Child | None = None
 
+CHILD_BUDGET_SHARE = 0.75
+"""The task process's memory budget (``MINKPLAN_MEMORY_LIMIT``, :mod:`planner.budget`)
+is this share of ``--memory-limit``: the rest is its interpreter, meshes and results."""
 
-def _child() -> _Child:
+
+def _child(memory_limit_mb: float | None = None) -> _Child:
     global _CHILD
-    if _CHILD is not None and not _CHILD.alive():
+    if _CHILD is not None and (not _CHILD.alive()
+                               or _CHILD.memory_limit_mb != memory_limit_mb):
         _CHILD.kill()
         _CHILD = None
     if _CHILD is None:
-        _CHILD = _Child()
+        _CHILD = _Child(memory_limit_mb)
     return _CHILD
 
 
@@ -230,11 +240,11 @@ def run_task(task_json: dict[str, Any], limits: Limits) -> dict[str, Any]:
     """Run one task in this worker's child; the task's record, with the worker's host,
     process id and the task's peak resident memory (``peak_mb``)."""
     task = Task.from_json(task_json)
-    child = _child()
+    child = _child(limits.memory_limit_mb)
     try:
         child.send(task)
     except BrokenPipeError:  # it died between tasks: once more, with a new one
-        child = _child()
+        child = _child(limits.memory_limit_mb)
         child.send(task)
     record = _wait(child, task, limits, time.perf_counter())
     record.update(host=socket.gethostname(), worker_pid=os.getpid(),

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from planner import budget
 from planner.errors import ResourceLimitError
 from planner.problem import Scenario
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
@@ -66,7 +67,8 @@ class OctreeParams:
         refine_levels: levels a channel leaf is split per round.
         ring: also split the MIXED neighbours of a channel's MIXED leaves.
         attach_rings: face-steps searched to attach a point in a MIXED leaf.
-        max_leaves: leaf budget of the octree.
+        max_leaves: leaf budget of the octree (``None``: from the memory limit,
+            :func:`planner.budget.leaves`).
         max_rounds: refinement rounds at most.
         shortcut_passes: greedy shortcutting passes.
         escape_rel: longest escape from a tolerated contact, in contact tolerances.
@@ -79,7 +81,7 @@ class OctreeParams:
     refine_levels: int = 1
     ring: bool = True
     attach_rings: int = 2
-    max_leaves: int = 20_000_000
+    max_leaves: int | None = None
     max_rounds: int = 400
     shortcut_passes: int = 3
     escape_rel: float = 2.0
@@ -174,8 +176,10 @@ class OctreePlanner:
                                         max_leaves=self.params.max_leaves)
         except ResourceLimitError as exc:
             where = str(sc.path) if sc.path is not None else sc.name
-            raise ResourceLimitError(
-                f"{where}: the C-space ({self._src.kind} source) does not fit: {exc}") from exc
+            names = [f"{o.name} ⊕ −{sc.robot.name}" for o in sc.obstacles]
+            raise budget.explain(exc, f"{where}: the C-space ({self._src.kind} source)",
+                                 names, cell_bytes=budget.LEAF_BYTES,
+                                 knob="planner.resolution") from exc
 
     def _report_head(self) -> None:
         cs, sc = self.cspace, self.scenario

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from planner import budget
 from planner.errors import ResourceLimitError
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
 
@@ -104,7 +105,9 @@ def _refine(cs, channel: dict, run: SearchRun, index: int) -> SearchResult | Non
             stats = cs.refine(channel["leaves"], ring=run.params.ring,
                               levels=run.params.refine_levels)
     except ResourceLimitError as exc:
-        return SearchResult(NOT_FOUND, "budget", f"octree budget exhausted: {exc}")
+        return SearchResult(NOT_FOUND, "budget",
+                            f"octree budget exhausted: "
+                            f"{budget.explain(exc, cell_bytes=budget.LEAF_BYTES)}")
     if stats["refined"] == 0:
         return SearchResult(
             NOT_FOUND, "floor",
@@ -154,6 +157,11 @@ def search_without_margin(build: Callable[[float], Any], first: SearchResult, ma
     C-space it is about (``None``: the first one)."""
     if first.status != NO_PATH or margin <= 0:
         return first, None
+    if time.perf_counter() > run.deadline:  # the second C-space would run past the limit
+        return SearchResult(
+            NOT_FOUND, "time_limit",
+            f"time limit reached: no path keeps the clearance margin {margin:.4g}, and "
+            f"there was no time left to search without it"), None
     log.info("no path with margin %.3g; checking without the margin", margin)
     space = build(0.0)
     second = search(space, ends["start"], ends["goal"], run)

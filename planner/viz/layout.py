@@ -160,7 +160,16 @@ of the scenario's bounds: a picture, not the planner's geometry (which is exact)
 follows the scene's size, not the surface's."""
 
 DISPLAY_MAX_CELLS = 4_000_000
-"""Octree cell budget of one drawn C-obstacle surface (about 1 GB)."""
+"""Most octree cells of one drawn C-obstacle surface (about 2.5 GB); fewer when the
+memory limit is smaller (:func:`display_max_cells`)."""
+
+
+def display_max_cells() -> int | None:
+    """The cell budget of one drawn surface: :data:`DISPLAY_MAX_CELLS`, or ``None`` (what
+    the memory limit allows, :mod:`planner.budget`) when that is less."""
+    from planner import budget
+
+    return None if budget.current().surface_cells() < DISPLAY_MAX_CELLS else DISPLAY_MAX_CELLS
 
 
 def display_eps(scenario) -> float:
@@ -177,7 +186,7 @@ def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
     ``source`` (a plan's ``outcome.source``: the C-obstacles it planned on), or on the
     source the scenario's settings choose; at ``eps`` (default :func:`display_eps`), not
     refined further where features are thinner (a picture), within
-    :data:`DISPLAY_MAX_CELLS`.
+    :func:`display_max_cells`.
     """
     from planner.minkowski import c_obstacle
     from planner.sources import choose_for
@@ -189,7 +198,7 @@ def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
     # a picture's complex cells are no warning
     return {body.name: c_obstacle(body, scenario.robot, eps=eps, progress=progress,
                                   source=source, max_refinements=0,
-                                  max_cells=DISPLAY_MAX_CELLS, warn_complex=False).mesh
+                                  max_cells=display_max_cells(), warn_complex=False).mesh
             for body in scenario.obstacles}
 
 

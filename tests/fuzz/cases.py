@@ -211,7 +211,35 @@ def _cli_cases(rng: random.Random) -> list[Case]:
                                                      "batch"]),), {}),
         Case("batch_bad_runs", "cli", ("batch", "s.yaml", "--out", "out", "--runs",
                                        rng.choice(["0", "-2", "x"])), files),
+        _memory_case(rng, files),
     ]
+
+
+def _memory_case(rng: random.Random, files: dict[str, bytes | None]) -> Case:
+    """``--memory-limit`` out of range (0, negative, NaN, inf, huge, not a number), or
+    valid but too small for the work, before or after the subcommand: exit 2, one line."""
+    value = rng.choice(["0", "-1", "nan", "inf", "-inf", "1e30", "abc", "", "0.0001",
+                        "0.002", "0.01"])
+    command = rng.choice([("plan", "s.yaml", "--out", "out", "--no-progress"),
+                          ("minkowski", "m.stl", "m.stl", "-o", "out/s.stl", "--eps", "0.01",
+                           "--no-progress")])
+    argv = ((*command, "--memory-limit", value) if rng.random() < 0.5
+            else ("--memory-limit", value, *command))
+    box = (b"solid b\n" + b"".join(
+        b"facet normal 0 0 0\nouter loop\n" + b"".join(
+            b"vertex %d %d %d\n" % v for v in tri) + b"endloop\nendfacet\n"
+        for tri in _BOX_TRIANGLES) + b"endsolid b\n")
+    return Case(f"memory_limit_{command[0]}", "cli", argv, {**files, "m.stl": box})
+
+
+_BOX_TRIANGLES = [  # a unit cube, outward
+    ((0, 0, 0), (0, 1, 0), (1, 1, 0)), ((0, 0, 0), (1, 1, 0), (1, 0, 0)),
+    ((0, 0, 1), (1, 0, 1), (1, 1, 1)), ((0, 0, 1), (1, 1, 1), (0, 1, 1)),
+    ((0, 0, 0), (1, 0, 0), (1, 0, 1)), ((0, 0, 0), (1, 0, 1), (0, 0, 1)),
+    ((0, 1, 0), (0, 1, 1), (1, 1, 1)), ((0, 1, 0), (1, 1, 1), (1, 1, 0)),
+    ((0, 0, 0), (0, 0, 1), (0, 1, 1)), ((0, 0, 0), (0, 1, 1), (0, 1, 0)),
+    ((1, 0, 0), (1, 1, 0), (1, 1, 1)), ((1, 0, 0), (1, 1, 1), (1, 0, 1)),
+]
 
 
 def _output_cases(rng: random.Random) -> list[Case]:

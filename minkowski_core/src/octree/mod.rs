@@ -28,6 +28,22 @@ pub const MAX_DEPTH: u32 = 20;
 /// [`CoreError::RecordLimit`] instead of running out of memory.
 pub const MAX_RECORD_WORDS: usize = 1 << 30;
 
+/// The record budget [`Octree::build`] and [`crate::roadmap::refine`] use, in words:
+/// [`MAX_RECORD_WORDS`] unless the binding set a smaller one from the caller's memory
+/// limit ([`set_record_budget`]). One process-wide value, like the memory it stands for.
+static RECORD_BUDGET: AtomicUsize = AtomicUsize::new(MAX_RECORD_WORDS);
+
+/// The candidate-record budget in words (see [`set_record_budget`]).
+pub fn record_budget() -> usize {
+    RECORD_BUDGET.load(Ordering::Relaxed)
+}
+
+/// Set the candidate-record budget to `words` (clamped to `1..=MAX_RECORD_WORDS`); the
+/// previous value is returned.
+pub fn set_record_budget(words: usize) -> usize {
+    RECORD_BUDGET.swap(words.clamp(1, MAX_RECORD_WORDS), Ordering::Relaxed)
+}
+
 /// The fraction of a finest cell by which the lattice is shifted off the region's corner,
 /// so that axis-aligned facets rarely fall exactly on lattice planes.
 const LATTICE_SHIFT: f64 = 0.381_966_011_250_105_1;
@@ -206,9 +222,9 @@ impl Octree {
     /// # Errors
     /// [`CoreError::InvalidParameter`] for a non-positive or non-finite `h`,
     /// [`CoreError::ResourceLimit`] when the lattice or the leaf count would exceed the limits,
-    /// [`CoreError::RecordLimit`] when the candidate records would pass [`MAX_RECORD_WORDS`].
+    /// [`CoreError::RecordLimit`] when the candidate records would pass [`record_budget`].
     pub fn build<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize) -> CoreResult<Octree> {
-        Self::build_within(source, region, h, max_cells, MAX_RECORD_WORDS)
+        Self::build_within(source, region, h, max_cells, record_budget())
     }
 
     /// [`Octree::build`] with at most `max_words` candidate-record words.
@@ -474,7 +490,7 @@ impl Ctx<'_> {
     }
 }
 
-/// The error for an octree whose candidate records would pass [`MAX_RECORD_WORDS`].
+/// The error for an octree whose candidate records would pass its budget of `max_words`.
 pub(crate) fn record_limit(max_words: usize, h: f64, during: &str) -> CoreError {
     CoreError::RecordLimit { gib: (max_words * std::mem::size_of::<u32>()) as f64 / (1u64 << 30) as f64, cell_size: h, detail: during.into() }
 }

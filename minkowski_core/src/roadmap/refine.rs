@@ -9,7 +9,7 @@
 use super::index::LeafIndex;
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
-use crate::octree::{lattice_cell, record_limit, CellSource, Label, Leaf, Octree, MAX_DEPTH, MAX_RECORD_WORDS};
+use crate::octree::{lattice_cell, record_budget, record_limit, CellSource, Label, Leaf, Octree, MAX_DEPTH};
 use rayon::prelude::*;
 
 /// What a [`refine`] call did.
@@ -88,10 +88,10 @@ impl Classifier<'_> {
 ///
 /// # Errors
 /// [`CoreError::ResourceLimit`] when the octree would exceed `max_leaves` leaves,
-/// [`CoreError::RecordLimit`] when its candidate records would pass [`MAX_RECORD_WORDS`]
+/// [`CoreError::RecordLimit`] when its candidate records would pass [`record_budget`]
 /// (nothing is changed then).
 pub fn refine<S: CellSource>(source: &S, oct: &mut Octree, index: &mut LeafIndex, targets: &[usize], levels: u8, max_leaves: usize) -> CoreResult<RefineStats> {
-    refine_within(source, oct, index, targets, levels, max_leaves, MAX_RECORD_WORDS)
+    refine_within(source, oct, index, targets, levels, max_leaves, record_budget())
 }
 
 /// [`refine`] with at most `max_words` candidate-record words in the octree.
