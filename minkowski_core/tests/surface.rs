@@ -120,8 +120,13 @@ fn bad_eps_is_an_error() {
         let r = approximate_union(&set, &UnionParams { eps, max_cells: 1000, max_refinements: 0, simplify: false, planes: true });
         assert!(matches!(r, Err(CoreError::InvalidParameter { .. })), "eps {eps}");
     }
-    let r = approximate_union(&set, &UnionParams { eps: 1e-4, max_cells: 1000, max_refinements: 0, simplify: false, planes: true });
+    // sampled everywhere, a fine grid exceeds the budget; resolved by planes, the cube's
+    // faces, edges and corners need a few hundred cells at any eps
+    let r = approximate_union(&set, &UnionParams { eps: 1e-4, max_cells: 1000, max_refinements: 0, simplify: false, planes: false });
     assert!(matches!(r, Err(CoreError::ResourceLimit { .. })));
+    let r = approximate_union(&set, &UnionParams { eps: 1e-4, max_cells: 1000, max_refinements: 0, simplify: true, planes: true }).unwrap();
+    assert_eq!(r.surface.band_cells, 0);
+    assert_eq!(r.surface.faces.len(), 12, "a cube's six faces");
 }
 
 #[test]

@@ -135,6 +135,22 @@ impl CellSource for crate::minkowski::PolytopeSet {
         out.clear();
         out.extend_from_slice(bnd);
     }
+
+    /// The union's boundary in a cell lies on the planes its primitives kept (the others
+    /// do not cut it): resolved when those are at most three distinct planes.
+    fn plane_cut(&self, own: &[u32]) -> Option<Cut> {
+        let mut cut = Cut::new();
+        let tol = 1e-12 * self.aabb.min.abs().max(self.aabb.max.abs()).max_element().max(1e-300);
+        for (prim, planes) in (CandIter { data: own }) {
+            let poly = &self.polys[prim];
+            for &k in planes {
+                if !cut.add(poly.normals[k as usize], poly.offsets[k as usize], tol) {
+                    return None;
+                }
+            }
+        }
+        Some(cut)
+    }
 }
 
 /// Sort `iv` and merge overlapping (or touching within 1e-12) intervals in place.

@@ -11,6 +11,9 @@
 //! refine. Triangle orientation comes from integer determinants on the lattice, never from
 //! rounded geometry, so the mesh is consistently oriented.
 //!
+//! Cells above the finest level that the source resolved by at most three planes
+//! ([`planar`]) give their exact polygons instead, joined to the sampled band ([`stitch`]).
+//!
 //! Entry point: [`extract`].
 
 pub mod planar;
