@@ -67,6 +67,21 @@ def test_every_output_point_is_within_the_bound_of_the_true_offset_surface():
     assert np.all(np.abs(distance - r) <= result.error_bound + 1e-12)
 
 
+def test_a_non_convex_offset_is_within_its_bound_of_the_exact_distance():
+    # concave edges and corners: the boundary's crossings there come from several
+    # triangles' neighbourhoods at once (their closed-form intervals, merged)
+    from shapes import l_bracket
+
+    bracket = l_bracket(length=2.0, height=1.5, thickness=0.5, depth=1.0)
+    r = 0.2
+    result = planner.offset(bracket, r, eps=0.04)
+    assert result.mesh.is_watertight and math.isfinite(result.error_bound)
+    points, _ = trimesh.sample.sample_surface(result.mesh, 4000, seed=1)
+    _, distance, _ = trimesh.proximity.closest_point(bracket, points)
+    distance = np.where(bracket.contains(points), 0.0, distance)
+    assert np.max(np.abs(distance - r)) <= result.error_bound
+
+
 @pytest.mark.parametrize("r, genus", [(0.15, 1), (0.9, 0)])
 def test_a_torus_keeps_its_hole_until_the_radius_fills_it(r, genus):
     torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.3,

@@ -12,21 +12,21 @@
 //! winding-number test at its centre decides); a cell within `|r|` of one triangle at
 //! all eight corners (the distance to a convex set is convex, so the corners bound it)
 //! is wholly in the neighbourhoods. Along a segment, the part within `|r|` of a triangle
-//! is one interval (a convex function's sublevel set), found by golden-section search for
-//! the nearest point and bisection for the two ends; the offset's boundary lies at the
-//! ends of those intervals, and between them a stretch is wholly inside or outside `P`.
+//! is one interval (the neighbourhood is convex), in closed form: the hull of the intervals
+//! of the corners' balls, the edges' cylinders and the face's prism ([`near_hull`]: two
+//! quadratics and a few clips, where a search along the segment took some 300 distance
+//! evaluations); the offset's boundary lies at the ends of those intervals, and between
+//! them a stretch is wholly inside or outside `P`.
 
 use crate::exact::TriMesh;
 use crate::math::{Aabb, Vec3};
 use crate::octree::{merge_sorted, CellSource, Label};
 
-/// Bisection and golden-section steps along a segment: bisection to 2^-76 of its length,
-/// golden-section search to 0.618^76, about 1e-16.
-const STEPS: usize = 76;
-
 /// The offset of a closed solid by a radius (see the module documentation).
 pub struct OffsetSource<'a> {
     mesh: &'a TriMesh,
+    /// Per triangle, its face's planes ([`Face`]).
+    faces: Vec<Face>,
     radius: f64,
     grow: bool,
     /// The box the offset lies in.
@@ -44,47 +44,36 @@ impl<'a> OffsetSource<'a> {
         debug_assert!(mesh.solid, "the offset of a surface");
         let grow = r > 0.0;
         let aabb = if grow { mesh.aabb.inflated(r * (1.0 + 1e-9)) } else { mesh.aabb };
-        OffsetSource { mesh, radius: r.abs(), grow, aabb }
+        let faces = mesh.tris.iter().map(|t| Face::new(t.p)).collect();
+        OffsetSource { mesh, faces, radius: r.abs(), grow, aabb }
     }
 
     fn distance(&self, t: u32, p: Vec3) -> f64 {
-        let [a, b, c] = self.mesh.tris[t as usize].p;
-        (closest_on_triangle(p, a, b, c) - p).length()
+        self.faces[t as usize].distance(self.mesh.tris[t as usize].p, p)
     }
 
-    /// The part `[s0, s1]` of `a → b` within the radius of triangle `t`, if any. The
-    /// distance is convex along the segment, so an end within the radius bounds the
-    /// search to one bisection, both ends within it give the whole segment, and only a
-    /// segment whose ends are both farther needs the nearest point searched for (after a
-    /// cheap test: the midpoint's distance less half the length).
+    /// The part `[s0, s1]` of `a → b` within the radius of triangle `t`, if any. The ends'
+    /// memberships come from [`Self::distance`] (as every point query's do); the crossings
+    /// between them are the closed-form [`near_hull`] of the segment's line, clipped to it.
     fn near_interval(&self, t: u32, a: Vec3, b: Vec3) -> Option<(f64, f64)> {
-        let f = |s: f64| self.distance(t, a + (b - a) * s) - self.radius;
-        let (fa, fb) = (f(0.0), f(1.0));
-        match (fa <= 0.0, fb <= 0.0) {
-            (true, true) => return Some((0.0, 1.0)),
-            (true, false) => return Some((0.0, crossing(&f, 0.0, 1.0))),
-            (false, true) => return Some((crossing(&f, 1.0, 0.0), 1.0)),
-            (false, false) => {}
+        let near_a = self.distance(t, a) <= self.radius;
+        let near_b = self.distance(t, b) <= self.radius;
+        if near_a && near_b {
+            return Some((0.0, 1.0));
         }
-        if f(0.5) - 0.5 * (b - a).length() > 0.0 {
-            return None;
-        }
-        let (mut lo, mut hi) = (0.0, 1.0);
-        let golden = 0.5 * (5f64.sqrt() - 1.0);
-        for _ in 0..STEPS {
-            let m1 = hi - golden * (hi - lo);
-            let m2 = lo + golden * (hi - lo);
-            if f(m1) <= f(m2) {
-                hi = m2;
-            } else {
-                lo = m1;
+        let face = &self.faces[t as usize];
+        let hull = near_hull(self.mesh.tris[t as usize].p, face, self.radius, a, b - a);
+        match (near_a, near_b, hull) {
+            (true, false, Some((_, hi))) => Some((0.0, hi.clamp(0.0, 1.0))),
+            (true, false, None) => Some((0.0, 0.0)),
+            (false, true, Some((lo, _))) => Some((lo.clamp(0.0, 1.0), 1.0)),
+            (false, true, None) => Some((1.0, 1.0)),
+            (false, false, Some((lo, hi))) => {
+                let (lo, hi) = (lo.max(0.0), hi.min(1.0));
+                (lo <= hi).then_some((lo, hi))
             }
+            _ => None,
         }
-        let best = 0.5 * (lo + hi);
-        if f(best) > 0.0 {
-            return None;
-        }
-        Some((crossing(&f, best, 0.0), crossing(&f, best, 1.0)))
     }
 
     /// Whether `p`, not within the radius of the boundary, is in the offset: inside `P`.
@@ -162,19 +151,122 @@ impl CellSource for OffsetSource<'_> {
     }
 }
 
-/// Where `f` (at most zero at `inside`, positive at `outside`, convex) crosses zero
-/// between them: the last point found with `f <= 0` (bisection).
-fn crossing(f: &impl Fn(f64) -> f64, inside: f64, outside: f64) -> f64 {
-    let (mut i, mut o) = (inside, outside);
-    for _ in 0..STEPS {
-        let m = 0.5 * (i + o);
-        if f(m) <= 0.0 {
-            i = m;
-        } else {
-            o = m;
+/// Below this ratio of twice its area to its longest edge squared a triangle is taken for
+/// its three edges (a sliver at most 1e-9 of its length wide: its points are that close to
+/// them): its normal, from a cross product of nearly parallel edges, would be rounding.
+const SLIVER: f64 = 1e-9;
+
+/// A triangle's face: unit normal `n` and unit in-plane edge normals `m[k]` (of the edge
+/// from corner `k` to corner `k + 1`, pointing into the triangle); all zero for a sliver.
+#[derive(Clone, Copy, Debug)]
+pub struct Face {
+    n: Vec3,
+    m: [Vec3; 3],
+}
+
+impl Face {
+    /// The face of the triangle with corners `p`.
+    pub fn new(p: [Vec3; 3]) -> Face {
+        let e = [p[1] - p[0], p[2] - p[1], p[0] - p[2]];
+        let cross = e[0].cross(e[1]);
+        let longest = e.iter().map(|x| x.length_squared()).fold(0.0, f64::max);
+        if cross.length() <= SLIVER * longest {
+            return Face { n: Vec3::ZERO, m: [Vec3::ZERO; 3] };
+        }
+        let n = cross.normalize();
+        Face { n, m: e.map(|x| n.cross(x).normalize()) }
+    }
+
+    /// Whether the point's projection on the plane lies in the triangle (`false` for a
+    /// sliver).
+    fn over(&self, p: [Vec3; 3], x: Vec3) -> bool {
+        self.n != Vec3::ZERO && (0..3).all(|k| (x - p[k]).dot(self.m[k]) >= 0.0)
+    }
+
+    /// The distance from `x` to the triangle with corners `p`: to its plane when `x` lies
+    /// over it, else to its nearest edge.
+    pub fn distance(&self, p: [Vec3; 3], x: Vec3) -> f64 {
+        if self.over(p, x) {
+            return (x - p[0]).dot(self.n).abs();
+        }
+        (0..3).map(|k| (closest_on_segment(x, p[k], p[(k + 1) % 3]) - x).length_squared()).fold(f64::INFINITY, f64::min).sqrt()
+    }
+}
+
+/// Where the line `a + s d` (all real `s`) meets the `r`-neighbourhood of the triangle with
+/// corners `p` and face `face`: `[lo, hi]` or none. That neighbourhood is convex and the union of the
+/// corners' balls, the edges' finite cylinders and the prism over the face, so the hull of
+/// the seven pieces' intervals (each a quadratic's or a clip's) is exactly its interval.
+pub fn near_hull(p: [Vec3; 3], face: &Face, r: f64, a: Vec3, d: Vec3) -> Option<(f64, f64)> {
+    let dd = d.length_squared();
+    if dd == 0.0 {
+        return None;
+    }
+    let mut hull: Option<(f64, f64)> = None;
+    let mut add = |iv: Option<(f64, f64)>| {
+        if let Some((lo, hi)) = iv {
+            hull = Some(hull.map_or((lo, hi), |(l, h)| (l.min(lo), h.max(hi))));
+        }
+    };
+    for k in 0..3 {
+        let w = a - p[k];
+        add(quadratic_below(dd, 2.0 * w.dot(d), w.length_squared() - r * r));
+        let e = p[(k + 1) % 3] - p[k];
+        let ee = e.length_squared();
+        if ee > 0.0 {
+            // perpendicular to the edge: within r of its line; along it: between its ends
+            let (we, de) = (w.dot(e) / ee, d.dot(e) / ee);
+            let (wp, dp) = (w - e * we, d - e * de);
+            let across = quadratic_below(dp.length_squared(), 2.0 * wp.dot(dp), wp.length_squared() - r * r);
+            add(across.and_then(|iv| clip(iv, we, de, 0.0)).and_then(|iv| clip(iv, -we, -de, -1.0)));
         }
     }
-    i
+    let (n, m) = (face.n, face.m);
+    if n != Vec3::ZERO {
+        let h = (a - p[0]).dot(n);
+        let mut prism = clip((f64::NEG_INFINITY, f64::INFINITY), h, d.dot(n), -r);
+        prism = prism.and_then(|iv| clip(iv, -h, -d.dot(n), -r));
+        for k in 0..3 {
+            prism = prism.and_then(|iv| clip(iv, (a - p[k]).dot(m[k]), d.dot(m[k]), 0.0));
+        }
+        add(prism);
+    }
+    hull
+}
+
+/// `{s : A s² + B s + C <= 0}` for `A >= 0` (an interval or none; `A = 0`: all or none
+/// as `C`, the case of a line parallel to a cylinder's axis).
+fn quadratic_below(qa: f64, qb: f64, qc: f64) -> Option<(f64, f64)> {
+    if qa <= 0.0 {
+        return (qc <= 0.0).then_some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let disc = qb * qb - 4.0 * qa * qc;
+    if disc < 0.0 {
+        return None;
+    }
+    // the root of the larger magnitude first, the other from the product (no cancellation)
+    let q = -0.5 * (qb + qb.signum() * disc.sqrt());
+    if q == 0.0 {
+        return Some((0.0, 0.0));
+    }
+    let (s1, s2) = (q / qa, qc / q);
+    Some((s1.min(s2), s1.max(s2)))
+}
+
+/// `iv` clipped to `{s : g0 + s g1 >= lim}`.
+fn clip(iv: (f64, f64), g0: f64, g1: f64, lim: f64) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = iv;
+    let g = g0 - lim;
+    if g1 == 0.0 {
+        return (g >= 0.0).then_some(iv);
+    }
+    let s = -g / g1;
+    if g1 > 0.0 {
+        lo = lo.max(s);
+    } else {
+        hi = hi.min(s);
+    }
+    (lo <= hi).then_some((lo, hi))
 }
 
 /// The point of segment `ab` nearest `p`.
@@ -191,49 +283,6 @@ fn corner(cell: &Aabb, k: usize) -> Vec3 {
     Vec3::new(if k & 1 == 0 { cell.min.x } else { cell.max.x }, if k & 2 == 0 { cell.min.y } else { cell.max.y }, if k & 4 == 0 { cell.min.z } else { cell.max.z })
 }
 
-/// The point of triangle `abc` nearest `p` (by the regions of its vertices, edges and
-/// face; exact up to rounding).
-pub fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    if ab.cross(ac).length_squared() == 0.0 {
-        // degenerate: the triangle is its edges (the regions below divide by zero)
-        let on = [closest_on_segment(p, a, b), closest_on_segment(p, b, c), closest_on_segment(p, c, a)];
-        return on.into_iter().min_by(|x, y| (*x - p).length_squared().total_cmp(&(*y - p).length_squared())).unwrap_or(a);
-    }
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return if d1 - d3 > 0.0 { a + ab * (d1 / (d1 - d3)) } else { a };
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return if d2 - d6 > 0.0 { a + ac * (d2 / (d2 - d6)) } else { a };
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let span = (d4 - d3) + (d5 - d6);
-        return if span > 0.0 { b + (c - b) * ((d4 - d3) / span) } else { b };
-    }
-    let denom = va + vb + vc;
-    if denom == 0.0 {
-        return a; // a degenerate triangle: its vertices and edges are what is left
-    }
-    a + ab * (vb / denom) + ac * (vc / denom)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -246,16 +295,24 @@ mod tests {
     }
 
     #[test]
-    fn closest_points_of_a_triangle() {
-        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
-        let near = |p: Vec3, q: Vec3| (closest_on_triangle(p, a, b, c) - q).length() < 1e-15;
-        assert!(near(Vec3::new(0.2, 0.2, 5.0), Vec3::new(0.2, 0.2, 0.0))); // the face
-        assert!(near(Vec3::new(-1.0, -1.0, 0.0), a)); // a vertex
-        assert!(near(Vec3::new(0.5, -2.0, 0.0), Vec3::new(0.5, 0.0, 0.0))); // an edge
-        assert!(near(Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.5, 0.5, 0.0))); // the hypotenuse
-                                                                           // a triangle with two equal corners is its edge: no NaN from 0 / 0
-        let q = closest_on_triangle(Vec3::new(-0.5, 2.0, 0.0), a, a, c);
-        assert!(q.is_finite() && (q - Vec3::new(0.0, 1.0, 0.0)).length() < 1e-15, "{q}");
+    fn distances_to_a_triangle() {
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let dist = |x: Vec3| Face::new(p).distance(p, x);
+        assert!((dist(Vec3::new(0.2, 0.2, 5.0)) - 5.0).abs() < 1e-15); // the face
+        assert!((dist(Vec3::new(-1.0, -1.0, 0.0)) - 2f64.sqrt()).abs() < 1e-15); // a vertex
+        assert!((dist(Vec3::new(0.5, -2.0, 0.0)) - 2.0).abs() < 1e-15); // an edge
+        assert!((dist(Vec3::new(1.0, 1.0, 0.0)) - 0.5f64.sqrt()).abs() < 1e-15); // the hypotenuse
+                                                                                 // a triangle with two equal corners is its edge: no NaN from 0 / 0
+        let q = [Vec3::ZERO, Vec3::ZERO, Vec3::Y];
+        let d = Face::new(q).distance(q, Vec3::new(-0.5, 2.0, 0.0));
+        assert!((d - 5f64.sqrt() / 2.0).abs() < 1e-15, "{d}");
+        // nearly collinear corners (a rounding-level area): the distance to the sliver is
+        // the distance to its edges, not what a division by that area makes of it
+        let (a, b) = (Vec3::new(0.06, -0.08, 0.38), Vec3::new(-0.15, -0.65, -0.96));
+        let s = [a, b, a + (b - a) * 0.3];
+        let x = Vec3::new(-0.08, -0.51, -0.51); // the old region code was 0.32 off here
+        let edge = (closest_on_segment(x, a, b) - x).length();
+        assert!((Face::new(s).distance(s, x) - edge).abs() < 1e-12);
     }
 
     #[test]
@@ -282,6 +339,55 @@ mod tests {
         let volume = signed_volume(&result.surface.vertices, &result.surface.faces);
         let exact = 1.0 + 6.0 * r + 3.0 * std::f64::consts::PI * r * r + 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
         assert!((volume - exact).abs() < 0.03 * exact, "{volume} vs {exact}");
+    }
+
+    /// The closed-form interval against dense samples of the exact distance, on random
+    /// triangles (degenerate ones too) and segments (some parallel to an edge or in the
+    /// triangle's plane): every sample farther than 1e-9 from the interval's ends is near
+    /// exactly when it lies inside it.
+    #[test]
+    fn the_closed_form_interval_is_where_the_distance_is_within_the_radius() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rand = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let point = |s: f64, rand: &mut dyn FnMut() -> f64| Vec3::new(rand() * s, rand() * s, rand() * s);
+        let (mut met, mut missed) = (0, 0);
+        for k in 0..3000 {
+            let mut p = [point(1.0, &mut rand), point(1.0, &mut rand), point(1.0, &mut rand)];
+            if k % 10 == 0 {
+                p[2] = p[1]; // two corners the same
+            } else if k % 10 == 1 {
+                p[2] = p[0] + (p[1] - p[0]) * 0.3; // collinear
+            }
+            let v: Vec<Vec3> = p.to_vec();
+            let mesh = TriMesh::surface(v, &[[0, 1, 2]], "tri").expect("a triangle");
+            let src = OffsetSource { faces: vec![Face::new(p)], mesh: &mesh, radius: 0.1 + 0.5 * rand().abs(), grow: true, aabb: mesh.aabb };
+            let a = point(1.5, &mut rand);
+            let b = match k % 7 {
+                0 => a + (p[1] - p[0]) * rand(),                          // parallel to an edge
+                1 => a + (p[1] - p[0]) * rand() + (p[2] - p[0]) * rand(), // parallel to the face
+                _ => point(1.5, &mut rand),
+            };
+            let iv = src.near_interval(0, a, b);
+            let len = (b - a).length().max(1e-300);
+            for j in 0..=400 {
+                let s = j as f64 / 400.0;
+                let near = src.distance(0, a + (b - a) * s) <= src.radius;
+                let inside = iv.is_some_and(|(lo, hi)| lo <= s && s <= hi);
+                let at_end = iv.is_some_and(|(lo, hi)| ((s - lo).abs().min((s - hi).abs())) * len < 1e-9);
+                assert!(near == inside || at_end, "case {k}: s {s} near {near} interval {iv:?}");
+            }
+            if iv.is_some() {
+                met += 1;
+            } else {
+                missed += 1;
+            }
+        }
+        assert!(met > 500 && missed > 500, "{met} met, {missed} missed");
     }
 
     fn signed_volume(v: &[Vec3], f: &[[u32; 3]]) -> f64 {
