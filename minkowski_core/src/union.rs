@@ -23,8 +23,9 @@ pub struct UnionParams {
     /// Keep cells the source resolves by at most three planes as exact polygons at their
     /// size ([`Octree::build_resolving_planes`]); the sampled band is left only where the
     /// boundary is not that simple. Where the polygons and the band do not join into a
-    /// closed surface, the grid is rebuilt sampling around those edges (up to
-    /// `MAX_JOIN_RETRIES` times, then everywhere).
+    /// closed manifold surface, the grid is rebuilt sampling around those edges (up to
+    /// `MAX_JOIN_RETRIES` times, then everywhere); where an exact edge or corner meets the
+    /// sampled band, at once everywhere.
     pub planes: bool,
 }
 
@@ -132,12 +133,15 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         let t1 = Instant::now();
         let surface = extract(&oct, set);
         t_surf += t1.elapsed().as_secs_f64();
-        if surface.open_edges > 0 {
-            // the exact polygons did not join the band there: sample around those edges
-            // (a few times), then everywhere
-            open_seen += surface.open_edges;
+        // where the exact polygons did not join the band, or the band has complex cells
+        // next to them, sample around those places (a few times), then everywhere
+        let joined_badly = surface.open_edges > 0 || surface.crease_conflicts > 0 || (surface.complex_cells > 0 && surface.planar_cells > 0);
+        if planes && joined_badly {
+            open_seen += surface.open_edges + surface.crease_conflicts + surface.complex_cells;
             retries += 1;
-            if retries > MAX_JOIN_RETRIES || surface.open_edges > MAX_OPEN_REPORTED {
+            // an exact edge or corner next to the sampled band is not joined (the band
+            // chamfers it): sample everywhere at once
+            if retries > MAX_JOIN_RETRIES || surface.open_edges > MAX_OPEN_REPORTED || surface.crease_conflicts > 0 {
                 planes = false;
             }
             sampled.extend(surface.open_at.iter().map(|b| b.inflated(4.0 * h)));

@@ -74,11 +74,18 @@ pub struct Surface {
     pub planar_cells: usize,
     /// Exact polygons those cells gave.
     pub planar_pieces: usize,
-    /// Edges left open (or used twice) where those polygons met the band: 0 for a closed
-    /// surface (the caller samples there instead when not).
+    /// Edges left open (or used twice), or vertices pinched, where those polygons met the
+    /// band: 0 for a closed manifold surface (the caller samples there instead when not).
     pub open_edges: usize,
-    /// The boxes of those edges (at most [`MAX_OPEN_REPORTED`]).
+    /// The boxes of those edges and vertices, then of the complex cells (at most
+    /// [`MAX_OPEN_REPORTED`]).
     pub open_at: Vec<Aabb>,
+    /// Sampled cells with a surface next to a plane-resolved cell with an exact edge or
+    /// corner (their boxes are in [`Surface::open_at`]).
+    pub crease_conflicts: usize,
+    /// Closed slivers (two layers folded onto each other, under two cells across) removed
+    /// after the join ([`stitch::drop_slivers`]).
+    pub slivers_dropped: usize,
 }
 
 #[inline]
@@ -236,15 +243,23 @@ impl EdgeIntervals {
 /// MIXED cells above the finest level (an octree from [`Octree::build_resolving_planes`])
 /// give their exact polygons ([`planar`]), joined to the band's triangles ([`stitch`]).
 pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
-    let planar_polys = planar_polygons(oct, src);
-    let mut s = sample_band(oct, src, &planar_polys.1);
-    s.planar_cells = planar_polys.2;
-    s.planar_pieces = planar_polys.0.len();
-    if !planar_polys.0.is_empty() {
-        stitch::join(&mut s, &planar_polys.0, STITCH_TOL * oct.h, (oct.origin, oct.h));
+    let planar = planar_polygons(oct, src);
+    let mut s = sample_band(oct, src, &planar);
+    s.planar_cells = planar.cells;
+    s.planar_pieces = planar.polys.len();
+    if !planar.polys.is_empty() {
+        stitch::join(&mut s, &planar.polys, STITCH_TOL * oct.h, (oct.origin, oct.h));
+        s.slivers_dropped = stitch::drop_slivers(&mut s, 2.0 * oct.h, 1e-4 * oct.h.powi(3));
         let open = stitch::open_edges(&s.faces);
-        s.open_edges = open.len();
-        s.open_at = open.iter().take(MAX_OPEN_REPORTED).map(|&(a, b)| Aabb::from_points(&[s.vertices[a as usize], s.vertices[b as usize]])).collect();
+        let pinched = if open.is_empty() { stitch::pinched_vertices(&s.faces) } else { Vec::new() };
+        s.open_edges = open.len() + pinched.len();
+        let at: Vec<Aabb> = open
+            .iter()
+            .map(|&(a, b)| Aabb::from_points(&[s.vertices[a as usize], s.vertices[b as usize]]))
+            .chain(pinched.iter().map(|&v| Aabb::new(s.vertices[v as usize], s.vertices[v as usize])))
+            .take(MAX_OPEN_REPORTED)
+            .collect();
+        s.open_at.extend(at);
     }
     s
 }
@@ -262,15 +277,15 @@ type PlanarSet = std::collections::HashSet<(u8, u64)>;
 
 /// The exact polygons of the MIXED cells above the finest level (outward, counter-clockwise),
 /// the cells that have some, and how many such cells there are.
-fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> (Vec<Vec<Vec3>>, PlanarSet, usize) {
+fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
     let cells: Vec<usize> = (0..oct.leaves.len()).filter(|&i| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level > 0).collect();
-    let per_cell: Vec<(usize, Vec<Vec<Vec3>>)> = cells
+    let per_cell: Vec<(usize, Vec<Vec<Vec3>>, bool)> = cells
         .par_iter()
         .map(|&li| {
             let leaf = &oct.leaves[li];
             let (recs, cell) = (oct.records(leaf), oct.cell_box(leaf));
             let Some((cut, pieces)) = src.plane_cut(recs).and_then(|cut| Some((cut, cut.pieces(&cell)?))) else {
-                return (li, Vec::new()); // not resolvable after all: the stitch check sees the hole
+                return (li, Vec::new(), false); // not resolvable after all: the stitch check sees the hole
             };
             // one point query per region of the cut (pieces share them)
             let mut region_inside: [Option<bool>; 1 << planar::MAX_PLANES] = [None; 1 << planar::MAX_PLANES];
@@ -286,19 +301,35 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> (Vec<Vec<Vec3>>, Pla
                     }
                 })
                 .collect();
-            (li, polys)
+            (li, polys, cut.n >= 2)
         })
         .collect();
-    let mut with_surface = PlanarSet::new();
-    let mut polys = Vec::new();
-    for (li, p) in per_cell {
+    let mut out = PlanarPolygons { cells: cells.len(), ..Default::default() };
+    for (li, p, creased) in per_cell {
         if !p.is_empty() {
             let l = &oct.leaves[li];
-            with_surface.insert((l.level, key(l.ijk[0], l.ijk[1], l.ijk[2])));
-            polys.extend(p);
+            let k = (l.level, key(l.ijk[0], l.ijk[1], l.ijk[2]));
+            out.with_surface.insert(k);
+            if creased {
+                out.creased.insert(k);
+            }
+            out.polys.extend(p);
         }
     }
-    (polys, with_surface, cells.len())
+    out
+}
+
+/// What the plane-resolved cells gave.
+#[derive(Default)]
+struct PlanarPolygons {
+    /// Their exact polygons, outward.
+    polys: Vec<Vec<Vec3>>,
+    /// The cells with some.
+    with_surface: PlanarSet,
+    /// Those with an edge or a corner (two or three planes).
+    creased: PlanarSet,
+    /// How many cells were resolved by planes.
+    cells: usize,
 }
 
 /// Whether the finest cell at `(x, y, z)` lies in a plane-resolved cell with a surface.
@@ -311,7 +342,7 @@ fn in_planar(planar: &PlanarSet, x: u32, y: u32, z: u32, max_level: u8) -> bool 
 
 /// Marching tetrahedra over the finest MIXED cells (see the module docs); `planar`: the
 /// plane-resolved cells with a surface, which count as neighbours with a sign change.
-fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarSet) -> Surface {
+fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarPolygons) -> Surface {
     let band: Vec<usize> = (0..oct.leaves.len()).filter(|&i| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level == 0).collect();
     let mut s = Surface { band_cells: band.len(), ..Default::default() };
     if band.is_empty() {
@@ -488,6 +519,25 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarSet) -> Surf
     // surface passes within the two cells' joint diagonal (2 sqrt(3) h) of its points
     let mut resolved: Vec<u64> = band.iter().zip(&flags).filter(|(_, c)| c.0).map(|(&li, _)| leaf_corner_key(li, 0)).collect();
     resolved.sort_unstable();
+    // an exact edge or corner must not meet the sampled surface (the band chamfers it):
+    // such plane-resolved cells are reported, for the caller to sample there too
+    if !planar.creased.is_empty() {
+        let conflicts: Vec<Aabb> = band
+            .par_iter()
+            .zip(&flags)
+            .filter(|(_, f)| f.0)
+            .filter_map(|(&li, _)| {
+                let l = &oct.leaves[li];
+                let near = (-1i64..=1).flat_map(|dz| (-1i64..=1).flat_map(move |dy| (-1i64..=1).map(move |dx| [dx, dy, dz]))).any(|d| {
+                    let c: Vec<i64> = (0..3).map(|a| l.ijk[a] as i64 + d[a]).collect();
+                    c.iter().all(|&x| x >= 0) && in_planar(&planar.creased, c[0] as u32, c[1] as u32, c[2] as u32, oct.depth)
+                });
+                near.then(|| oct.cell_box(l))
+            })
+            .collect();
+        s.crease_conflicts = conflicts.len();
+        s.open_at.extend(conflicts.into_iter().take(MAX_OPEN_REPORTED));
+    }
     for (&li, &(_, unresolved)) in band.iter().zip(&flags) {
         if !unresolved {
             continue;
@@ -502,7 +552,7 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarSet) -> Surf
                     if x < 0 || y < 0 || z < 0 {
                         continue;
                     }
-                    if resolved.binary_search(&key(x as u32, y as u32, z as u32)).is_ok() || in_planar(planar, x as u32, y as u32, z as u32, oct.depth) {
+                    if resolved.binary_search(&key(x as u32, y as u32, z as u32)).is_ok() || in_planar(&planar.with_surface, x as u32, y as u32, z as u32, oct.depth) {
                         near = true;
                         break 'n;
                     }
@@ -511,6 +561,9 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarSet) -> Surf
         }
         if !near {
             s.complex_cells += 1;
+            if s.open_at.len() < MAX_OPEN_REPORTED {
+                s.open_at.push(oct.cell_box(l));
+            }
         }
     }
     s

@@ -46,6 +46,82 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], tol: f64, lattice: (Vec3, f64)
     fill_face_gaps(s, tol, lattice);
 }
 
+/// Remove closed components that are slivers: at most `size` across and enclosing less
+/// than `volume` (two layers of the joined surface folded onto each other, left where a
+/// fill and a polygon overlap). They lie within `size` of the rest, so the bound holds
+/// without them. Returns how many were removed.
+pub fn drop_slivers(s: &mut Surface, size: f64, volume: f64) -> usize {
+    let mut uf = crate::util::UnionFind::new(s.vertices.len());
+    for f in &s.faces {
+        uf.union(f[0] as usize, f[1] as usize);
+        uf.union(f[0] as usize, f[2] as usize);
+    }
+    let mut parts: HashMap<usize, (f64, Aabb)> = HashMap::new();
+    for f in &s.faces {
+        let p = f.map(|v| s.vertices[v as usize]);
+        let e = parts.entry(uf.find(f[0] as usize)).or_insert((0.0, Aabb::empty()));
+        e.0 += p[0].dot(p[1].cross(p[2])) / 6.0;
+        e.1 = e.1.union(&Aabb::from_points(&p));
+    }
+    let slivers: std::collections::HashSet<usize> = parts.iter().filter(|(_, (v, b))| v.abs() < volume && b.extent().max_element() <= size).map(|(&r, _)| r).collect();
+    if slivers.is_empty() || slivers.len() == parts.len() {
+        return 0;
+    }
+    s.faces.retain(|f| !slivers.contains(&uf.find(f[0] as usize)));
+    // and their vertices
+    let mut remap = vec![u32::MAX; s.vertices.len()];
+    for f in &s.faces {
+        for &v in f {
+            remap[v as usize] = 0;
+        }
+    }
+    let mut kept = Vec::with_capacity(s.vertices.len());
+    for (i, &p) in s.vertices.iter().enumerate() {
+        if remap[i] == 0 {
+            remap[i] = kept.len() as u32;
+            kept.push(p);
+        }
+    }
+    s.vertices = kept;
+    for f in &mut s.faces {
+        *f = f.map(|v| remap[v as usize]);
+    }
+    slivers.len()
+}
+
+/// Vertices whose triangles do not form one fan (a disk) about them: where two sheets of
+/// the joined surface touch at a point. On a closed surface with every edge used once each
+/// way, these are what is left of a non-manifold join.
+pub fn pinched_vertices(faces: &[[u32; 3]]) -> Vec<u32> {
+    // per corner: (vertex, the edge opposite it), the link's directed edges
+    let mut link: Vec<(u32, u32, u32)> = faces.par_iter().flat_map_iter(|f| (0..3).map(move |i| (f[i], f[(i + 1) % 3], f[(i + 2) % 3]))).collect();
+    link.par_sort_unstable();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < link.len() {
+        let v = link[i].0;
+        let mut j = i;
+        while j < link.len() && link[j].0 == v {
+            j += 1;
+        }
+        // follow the link from its first edge: one cycle must use all of it
+        let star = &link[i..j];
+        let (mut at, mut steps) = (star[0].2, 1usize);
+        while at != star[0].1 && steps <= star.len() {
+            match star.binary_search_by(|e| (e.1).cmp(&at)) {
+                Ok(k) => at = star[k].2,
+                Err(_) => break,
+            }
+            steps += 1;
+        }
+        if at != star[0].1 || steps != star.len() {
+            out.push(v);
+        }
+        i = j;
+    }
+    out
+}
+
 /// Directed edges used by one triangle whose reverse no triangle uses, and directed edges
 /// used more than once (both break a closed manifold).
 pub fn open_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
@@ -167,24 +243,6 @@ fn fill_face_gaps(s: &mut Surface, tol: f64, lattice: (Vec3, f64)) {
                 }
                 s.faces.extend(tris);
             }
-        }
-    }
-    // what is left bends over a lattice edge (two faces of band cells): a fan about the
-    // centroid of each small loop, whose points are within the loop's span (at most two
-    // cell faces, a face diagonal) of its corners, which lie on the boundary
-    let mut next: HashMap<u32, Vec<u32>> = HashMap::new();
-    for &(a, b) in open.iter().filter(|e| !filled.contains(*e)) {
-        next.entry(b).or_default().push(a);
-    }
-    for ring in cycles(&mut next) {
-        let pts: Vec<Vec3> = ring.iter().map(|&v| s.vertices[v as usize]).collect();
-        if Aabb::from_points(&pts).diagonal() > 2.0 * h {
-            continue;
-        }
-        let centre = s.vertices.len() as u32;
-        s.vertices.push(pts.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / pts.len() as f64);
-        for i in 0..ring.len() {
-            s.faces.push([centre, ring[i], ring[(i + 1) % ring.len()]]);
         }
     }
 }
