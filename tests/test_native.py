@@ -13,6 +13,15 @@ from planner import _minkowski_core as core
 from planner.errors import InvalidMeshError, InvalidParameterError, ResourceLimitError
 
 
+def ball(center, r, n=200):
+    """A convex piece of ``n`` points on a sphere: many facet planes, so its sum's boundary
+    cells are sampled (a box's are resolved by planes at any size)."""
+    k = np.arange(n) + 0.5
+    phi, theta = np.arccos(1 - 2 * k / n), np.pi * (1 + 5 ** 0.5) * k
+    pts = np.column_stack([np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)])
+    return np.asarray(center, float) + r * pts
+
+
 def cube(lo, hi):
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     return np.array([
@@ -99,11 +108,12 @@ def test_errors_map_to_planner_errors():
     with pytest.raises(InvalidParameterError, match="eps"):
         core.union_surface(s, -1.0)
     with pytest.raises(ResourceLimitError, match="cells"):
-        core.union_surface(s, 1e-4, max_cells=1000)
+        core.union_surface(core.Primitives.from_pieces([ball([0, 0, 0], 1.0)]), 1e-4,
+                           max_cells=1000)
 
 
 def test_native_work_releases_the_gil():
-    pieces = [cube(np.array([i, 0, 0]) * 1.5, np.array([i, 0, 0]) * 1.5 + 1) for i in range(6)]
+    pieces = [ball(np.array([i, 0, 0]) * 1.5, 0.6) for i in range(6)]
     s = core.Primitives.from_pieces(pieces)
     ticks = []
     stop = threading.Event()

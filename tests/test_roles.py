@@ -89,7 +89,7 @@ def test_a_cspace_over_budget_is_refused_naming_the_problem():
         octree.setup()
     message = str(refused.value)
     assert message.startswith(str(path.resolve())) and "exact source" in message
-    assert "does not fit" in message and "4.0 GiB" in message
+    assert "--memory-limit" in message and "4.0 GiB" in message
     assert octree.cspace is None
 
 
