@@ -5,8 +5,10 @@ The offset of a solid ``P`` by ``r > 0`` is ``{x : dist(x, P) <= r}``; by ``r < 
 the erosion ``{x in P : dist(x, boundary of P) >= |r|}``. Both are computed as cell
 sources of the native octree (:mod:`minkowski_core::offset`): cells classified by exact
 distances to ``P``'s triangles (never a sum with a polyhedral ball), the surface extracted
-with the grid's two-sided error bound, flat parts (prisms over faces) merged into their
-planes. ``opening(P, r)`` erodes then grows (removing features thinner than ``2 r``),
+with the grid's two-sided error bound. Flat parts (the prisms over faces; all of an
+eroded box) are exact: cells in the column over one face are cut by its offset plane at
+their size (``stats["planar_pieces"]``), only the round parts are sampled.
+``opening(P, r)`` erodes then grows (removing features thinner than ``2 r``),
 ``closing(P, r)`` grows then erodes (filling gaps narrower than ``2 r``). Their
 ``error_bound`` is ``inf``: an erosion is not continuous in its input (a neck a hair
 thicker than ``2 r`` survives, a hair thinner vanishes), so the first stage's error has no
@@ -124,6 +126,8 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
     stats = {"triangles": len(surface.faces), "band_cells": int(raw["band_cells"]),
              "h": float(raw["h"]), "refinements": int(raw["refinements"]),
+             "planar_cells": int(raw["planar_cells"]), "planar_pieces": int(raw["planar_pieces"]),
+             "planes_fallback_edges": int(raw["planes_fallback_edges"]),
              "seconds": time.perf_counter() - t0}
     return OffsetResult(surface, radius, float(raw["error_bound"]), step, stats)
 

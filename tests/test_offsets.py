@@ -56,6 +56,33 @@ def test_an_eroded_box_is_the_shrunken_box():
     assert abs(result.mesh.volume - exact) <= _volume_slack(result, 2 * (0.96 + 0.36 + 0.96))
 
 
+def test_an_eroded_box_is_resolved_by_its_face_planes_exactly():
+    # every cell of the shrunken box's boundary lies in the column over one to three faces:
+    # cut by their offset planes at its size, nothing sampled
+    result = planner.offset(trimesh.creation.box([2.0, 1.0, 1.0]), -0.2)
+    assert result.stats["planar_pieces"] > 0 and result.stats["band_cells"] == 0
+    assert len(result.mesh.faces) == 12
+    corners = np.abs(result.mesh.vertices)
+    assert np.allclose(corners, [0.8, 0.3, 0.3], rtol=0, atol=1e-12)
+    assert abs(result.mesh.volume - 1.6 * 0.6 * 0.6) < 1e-12
+
+
+def test_a_grown_box_has_exact_flat_faces_joined_to_its_round_edges():
+    half, r = 0.5, 0.25
+    result = planner.offset(trimesh.creation.box([1.0, 1.0, 1.0]), r, eps=0.02)
+    assert result.stats["planar_pieces"] > 0 and result.mesh.is_watertight
+    tris = result.mesh.triangles
+    centroids = tris.mean(axis=1)
+    # the triangles over the middle of a face (in its column by more than the bound) lie
+    # on the offset plane to rounding, corners and all: not within the grid's bound only
+    for axis in range(3):
+        others = [a for a in range(3) if a != axis]
+        over = np.all(np.abs(centroids[:, others]) < half - 2 * result.error_bound, axis=1)
+        over &= np.abs(centroids[:, axis]) > half
+        assert over.sum() >= 2
+        np.testing.assert_allclose(np.abs(tris[over][:, :, axis]), half + r, rtol=0, atol=1e-12)
+
+
 def test_every_output_point_is_within_the_bound_of_the_true_offset_surface():
     solid = trimesh.creation.box([1.0, 1.0, 1.0])
     r = 0.25

@@ -16,6 +16,7 @@
 pub mod bvh;
 pub mod error;
 pub mod exact;
+pub mod flat_faces;
 pub mod math;
 pub mod minkowski;
 pub mod octree;

@@ -18,6 +18,8 @@ use crate::math::Vec3;
 const MAX_TARGET_DEGREE: usize = 40;
 /// Vertices with larger stars are left alone.
 const STAR_CAP: usize = 64;
+/// Rounds over the vertices next to the previous round's collapses, at most.
+const MAX_ROUNDS: u32 = 8;
 
 /// Collapse interior vertices of planar patches of `s` (see the module docs). `plane_tol`
 /// is the distance within which a point counts as on a plane, `min_area` the smallest
@@ -39,23 +41,33 @@ pub fn merge_coplanar(s: &mut Surface, plane_tol: f64, min_area: f64) -> usize {
     let mut mark = vec![0u64; nv];
     let mut counted = vec![0u64; nv];
     let mut stamp = 0u64;
-    for _pass in 0..2 {
-        let mut changed = 0usize;
-        for v in 0..nv {
+    // every vertex once, then again those next to a collapse (a collapse can free a
+    // neighbour that was blocked), a few rounds at most
+    let mut queue: Vec<usize> = (0..nv).collect();
+    let mut queued = vec![0u32; nv];
+    for round in 1..=MAX_ROUNDS {
+        let mut next = Vec::new();
+        for &v in &queue {
             if removed_v[v] || inc[v].len() < 3 {
                 continue;
             }
             stamp += 1;
-            if let Some(u) = try_collapse(v, &s.vertices, &mut faces, &mut alive, &mut inc, (plane_tol, min_area), (&mut mark, &mut counted, stamp)) {
-                removed_v[v] = true;
-                let _ = u;
-                changed += 1;
+            let Some(u) = try_collapse(v, &s.vertices, &mut faces, &mut alive, &mut inc, (plane_tol, min_area), (&mut mark, &mut counted, stamp)) else { continue };
+            removed_v[v] = true;
+            removed += 1;
+            for &fi in &inc[u] {
+                for &w in &faces[fi as usize] {
+                    if queued[w as usize] != round {
+                        queued[w as usize] = round;
+                        next.push(w as usize);
+                    }
+                }
             }
         }
-        removed += changed;
-        if changed * 50 < nv {
+        if next.is_empty() {
             break;
         }
+        queue = next;
     }
     // compact
     let mut remap = vec![u32::MAX; nv];
