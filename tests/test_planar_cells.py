@@ -54,11 +54,16 @@ def test_box_sum_is_its_six_faces():
     assert np.abs(np.sort(r.mesh.vertices, axis=0) - np.sort(corners, axis=0)).max() < 1e-12
 
 
-@pytest.mark.parametrize("pair", ["L-bracket ⊕ cube", "L-bracket ⊕ jack"])
+@pytest.mark.parametrize("pair", ["L-bracket ⊕ cube", "L-bracket ⊕ jack", "jack ⊕ tetrahedron",
+                                  "cube ⊕ octahedron"])
 def test_flat_pairs_are_exact_with_their_sharp_edges(pair):
     make = {
         "L-bracket ⊕ cube": (shapes.l_bracket, lambda: shapes.box((1.0, 1.0, 1.0))),
         "L-bracket ⊕ jack": (shapes.l_bracket, shapes.jack),
+        # the jack's concave edges meet the tetrahedron's faces: vertices where four or
+        # more planes meet, resolved by their arrangement in the cell
+        "jack ⊕ tetrahedron": (shapes.jack, shapes.tetrahedron),
+        "cube ⊕ octahedron": (lambda: shapes.box((1.0, 1.0, 1.0)), _octahedron),
     }[pair]
     a, b = make[0](), make[1]()
     r = exact_sum(a, b)
@@ -77,11 +82,26 @@ def test_flat_pairs_are_exact_with_their_sharp_edges(pair):
     assert max(d1, d2) < 1e-9 * truth.scale
 
 
+def _octahedron() -> trimesh.Trimesh:
+    v = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float) * 0.4
+    return trimesh.convex.convex_hull(v)
+
+
+def test_cube_plus_octahedron_has_the_closed_form_volume():
+    # the sum of the unit cube and the octahedron of radius s: the cube's volume, its faces
+    # swept by s, its edges swept by the octahedron's rhombic sections, and the octahedron
+    s = 0.4
+    r = exact_sum(shapes.box((1.0, 1.0, 1.0)), _octahedron())
+    exact = 1.0 + 6.0 * s + 12.0 * (s * s) / 2.0 * 2.0 / 2.0 + 4.0 / 3.0 * s ** 3
+    assert r.stats["band_cells"] == 0
+    assert r.mesh.volume == pytest.approx(exact, rel=1e-12)
+
+
 def test_exact_edges_next_to_the_sampled_band_fall_back_to_sampling():
-    # the jack's concave edges meet the tetrahedron's faces: cells with more than three
-    # planes are sampled, and an exact edge next to that band is not joined to it (the
+    # the comb's edges meet the ball's small facets: cells with more planes than a cut
+    # takes are sampled, and an exact edge next to that band is not joined to it (the
     # band chamfers it), so the whole sum is sampled: closed and within the bound
-    a, b = shapes.jack(), shapes.tetrahedron()
+    a, b = shapes.comb(), shapes.icosphere(2, 0.3)
     r = exact_sum(a, b)
     assert r.stats["planar_cells"] == 0 and r.stats["planes_fallback_edges"] > 0
     truth = manifold_sum(a, b)
@@ -103,10 +123,13 @@ def agree_away_from_surface(r, a, b, n, seed):
     return len(pts)
 
 
-def test_curved_operand_is_sampled_within_the_bound():
+def test_a_coarse_torus_operand_is_resolved_by_its_facets_and_agrees_with_the_oracle():
+    # the small torus's facets are larger than the cells: every boundary cell of the sum
+    # is cut by a few of them, so the sum is its exact facets, not a sampled band
     a, b = shapes.jack(), shapes.torus(1.0, 0.3, 24, 12)
     r = exact_sum(a, b)
-    assert r.stats["band_cells"] > 0 and r.mesh.body_count == 1 and r.mesh.euler_number == 2
+    assert r.stats["band_cells"] == 0 and r.stats["planar_cells"] > 0
+    assert r.mesh.body_count == 1 and r.mesh.euler_number == 2
     # (manifold3d is no reference here: the torus does not contain the origin)
     assert agree_away_from_surface(r, a, b, 3000, seed=2) > 1000
 

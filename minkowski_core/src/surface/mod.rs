@@ -290,18 +290,21 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
             // one point query per region of the cut (pieces share them)
             let mut region_inside: [Option<bool>; 1 << planar::MAX_PLANES] = [None; 1 << planar::MAX_PLANES];
             let mut inside = |p: Vec3| *region_inside[cut.region(p)].get_or_insert_with(|| src.cell_contains(recs, p));
+            let mut planes_used = 0u32; // a bit per plane with a polygon
             let polys = pieces
                 .into_iter()
                 .filter_map(|p| {
                     let (front, behind) = (inside(p.sides[0]), inside(p.sides[1]));
-                    match (front, behind) {
-                        (false, true) => Some(p.polygon),
-                        (true, false) => Some(p.polygon.into_iter().rev().collect()),
-                        _ => None, // the same on both sides: no boundary there
-                    }
+                    let polygon = match (front, behind) {
+                        (false, true) => p.polygon,
+                        (true, false) => p.polygon.into_iter().rev().collect(),
+                        _ => return None, // the same on both sides: no boundary there
+                    };
+                    planes_used |= 1 << p.plane;
+                    Some(polygon)
                 })
                 .collect();
-            (li, polys, cut.n >= 2)
+            (li, polys, planes_used.count_ones() >= 2)
         })
         .collect();
     let mut out = PlanarPolygons { cells: cells.len(), ..Default::default() };
@@ -326,7 +329,7 @@ struct PlanarPolygons {
     polys: Vec<Vec<Vec3>>,
     /// The cells with some.
     with_surface: PlanarSet,
-    /// Those with an edge or a corner (two or three planes).
+    /// Those with an edge or a corner (polygons on two planes or more).
     creased: PlanarSet,
     /// How many cells were resolved by planes.
     cells: usize,

@@ -1,12 +1,14 @@
-//! Cells whose boundary lies on at most three planes: the exact surface pieces there.
+//! Cells whose boundary lies on a few planes: the exact surface pieces there.
 //!
-//! When every boundary candidate that meets a closed cell lies on one of `k <= 3` planes,
+//! When every boundary candidate that meets a closed cell lies on one of `k <=`
+//! [`MAX_PLANES`] planes,
 //! the boundary inside the cell lies on those planes, so each open region of the cell cut
 //! by them holds no boundary point: it is wholly inside or wholly outside the solid, and one
 //! point decides it. The surface in the cell is then the set of plane pieces (the plane
 //! clipped to the cell and to one side of each other plane) whose two sides differ: a flat
-//! cell gives one polygon, an edge two, a corner three — exact, at any cell size, so such
-//! cells are never split. A cell whose pieces are too thin or whose planes nearly coincide
+//! cell gives one polygon, an edge two, a corner three, a vertex where more facets meet
+//! more — exact, at any cell size, so such cells are never split. Each plane's section of
+//! the cell is split by every other plane in turn (the arrangement of their lines in it). A cell whose pieces are too thin or whose planes nearly coincide
 //! to decide a side safely is not resolved this way (it is split, and at the finest level
 //! sampled like any other).
 //!
@@ -14,8 +16,8 @@
 
 use crate::math::{Aabb, Vec3};
 
-/// Most planes a resolved cell may have.
-pub const MAX_PLANES: usize = 3;
+/// Most planes a resolved cell may have (a cell where more meet is split).
+pub const MAX_PLANES: usize = 8;
 
 /// Pieces thinner than this fraction of the cell (from their centre to any plane or cell
 /// face), or planes closer to parallel than this (`1 − |n_i · n_j|`), are not resolved.
@@ -38,6 +40,8 @@ pub struct Piece {
     pub polygon: Vec<Vec3>,
     /// The plane's unit normal.
     pub normal: Vec3,
+    /// The index of its plane in the cut.
+    pub plane: usize,
     /// A point just in front of the piece (along `normal`) and one just behind it.
     pub sides: [Vec3; 2],
 }
@@ -88,21 +92,13 @@ impl Cut {
             if section.len() < 3 {
                 continue;
             }
-            let others: Vec<(Vec3, f64)> = planes.iter().enumerate().filter(|&(j, _)| j != i).map(|(_, &p)| p).collect();
-            for signs in 0..(1u32 << others.len()) {
-                let mut poly = section.clone();
-                for (b, &(m, v)) in others.iter().enumerate() {
-                    // keep the side `m · x - v` has the sign bit `b` says
-                    let s = if signs >> b & 1 == 1 { 1.0 } else { -1.0 };
-                    poly = clip(&poly, m * s, v * s);
-                    if poly.len() < 3 {
-                        break;
-                    }
-                }
-                if poly.len() < 3 {
-                    continue;
-                }
-                out.push(piece(cell, &poly, n, planes, size)?);
+            // the section split by the line of every other plane in it
+            let mut parts = vec![section];
+            for (_, &(m, v)) in planes.iter().enumerate().filter(|&(j, _)| j != i) {
+                parts = parts.iter().flat_map(|poly| [clip(poly, m, v), clip(poly, -m, -v)]).filter(|p| area(p) > THIN * THIN * size * size).collect();
+            }
+            for poly in parts {
+                out.push(piece(cell, &poly, (i, n), planes, size)?);
             }
         }
         Some(out)
@@ -117,7 +113,7 @@ impl Default for Cut {
 
 /// A piece for the polygon `poly` on the plane with normal `n`, with its side points;
 /// `None` when it is too thin for them.
-fn piece(cell: &Aabb, poly: &[Vec3], n: Vec3, planes: &[(Vec3, f64)], size: f64) -> Option<Piece> {
+fn piece(cell: &Aabb, poly: &[Vec3], (plane, n): (usize, Vec3), planes: &[(Vec3, f64)], size: f64) -> Option<Piece> {
     let c = poly.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / poly.len() as f64;
     // room around the centre: to every other plane and every cell face
     let mut room = f64::INFINITY;
@@ -135,7 +131,16 @@ fn piece(cell: &Aabb, poly: &[Vec3], n: Vec3, planes: &[(Vec3, f64)], size: f64)
         return None;
     }
     let d = 0.5 * room;
-    Some(Piece { polygon: poly.to_vec(), normal: n, sides: [c + n * d, c - n * d] })
+    Some(Piece { polygon: poly.to_vec(), normal: n, plane, sides: [c + n * d, c - n * d] })
+}
+
+/// The area of a planar polygon (a fan from its first corner).
+fn area(poly: &[Vec3]) -> f64 {
+    if poly.len() < 3 {
+        return 0.0;
+    }
+    let sum = (1..poly.len() - 1).fold(Vec3::ZERO, |acc, i| acc + (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]));
+    0.5 * sum.length()
 }
 
 /// The convex polygon where the plane `n · x = w` crosses the closed box, counter-clockwise
@@ -214,12 +219,42 @@ mod tests {
         cut.add(Vec3::Y, 0.6, 1e-12);
         assert_eq!(cut.pieces(&cell).unwrap().len(), 4);
         cut.add(Vec3::Z, 0.5, 1e-12);
-        assert!(!cut.add(Vec3::new(1.0, 1.0, 0.0).normalize(), 0.7, 1e-12), "a fourth plane");
         let pieces = cut.pieces(&cell).unwrap();
         assert_eq!(pieces.len(), 12);
         let area: f64 =
             pieces.iter().map(|p| (1..p.polygon.len() - 1).map(|i| 0.5 * (p.polygon[i] - p.polygon[0]).cross(p.polygon[i + 1] - p.polygon[0]).length()).sum::<f64>()).sum();
         assert!((area - 3.0).abs() < 1e-12, "three unit squares, {area}");
+    }
+
+    /// Four planes through one point (the apex of a square pyramid, a vertex where four
+    /// facets meet): each plane's section is split by the three others' lines, which all
+    /// pass through the apex; no piece is lost and none is degenerate.
+    #[test]
+    fn four_planes_through_one_point_give_the_full_arrangement() {
+        let cell = Aabb::new(-Vec3::ONE, Vec3::ONE);
+        let apex = Vec3::new(0.1, -0.05, 0.2);
+        let mut cut = Cut::new();
+        for n in [Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.0), Vec3::new(0.0, -1.0, 1.0)] {
+            let n = n.normalize();
+            assert!(cut.add(n, n.dot(apex), 1e-12));
+        }
+        let pieces = cut.pieces(&cell).unwrap();
+        // the pieces of each plane tile its section
+        for i in 0..4 {
+            let (n, w) = cut.planes[i];
+            let total: f64 = pieces.iter().filter(|p| p.plane == i).map(|p| area(&p.polygon)).sum();
+            assert!((total - area(&plane_section(&cell, n, w))).abs() < 1e-12, "plane {i}");
+            assert!(pieces.iter().filter(|p| p.plane == i).count() >= 4, "plane {i} split by three lines through one point");
+        }
+        // the sides of every piece are in the regions that differ in its plane's bit only
+        for p in &pieces {
+            let (front, behind) = (cut.region(p.sides[0]), cut.region(p.sides[1]));
+            assert_eq!(front ^ behind, 1 << p.plane);
+        }
+        // more than MAX_PLANES planes are refused
+        let mut many = Cut::new();
+        let added = (0..=MAX_PLANES).filter(|&k| many.add(Vec3::new(1.0, k as f64, 0.0).normalize(), 0.1, 1e-12)).count();
+        assert_eq!(added, MAX_PLANES);
     }
 
     #[test]
