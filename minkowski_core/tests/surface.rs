@@ -88,15 +88,23 @@ fn square_ring_keeps_its_hole() {
 fn thin_slot_is_detected_as_complex_then_refined_open() {
     // two blocks 0.06 apart: at eps 0.25 (h ≈ 0.144) no lattice point falls in the slot,
     // the samples join the blocks, and the cells across the slot must be flagged
+    // (sampled everywhere: resolved by planes, the slot's two faces are exact at once)
     let set = set_of(&[([0.0, 0.0, 0.0], [1.0, 2.0, 2.0]), ([1.06, 0.0, 0.0], [2.06, 2.0, 2.0])]);
-    let coarse = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 0, simplify: false, planes: true }).unwrap();
+    let coarse = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 0, simplify: false, planes: false }).unwrap();
     assert!(coarse.surface.complex_cells > 0, "the slot must be flagged");
     assert_eq!(euler(&coarse.surface), 2, "unrefined, the slot is closed (one sphere)");
-    let fine = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 4, simplify: false, planes: true }).unwrap();
+    let fine = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 4, simplify: false, planes: false }).unwrap();
     assert_eq!(fine.surface.complex_cells, 0);
     assert!(fine.refinements > 0);
     check_closed_oriented(&fine.surface);
     assert_eq!(euler(&fine.surface), 4, "two separate boxes: two spheres");
+    // resolved by planes: the cells across the slot hold its two parallel faces, exact at
+    // the coarse grid with no refinement
+    let planar = approximate_union(&set, &UnionParams { eps: 0.25, max_cells: 20_000_000, max_refinements: 4, simplify: true, planes: true }).unwrap();
+    assert_eq!((planar.surface.complex_cells, planar.refinements, planar.surface.band_cells), (0, 0, 0));
+    check_closed_oriented(&planar.surface);
+    assert_eq!(euler(&planar.surface), 4);
+    assert_eq!(planar.surface.faces.len(), 24, "two boxes' faces");
 }
 
 #[test]
@@ -146,7 +154,8 @@ fn set_queries() {
 #[test]
 fn simplification_keeps_the_surface_and_drops_flat_interiors() {
     let set = set_of(&[([0.0, 0.0, 0.0], [3.0, 1.0, 1.0]), ([0.0, 0.0, 0.0], [1.0, 3.0, 1.0])]);
-    let p = |simplify| UnionParams { eps: 0.05, max_cells: 20_000_000, max_refinements: 1, simplify, planes: true };
+    // (sampled: resolved by planes, the L's surface is its exact faces before simplification)
+    let p = |simplify| UnionParams { eps: 0.05, max_cells: 20_000_000, max_refinements: 1, simplify, planes: false };
     let raw = approximate_union(&set, &p(false)).unwrap();
     let simple = approximate_union(&set, &p(true)).unwrap();
     check_closed_oriented(&simple.surface);

@@ -210,6 +210,10 @@ pub struct Octree {
     pub leaves: Vec<Leaf>,
     /// Candidate arena: for each MIXED leaf, records `[prim, k, plane_1 .. plane_k]`.
     pub cands: Vec<u32>,
+    /// Built by [`Octree::build_resolving_planes`]: the boxes where cells are sampled all the
+    /// same (elsewhere MIXED leaves the source resolves by planes are exact, at any level);
+    /// `None` for [`Octree::build`].
+    pub planar: Option<Vec<Aabb>>,
 }
 
 /// Counts of leaves by level (index = level) and label (index = `Label as usize`).
@@ -230,6 +234,12 @@ struct Ctx<'a> {
 }
 
 type Out = (Vec<Leaf>, Vec<u32>);
+
+/// Whether the MIXED cell `cell` with records `own` is resolved by planes: outside the
+/// `sampled` boxes, and cut safely by the planes of its candidates.
+pub fn resolvable<S: CellSource + ?Sized>(src: &S, sampled: &[Aabb], cell: &Aabb, own: &[u32]) -> bool {
+    !sampled.iter().any(|b| b.overlaps(cell)) && src.plane_cut(own).is_some_and(|cut| cut.pieces(cell).is_some())
+}
 
 impl Octree {
     /// Build the octree over `source` covering `region` (grown by two cells and shifted off
@@ -283,7 +293,7 @@ impl Octree {
         if ctx.abort.load(Ordering::Relaxed) {
             return Err(CoreError::ResourceLimit { budget: max_cells, cell_size: h, detail: "octree leaves".into() });
         }
-        Ok(Octree { origin, h, depth: depth as u8, leaves, cands })
+        Ok(Octree { origin, h, depth: depth as u8, leaves, cands, planar: planar.map(<[Aabb]>::to_vec) })
     }
 
     /// The closed box of a leaf.
@@ -430,7 +440,7 @@ impl Ctx<'_> {
 
     /// Whether a MIXED cell above the finest level stays a leaf: resolved by planes.
     fn resolved(&self, cell: &Aabb, own: &[u32]) -> bool {
-        self.planar.is_some_and(|sampled| !sampled.iter().any(|b| b.overlaps(cell))) && self.src.plane_cut(own).is_some_and(|cut| cut.pieces(cell).is_some())
+        self.planar.is_some_and(|sampled| resolvable(self.src, sampled, cell, own))
     }
 
     fn leaf(&self, ijk: [u32; 3], level: u8, label: Label, cand_len: usize) -> Leaf {

@@ -278,14 +278,25 @@ type PlanarSet = std::collections::HashSet<(u8, u64)>;
 /// The exact polygons of the MIXED cells above the finest level (outward, counter-clockwise),
 /// the cells that have some, and how many such cells there are.
 fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
-    let cells: Vec<usize> = (0..oct.leaves.len()).filter(|&i| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level > 0).collect();
-    let per_cell: Vec<(usize, Vec<Vec<Vec3>>, bool)> = cells
+    // above the finest level the octree kept only resolvable MIXED cells; at the finest
+    // level, those outside the sampled boxes are tried here
+    let sampled: &[Aabb] = match &oct.planar {
+        Some(boxes) => boxes,
+        None => return PlanarPolygons::default(),
+    };
+    let tried = |i: usize| {
+        let l = &oct.leaves[i];
+        l.label == Label::Mixed && (l.level > 0 || !sampled.iter().any(|b| b.overlaps(&oct.cell_box(l))))
+    };
+    let cells: Vec<usize> = (0..oct.leaves.len()).filter(|&i| tried(i)).collect();
+    let per_cell: Vec<(usize, Option<Vec<Vec<Vec3>>>, bool)> = cells
         .par_iter()
         .map(|&li| {
             let leaf = &oct.leaves[li];
             let (recs, cell) = (oct.records(leaf), oct.cell_box(leaf));
             let Some((cut, pieces)) = src.plane_cut(recs).and_then(|cut| Some((cut, cut.pieces(&cell)?))) else {
-                return (li, Vec::new(), false); // not resolvable after all: the stitch check sees the hole
+                // a finest cell not resolvable is sampled; above, the stitch check sees the hole
+                return (li, None, false);
             };
             // one point query per region of the cut (pieces share them)
             let mut region_inside: [Option<bool>; 1 << planar::MAX_PLANES] = [None; 1 << planar::MAX_PLANES];
@@ -304,11 +315,18 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
                     Some(polygon)
                 })
                 .collect();
-            (li, polys, planes_used.count_ones() >= 2)
+            (li, Some(polys), planes_used.count_ones() >= 2)
         })
         .collect();
-    let mut out = PlanarPolygons { cells: cells.len(), ..Default::default() };
+    let mut out = PlanarPolygons { resolved: vec![false; oct.leaves.len()], ..Default::default() };
     for (li, p, creased) in per_cell {
+        let l = &oct.leaves[li];
+        if p.is_none() && l.level == 0 {
+            continue; // sampled
+        }
+        out.resolved[li] = true;
+        out.cells += 1;
+        let p = p.unwrap_or_default();
         if !p.is_empty() {
             let l = &oct.leaves[li];
             let k = (l.level, key(l.ijk[0], l.ijk[1], l.ijk[2]));
@@ -333,11 +351,13 @@ struct PlanarPolygons {
     creased: PlanarSet,
     /// How many cells were resolved by planes.
     cells: usize,
+    /// Per leaf, whether it was resolved by planes (empty: none was).
+    resolved: Vec<bool>,
 }
 
 /// Whether the finest cell at `(x, y, z)` lies in a plane-resolved cell with a surface.
 fn in_planar(planar: &PlanarSet, x: u32, y: u32, z: u32, max_level: u8) -> bool {
-    (1..=max_level).any(|lv| {
+    (0..=max_level).any(|lv| {
         let m = !((1u32 << lv) - 1);
         planar.contains(&(lv, key(x & m, y & m, z & m)))
     })
@@ -346,7 +366,8 @@ fn in_planar(planar: &PlanarSet, x: u32, y: u32, z: u32, max_level: u8) -> bool 
 /// Marching tetrahedra over the finest MIXED cells (see the module docs); `planar`: the
 /// plane-resolved cells with a surface, which count as neighbours with a sign change.
 fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarPolygons) -> Surface {
-    let band: Vec<usize> = (0..oct.leaves.len()).filter(|&i| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level == 0).collect();
+    let sampled = |i: usize| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level == 0 && !planar.resolved.get(i).copied().unwrap_or(false);
+    let band: Vec<usize> = (0..oct.leaves.len()).filter(|&i| sampled(i)).collect();
     let mut s = Surface { band_cells: band.len(), ..Default::default() };
     if band.is_empty() {
         return s;

@@ -19,8 +19,8 @@ use crate::math::{Aabb, Vec3};
 /// Most planes a resolved cell may have (a cell where more meet is split).
 pub const MAX_PLANES: usize = 8;
 
-/// Pieces thinner than this fraction of the cell (from their centre to any plane or cell
-/// face), or planes closer to parallel than this (`1 − |n_i · n_j|`), are not resolved.
+/// Pieces thinner than this fraction of the cell (from their centre to any other plane or
+/// a cell face) are not resolved.
 const THIN: f64 = 1e-6;
 
 /// The distinct planes `(n, w)` (`n · x = w`, `n` unit) of the boundary candidates in one cell.
@@ -75,17 +75,11 @@ impl Cut {
     }
 
     /// The pieces of every plane in `cell`, or `None` when the cell cannot be resolved
-    /// safely (nearly parallel planes, a piece too thin to tell its sides).
+    /// safely (a piece too thin to tell its sides: nearly coincident planes, a grazing
+    /// line, a sliver at a cell face).
     pub fn pieces(&self, cell: &Aabb) -> Option<Vec<Piece>> {
         let size = cell.extent().max_element();
         let planes = &self.planes[..self.n];
-        for i in 0..planes.len() {
-            for j in 0..i {
-                if 1.0 - planes[i].0.dot(planes[j].0).abs() < THIN {
-                    return None;
-                }
-            }
-        }
         let mut out = Vec::new();
         for (i, &(n, w)) in planes.iter().enumerate() {
             let section = plane_section(cell, n, w);
@@ -116,9 +110,11 @@ impl Default for Cut {
 fn piece(cell: &Aabb, poly: &[Vec3], (plane, n): (usize, Vec3), planes: &[(Vec3, f64)], size: f64) -> Option<Piece> {
     let c = poly.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / poly.len() as f64;
     // room around the centre: to every other plane and every cell face
+    // (a side point moved by d along n changes its distance to a plane by at most d, so
+    // both stay in the regions next to the piece; parallel planes count with their gap)
     let mut room = f64::INFINITY;
-    for &(m, v) in planes {
-        if 1.0 - m.dot(n).abs() >= THIN {
+    for (j, &(m, v)) in planes.iter().enumerate() {
+        if j != plane {
             room = room.min((m.dot(c) - v).abs());
         }
     }
@@ -258,14 +254,28 @@ mod tests {
     }
 
     #[test]
-    fn thin_or_nearly_parallel_cuts_are_not_resolved() {
+    fn thin_cuts_are_not_resolved_and_parallel_ones_are() {
         let cell = Aabb::new(Vec3::ZERO, Vec3::ONE);
         let mut cut = Cut::new();
         cut.add(Vec3::Z, 1e-9, 1e-15);
         assert!(cut.pieces(&cell).is_none(), "a plane hugging a face");
         let mut cut = Cut::new();
         cut.add(Vec3::Z, 0.5, 1e-15);
-        cut.add(Vec3::new(0.0, 1e-4, 1.0).normalize(), 0.2, 1e-15);
-        assert!(cut.pieces(&cell).is_none(), "nearly parallel planes");
+        cut.add(Vec3::Z, 0.5 + 1e-9, 1e-15);
+        assert!(cut.pieces(&cell).is_none(), "nearly coincident planes");
+        let mut cut = Cut::new();
+        let grazing = Vec3::new(0.0, -1e-7, 1.0).normalize();
+        cut.add(Vec3::Z, 0.5, 1e-15);
+        cut.add(grazing, grazing.dot(Vec3::new(0.0, 0.5, 0.5)), 1e-15);
+        assert!(cut.pieces(&cell).is_none(), "planes crossing at a grazing angle");
+        // parallel planes well apart (two faces of a slab) are two pieces
+        let mut cut = Cut::new();
+        cut.add(Vec3::Z, 0.2, 1e-15);
+        cut.add(Vec3::new(0.0, 1e-4, 1.0).normalize(), 0.5, 1e-15);
+        let pieces = cut.pieces(&cell).expect("a slab");
+        assert_eq!(pieces.len(), 2);
+        for p in &pieces {
+            assert_eq!(cut.region(p.sides[0]) ^ cut.region(p.sides[1]), 1 << p.plane);
+        }
     }
 }
