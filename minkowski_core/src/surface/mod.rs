@@ -289,7 +289,7 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
         l.label == Label::Mixed && (l.level > 0 || !sampled.iter().any(|b| b.overlaps(&oct.cell_box(l))))
     };
     let cells: Vec<usize> = (0..oct.leaves.len()).filter(|&i| tried(i)).collect();
-    let per_cell: Vec<(usize, Option<Vec<Vec<Vec3>>>, bool)> = cells
+    let per_cell: Vec<CellPolygons> = cells
         .par_iter()
         .map(|&li| {
             let leaf = &oct.leaves[li];
@@ -339,6 +339,10 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
     }
     out
 }
+
+/// One cell's exact polygons (`None`: not resolvable by planes) and whether they lie on
+/// two planes or more, by leaf index.
+type CellPolygons = (usize, Option<Vec<Vec<Vec3>>>, bool);
 
 /// What the plane-resolved cells gave.
 #[derive(Default)]
