@@ -81,3 +81,21 @@ def test_with_cargo_the_hooks_are_maturins(tmp_path):
     dist_info = proc.stdout.strip().splitlines()[-1]
     assert dist_info == "minkplan-0.1.0.dist-info"
     assert "Name: minkplan" in (tmp_path / dist_info / "METADATA").read_text()
+
+
+def test_the_sdist_carries_the_backend_and_the_vendored_inputs(tmp_path):
+    """Built through the backend: a build from the sdist finds ``build_backend/`` (named by
+    ``backend-path``), and its tests find ``tests/data``; a built API reference stays out."""
+    import tarfile
+
+    if shutil.which("cargo") is None:
+        pytest.fail("cargo is needed to build minkplan at all; it is not on PATH")
+    proc = run_hook("build_sdist", tmp_path, os.environ["PATH"])
+    assert proc.returncode == 0, proc.stderr
+    name = proc.stdout.strip().splitlines()[-1]
+    with tarfile.open(tmp_path / name) as sdist:
+        members = {m.split("/", 1)[1] for m in sdist.getnames() if "/" in m}
+    assert {"build_backend/minkplan_backend.py", "pyproject.toml", "docs/build_api.py",
+            "tests/data/README.md", "tests/data/assemblies/LICENSE",
+            "tests/data/omplapp_format/window.cfg"} <= members
+    assert not any(m.startswith("docs/api/") for m in members)
