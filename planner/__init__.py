@@ -26,6 +26,8 @@ except ImportError as _exc:  # pragma: no cover - depends on how it was installe
         "this is probably the source tree shadowing an installed minkplan (run from another "
         "directory, or install with `pip install -e .` so the module is built here)"
     ) from _exc
+import sys as _sys
+import types as _types
 from typing import TYPE_CHECKING
 
 __version__ = _minkowski_core.__version__
@@ -54,10 +56,26 @@ _EXPORTS = {
 ``minkplan --help``) does not load trimesh, FCL and OMPL until something needs them."""
 
 
+class _Package(_types.ModuleType):
+    """The ``planner`` module's type: importing a submodule makes the import system set the
+    package's attribute of that name to the submodule, which would hide the public function
+    of the same name (``planner.decompose`` after anything imported ``planner.decompose``,
+    e.g. a sum). The function is kept; the submodule stays in ``sys.modules``."""
+
+    def __setattr__(self, name: str, value) -> None:
+        if isinstance(value, _types.ModuleType) and _EXPORTS.get(name) == name:
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+_sys.modules[__name__].__class__ = _Package
+
+
 def __getattr__(name: str):
     if name == "choose_source":
         from .sources import choose
 
+        globals()[name] = choose
         return choose
     module = _EXPORTS.get(name)
     if module is None:

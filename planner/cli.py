@@ -366,9 +366,12 @@ def _cmd_plan(args) -> int:
         sys.stdout.write(f"wrote {args.export_path} (OMPL's SE(3) path format)\n")
     if args.html:
         from planner import viz
+        from planner.progress import StatusLine
 
-        scene = viz.scene_for_plan(scenario, outcome, c_obstacle=True)
-        page = viz.write_html(scene, out / "scene.html")
+        with StatusLine(False if args.no_progress else None) as line:
+            line.show("minkplan: drawing the scene (C-obstacle surfaces)")
+            scene = viz.scene_for_plan(scenario, outcome, c_obstacle=True)
+            page = viz.write_html(scene, out / "scene.html")
         sys.stdout.write(f"wrote {page} (self-contained; open it in a browser)\n")
     return outcome.exit_code
 
@@ -430,9 +433,12 @@ def _cmd_view(args) -> int:
 
     from planner import viz
     from planner.io import load_scenario
+    from planner.progress import StatusLine
 
     scenario = load_scenario(scenario_path)
-    scene = viz.scene_for_plan(scenario, plan_json, c_obstacle=not args.no_c_obstacle)
+    with StatusLine(False if args.no_progress else None) as line:
+        line.show("minkplan: drawing the scene (C-obstacle surfaces)")
+        scene = viz.scene_for_plan(scenario, plan_json, c_obstacle=not args.no_c_obstacle)
 
     def _terminate(signum, frame):  # SIGTERM stops the server like Ctrl+C (no orphans)
         raise KeyboardInterrupt
@@ -455,6 +461,7 @@ def _add_viz_parsers(sub, common: _Parser) -> None:
     v.add_argument("scenario", help="scenario .yaml, or an OMPL.app problem .cfg")
     v.add_argument("--path", default=None, help="a path.json written by minkplan plan")
     v.add_argument("--no-c-obstacle", action="store_true", help="do not compute C-obstacles")
+    v.add_argument("--no-progress", action="store_true", help="no progress line")
     v.add_argument("--host", default="127.0.0.1",
                    help="the address the viewer listens on (default 127.0.0.1: this machine "
                    "only; 0.0.0.0 lets anyone on the network watch)")

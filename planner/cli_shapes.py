@@ -31,6 +31,7 @@ def _add_depth_parser(sub, common) -> None:
     d.add_argument("--tolerance", type=float, default=None,
                    help="widest interval wanted (default 1e-3 of the pair's size)")
     d.add_argument("--json", action="store_true", help="print the result as JSON")
+    d.add_argument("--no-progress", action="store_true", help="no progress line")
 
 
 def _add_offset_parser(sub, common) -> None:
@@ -50,6 +51,7 @@ def _add_offset_parser(sub, common) -> None:
     morph = o.add_mutually_exclusive_group()
     morph.add_argument("--opening", action="store_true", help="erode then grow by |r|")
     morph.add_argument("--closing", action="store_true", help="grow then erode by |r|")
+    o.add_argument("--no-progress", action="store_true", help="no progress line")
 
 
 def cmd_offset(args) -> int:
@@ -66,7 +68,7 @@ def cmd_offset(args) -> int:
     how = planner.opening if args.opening else planner.closing if args.closing else \
         planner.offset
     result = how(planner.load_mesh(args.mesh, name=args.mesh), args.radius, eps=args.eps,
-                 name=args.mesh)
+                 name=args.mesh, progress=False if args.no_progress else None)
     atomic_write(out, lambda tmp: result.mesh.export(tmp,
                                                      file_type=out.suffix.lower().lstrip(".")))
     sys.stdout.write(f"wrote {out}: {result.stats['triangles']} triangles, error bound "
@@ -84,7 +86,8 @@ def cmd_depth(args) -> int:
 
     r = planner.penetration_depth(planner.load_mesh(args.a, name=args.a),
                                   planner.load_mesh(args.b, name=args.b),
-                                  tolerance=args.tolerance)
+                                  tolerance=args.tolerance,
+                                  progress=False if args.no_progress else None)
     if args.json:
         sys.stdout.write(json.dumps({"a": args.a, "b": args.b, **r.describe()}) + "\n")
         return 0

@@ -22,7 +22,6 @@ import json
 import logging
 import math
 import os
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,6 +33,7 @@ from scipy.spatial import ConvexHull, QhullError
 from .decompose_cache import FORMAT_VERSION, SUFFIX, load_entry, store_entry
 from .errors import GeometryError, InvalidParameterError
 from .meshes import split_solid, validate_solid
+from .progress import StatusLine
 from .tolerances import scale_of, tol
 from .values import check_seed
 
@@ -124,8 +124,8 @@ def decompose(
         cache_dir: cache directory; default :func:`default_cache_dir`. Caching is
             skipped (with a warning) when the directory cannot be written.
         name: label for messages and logs.
-        progress: show a progress bar over bodies on stderr; ``None`` shows it only
-            when stderr is a terminal.
+        progress: a status line on stderr naming the body being decomposed
+            (:mod:`planner.progress`); ``None`` shows it only when stderr is a terminal.
         coacd_options: extra keyword arguments for ``coacd.run_coacd`` (e.g.
             ``{"resolution": 1000}``); part of the cache key.
         checked: the mesh is already the output of :func:`validate_solid` (not checked
@@ -167,26 +167,28 @@ def decompose(
         )
 
     bodies = split_solid(solid)
-    show = sys.stderr.isatty() if progress is None else bool(progress)
     pieces: list[np.ndarray] = []
     approx: list[np.ndarray] = []
     approx_bodies: list[trimesh.Trimesh] = []
-    for index, body in enumerate(_progress(bodies, show, name)):
-        body_label = name if len(bodies) == 1 else f"{name} body {index}"
-        hull_points = _hull_points(np.asarray(body.vertices))
-        if hull_points is not None and _is_convex(body, hull_points):
-            pieces.append(hull_points)
-            continue
-        parts = _run_coacd(body, threshold, seed, options, body_label)
-        pieces.extend(parts)
-        approx.extend(parts)
-        approx_bodies.append(body)
-    exact = not approx
-    if exact:
-        method, excess, deficit = "convex", 0.0, 0.0
-    else:
-        method = "coacd" if len(approx_bodies) == len(bodies) else "mixed"
-        excess, deficit = _measure(solid, approx, approx_bodies, pieces)
+    with StatusLine(progress) as line:
+        for index, body in enumerate(bodies):
+            line.show(f"minkplan: decomposing {name}: body {index + 1} of {len(bodies)}")
+            body_label = name if len(bodies) == 1 else f"{name} body {index}"
+            hull_points = _hull_points(np.asarray(body.vertices))
+            if hull_points is not None and _is_convex(body, hull_points):
+                pieces.append(hull_points)
+                continue
+            parts = _run_coacd(body, threshold, seed, options, body_label)
+            pieces.extend(parts)
+            approx.extend(parts)
+            approx_bodies.append(body)
+        exact = not approx
+        if exact:
+            method, excess, deficit = "convex", 0.0, 0.0
+        else:
+            line.show(f"minkplan: decomposing {name}: measuring the hulls' excess")
+            method = "coacd" if len(approx_bodies) == len(bodies) else "mixed"
+            excess, deficit = _measure(solid, approx, approx_bodies, pieces)
     meta = {
         "key": key,
         "exact": exact,
@@ -294,14 +296,6 @@ def _cache_key(vertices, faces, threshold, seed, options) -> str:
 
 
 # ------------------------------------------------------------------ geometry
-
-
-def _progress(items, show: bool, name: str):
-    if not show or len(items) < 1:
-        return items
-    from tqdm import tqdm
-
-    return tqdm(items, desc=f"decompose {name}", unit="body", file=sys.stderr, leave=False)
 
 
 def _hull_points(points: np.ndarray) -> np.ndarray | None:

@@ -41,6 +41,7 @@ import trimesh
 
 from .errors import InvalidMeshError, InvalidParameterError, ResourceLimitError
 from .problem import Part
+from .progress import StatusLine
 from .sources import ExactSource, Source, SourceSettings
 from .tolerances import tol
 
@@ -151,7 +152,8 @@ def _fcl_check(a: Part, b: Part, translation: np.ndarray, separated: bool, dista
 
 def penetration_depth(a, b, *, tolerance: float | None = None,
                       max_cells: int | None = None, validate: bool = True,
-                      source: Source | None = None) -> PenetrationDepth:
+                      source: Source | None = None,
+                      progress: bool | None = None) -> PenetrationDepth:
     """The translational penetration depth of solid ``a`` into solid ``b``.
 
     The length of the shortest translation ``t`` with ``(A + t) ∩ B = ∅`` (interiors), as
@@ -170,6 +172,8 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
         validate: check the answer with FCL (see :attr:`PenetrationDepth.validated`).
         source: an exact :class:`~planner.sources.Source` whose checked meshes to reuse
             (another kind is refused).
+        progress: a status line on stderr naming the stage (:mod:`planner.progress`;
+            ``None``: only when stderr is a terminal).
 
     Returns:
         :class:`PenetrationDepth`.
@@ -197,18 +201,25 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
         raise InvalidParameterError(f"source: the depth is computed on the exact source, got "
                                     f"the {source.kind} source")
     source = source or ExactSource(SourceSettings(exact=True), "penetration depth")
-    try:
-        pair = source.pair(part_b, part_a, mirror_b=True)  # B ⊕ (−A)
-    except ResourceLimitError as exc:
-        from . import budget  # noqa: PLC0415
+    what = f"minkplan: depth of {part_a.name} into {part_b.name}"
+    with StatusLine(progress) as line:
+        line.show(f"{what}: convolution facets")
+        try:
+            pair = source.pair(part_b, part_a, mirror_b=True)  # B ⊕ (−A)
+        except ResourceLimitError as exc:
+            from . import budget  # noqa: PLC0415
 
-        raise budget.explain(exc, f"penetration depth of {part_a.name} into "
-                                  f"{part_b.name}") from exc
-    bounds = np.vstack([part_a.mesh.bounds, part_b.mesh.bounds])
-    size = float(np.linalg.norm(bounds.max(axis=0) - bounds.min(axis=0)))
-    width = _tolerance(tolerance, size)
-    found = pair.native.depth(np.zeros(3), width, max_cells=cells)
-    result = _result(found, (part_a, part_b), int(pair.stats["facets"]), width, validate, t0)
+            raise budget.explain(exc, f"penetration depth of {part_a.name} into "
+                                      f"{part_b.name}") from exc
+        bounds = np.vstack([part_a.mesh.bounds, part_b.mesh.bounds])
+        size = float(np.linalg.norm(bounds.max(axis=0) - bounds.min(axis=0)))
+        width = _tolerance(tolerance, size)
+        line.show(f"{what}: searching cells down to a {width:.3g} wide interval")
+        found = pair.native.depth(np.zeros(3), width, max_cells=cells)
+        if validate:
+            line.show(f"{what}: checking the answer with FCL")
+        result = _result(found, (part_a, part_b), int(pair.stats["facets"]), width, validate,
+                         t0)
     _log(result, part_a.name, part_b.name, validate)
     return result
 

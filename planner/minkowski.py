@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import logging
 import math
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +29,7 @@ from . import budget
 from .decompose import check_threshold
 from .errors import GeometryError, InvalidMeshError, InvalidParameterError, ResourceLimitError
 from .problem import Part
+from .progress import StatusLine
 from .sources import PairCObstacle, Source, SourceSettings, choose, parse_exact
 from .tolerances import tol
 
@@ -153,16 +153,6 @@ def _cell_totals(per_level) -> dict[str, int]:
             for i, name in enumerate(("empty", "full", "mixed"))}
 
 
-def _progress_bar(show: bool | None, total: int, desc: str):
-    if show is None:
-        show = sys.stderr.isatty()
-    if not show:
-        return None
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc=desc, unit="stage", leave=False, file=sys.stderr)
-
-
 def _sum(a, b, *, mirror_b: bool, eps, threshold: float, seed: int, cache_dir, progress,
          max_cells, max_refinements: int, simplify: bool, names: tuple[str, str],
          exact="auto", source: Source | None = None,
@@ -177,13 +167,14 @@ def _sum(a, b, *, mirror_b: bool, eps, threshold: float, seed: int, cache_dir, p
         raise InvalidParameterError(f"max_refinements = {max_refinements}: must be >= 0")
     if source is None:
         source = choose(parts, SourceSettings(exact=exact, threshold=threshold, seed=seed,
-                                              cache_dir=cache_dir, progress=False))
+                                              cache_dir=cache_dir, progress=progress))
     grid = dict(eps=eps, max_cells=max_cells, from_memory=from_memory,
                 max_refinements=max_refinements,
                 simplify=simplify, names=names, t_start=t_start, warn_complex=warn_complex)
     if source.kind == "exact":
         chosen = "asked" if exact is True else "auto"
-        return _exact_sum(source, parts, mirror_b=mirror_b, chosen=chosen, **grid)
+        return _exact_sum(source, parts, mirror_b=mirror_b, chosen=chosen, progress=progress,
+                          **grid)
     return _decomposition_sum(source, parts, mirror_b=mirror_b, progress=progress, **grid)
 
 
@@ -191,35 +182,26 @@ def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bo
                        max_cells: int, from_memory: bool, max_refinements: int, simplify: bool,
                        names: tuple[str, str], t_start: float, progress,
                        warn_complex: bool) -> MinkowskiResult:
-    bar = _progress_bar(progress, 4, "minkowski")
-
-    def step(label: str) -> None:
-        if bar is not None:
-            bar.set_postfix_str(label)
-            bar.update(1)
-
-    try:
+    what = f"minkplan: {names[0]} ⊕ {names[1]}"
+    with StatusLine(progress) as line:
         # validate and decompose both before the slow work: bad input fails fast
+        line.show(f"{what}: decomposing {names[0]}")
         dec_a = source.decomposition(parts[0])  # type: ignore[attr-defined]
-        step(f"decomposed {names[0]}")
+        line.show(f"{what}: decomposing {names[1]}")
         dec_b = source.decomposition(parts[1])  # type: ignore[attr-defined]
-        step(f"decomposed {names[1]}")
         box = _result_box(parts[0].mesh, parts[1].mesh, mirror_b)
         diag = float(np.linalg.norm(box[1] - box[0]))
         eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory, names=names)
+        line.show(f"{what}: pairwise sums of the pieces")
         t0 = time.perf_counter()
         pair = source.pair(*parts, mirror_b=mirror_b)
         t_pairs = time.perf_counter() - t0
-        step("pairwise sums")
+        line.show(f"{what}: surface at eps {eps_value:.3g}")
         try:
             surf = core.union_surface(pair.native, eps_value, max_cells=max_cells,
                                       max_refinements=max_refinements, simplify=simplify)
         except ResourceLimitError as exc:
             raise budget.explain(exc, f"{names[0]} ⊕ {names[1]}") from exc
-        step("surface")
-    finally:
-        if bar is not None:
-            bar.close()
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     error_bound = float(surf["error_bound"]) + pair.excess
     stats = {
@@ -317,23 +299,26 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
 
 def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
                max_cells: int, from_memory: bool, max_refinements: int, simplify: bool,
-               names: tuple[str, str], t_start: float, chosen: str, warn_complex: bool
-               ) -> MinkowskiResult:
+               names: tuple[str, str], t_start: float, chosen: str, warn_complex: bool,
+               progress: bool | None) -> MinkowskiResult:
     t0 = time.perf_counter()
     what = f"{names[0]} ⊕ {names[1]}"
-    try:
-        pair = source.pair(*parts, mirror_b=mirror_b)
-    except ResourceLimitError as exc:
-        raise budget.explain(exc, what) from exc
-    t_source = time.perf_counter() - t0
-    box = np.asarray(pair.native.bounds)
-    diag = float(np.linalg.norm(box[1] - box[0]))
-    eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory, names=names)
-    try:
-        surf = pair.native.surface(eps_value, max_cells=max_cells,
-                                   max_refinements=max_refinements, simplify=simplify)
-    except ResourceLimitError as exc:
-        raise budget.explain(exc, what) from exc
+    with StatusLine(progress) as line:
+        line.show(f"minkplan: {what}: convolution facets")
+        try:
+            pair = source.pair(*parts, mirror_b=mirror_b)
+        except ResourceLimitError as exc:
+            raise budget.explain(exc, what) from exc
+        t_source = time.perf_counter() - t0
+        box = np.asarray(pair.native.bounds)
+        diag = float(np.linalg.norm(box[1] - box[0]))
+        eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory, names=names)
+        line.show(f"minkplan: {what}: surface at eps {eps_value:.3g}")
+        try:
+            surf = pair.native.surface(eps_value, max_cells=max_cells,
+                                       max_refinements=max_refinements, simplify=simplify)
+        except ResourceLimitError as exc:
+            raise budget.explain(exc, what) from exc
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     stats = {
         "source": "exact",
@@ -380,7 +365,8 @@ def minkowski_sum(
         seed: CoACD seed (results are deterministic for a seed).
         cache_dir: decomposition cache; default ``$MINKPLAN_CACHE_DIR`` or
             ``~/.cache/minkplan/decompositions``.
-        progress: stage progress bar on stderr (default: when stderr is a terminal).
+        progress: a status line on stderr naming the stage (:mod:`planner.progress`;
+            default: when stderr is a terminal).
         max_cells: octree leaf budget (default ``tol.max_cells``, else derived from the
             memory limit: :mod:`planner.budget`).
         max_refinements: how often the grid may be halved while complex cells remain.

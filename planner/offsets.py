@@ -33,6 +33,7 @@ from planner.errors import GeometryError, InvalidParameterError, ResourceLimitEr
 
 from .meshes import load_mesh
 from .meshes.kinds import classify
+from .progress import StatusLine
 from .tolerances import tol
 
 __all__ = ["OffsetResult", "closing", "offset", "opening"]
@@ -81,7 +82,7 @@ def _radius(r: float) -> float:
 
 
 def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
-           name: str = "mesh") -> OffsetResult:
+           name: str = "mesh", progress: bool | None = None) -> OffsetResult:
     """The offset of the closed solid ``mesh`` (a trimesh, ``(V, F)`` or a mesh file) by
     ``r``: grown for ``r > 0``, eroded for ``r < 0``.
 
@@ -90,6 +91,8 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
             is of this order.
         max_cells: octree cell budget (default ``tol.max_cells``, else from the memory
             limit: :mod:`planner.budget`).
+        progress: a status line on stderr while the surface is built
+            (:mod:`planner.progress`; ``None``: only when stderr is a terminal).
 
     Raises:
         InvalidMeshError: ``mesh`` is not a closed solid.
@@ -113,10 +116,13 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     from . import budget  # noqa: PLC0415
 
     cells, _ = budget.surface_cells(max_cells)
-    try:
-        raw = offset_surface(checked, radius, step, max_cells=cells)
-    except ResourceLimitError as exc:
-        raise budget.explain(exc, f"{name} offset by {radius:g}") from exc
+    verb = "growing" if radius > 0 else "eroding"
+    with StatusLine(progress) as line:
+        line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
+        try:
+            raw = offset_surface(checked, radius, step, max_cells=cells)
+        except ResourceLimitError as exc:
+            raise budget.explain(exc, f"{name} offset by {radius:g}") from exc
     if len(raw["faces"]) == 0:
         if not math.isfinite(raw["error_bound"]):
             raise GeometryError(f"{name}: nothing was resolved of it offset by {radius:g} at "
@@ -133,9 +139,10 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
 
 
 def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
-              kind: str) -> OffsetResult:
-    one = offset(mesh, first, eps=eps, max_cells=max_cells, name=name)
-    two = offset(one.mesh, second, eps=eps, max_cells=max_cells, name=f"{name} ({kind})")
+              kind: str, progress: bool | None) -> OffsetResult:
+    one = offset(mesh, first, eps=eps, max_cells=max_cells, name=name, progress=progress)
+    two = offset(one.mesh, second, eps=eps, max_cells=max_cells, name=f"{name} ({kind})",
+                 progress=progress)
     stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
              "stage_bounds": [one.error_bound, two.error_bound],
              "seconds": one.stats["seconds"] + two.stats["seconds"]}
@@ -143,14 +150,14 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
 
 
 def opening(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
-            name: str = "mesh") -> OffsetResult:
+            name: str = "mesh", progress: bool | None = None) -> OffsetResult:
     """Erode by ``r`` then grow by ``r`` (``r > 0``): features thinner than ``2 r`` go."""
     radius = abs(_radius(r))
-    return _composed(mesh, -radius, radius, eps, max_cells, name, "eroded")
+    return _composed(mesh, -radius, radius, eps, max_cells, name, "eroded", progress)
 
 
 def closing(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
-            name: str = "mesh") -> OffsetResult:
+            name: str = "mesh", progress: bool | None = None) -> OffsetResult:
     """Grow by ``r`` then erode by ``r`` (``r > 0``): gaps narrower than ``2 r`` close."""
     radius = abs(_radius(r))
-    return _composed(mesh, radius, -radius, eps, max_cells, name, "grown")
+    return _composed(mesh, radius, -radius, eps, max_cells, name, "grown", progress)

@@ -177,6 +177,38 @@ def test_omplapp_problem_file(tmp_path, capsys, cache_dir):
     assert report["source"]["used"] == "exact" and report["decomposition"]["exact"] is True
 
 
+WINDOW = Path(__file__).resolve().parent / "data" / "omplapp_format" / "window.cfg"
+"""A problem in OMPL.app's file format authored in tests/data (it runs in every clone)."""
+
+
+def test_a_problem_in_omplapp_format_is_planned_end_to_end(tmp_path, capsys, cache_dir):
+    """``window.cfg``: Z-up COLLADA, a double-sided floor (a surface) and a wall of four
+    boxes with a 20 x 20 window; the 10-cube robot must pass it (the straight line hits
+    the wall, the volume leaves no way around or over)."""
+    from planner.validation import FclChecker
+
+    out = tmp_path / "window"
+    code, stdout, err = run(["plan", str(WINDOW), "--out", str(out), "--cache-dir",
+                             str(cache_dir), "--no-progress"], capsys)
+    assert code == 0, err
+    doc = json.loads((out / "path.json").read_text())
+    assert doc["status"] == "found"
+    assert doc["validation"]["fcl"]["valid"] and doc["validation"]["ompl"]["valid"]
+    report = json.loads((out / "report.json").read_text())
+    assert report["source"]["used"] == "exact"        # the floor is no solid
+    scenario = load_scenario(WINDOW)
+    meshes = [b.mesh for b in scenario.obstacles]
+    straight = FclChecker(scenario.robot.mesh, meshes, solid=[b.solid for b in
+                                                              scenario.obstacles])
+    assert not straight.check_path(np.stack([scenario.start, scenario.goal])).valid
+    # app frame: the wall is z in [-55, -45]; the window x in [40, 60], y in [20, 40]
+    points = np.array(doc["waypoints"])
+    dense = np.concatenate([np.linspace(a, b, 50) for a, b in zip(points, points[1:])])
+    in_wall = dense[(dense[:, 2] > -55 - 5) & (dense[:, 2] < -45 + 5)]
+    assert len(in_wall) and np.all((in_wall[:, 0] >= 45) & (in_wall[:, 0] <= 55))
+    assert np.all((in_wall[:, 1] >= 25) & (in_wall[:, 1] <= 35))
+
+
 def test_an_internal_error_is_exit_3_and_one_line(tmp_path, capsys, monkeypatch):
     """A bug (anything but an input or resource error) never exits 0 or 1, whose meanings
     are answers; -vv shows the traceback."""

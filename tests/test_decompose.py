@@ -255,7 +255,9 @@ def test_progress_bar_can_be_forced(tmp_path, capsys):
             [3, 0, 0])]
     )
     decompose(pair, cache_dir=tmp_path, progress=True, name="pair")
-    assert "decompose pair" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "decomposing pair: body 1 of 2" in err and "decomposing pair: body 2 of 2" in err
+    assert err.endswith("\r\033[K")              # the line is cleared at the end
     decompose(pair, cache_dir=tmp_path / "other", progress=False, name="pair")
     assert capsys.readouterr().err == ""
 

@@ -5,7 +5,8 @@ convex decomposition.
    through-hole 0.02 smaller: no path, with an exact certificate that is re-checked here
    against the analytic C-obstacle; 0.02 larger: a path, FCL- and OMPL-valid, through the
    0.02-wide slot of the C-space.
-2. The peg-in-hole pairs of ``../shared/assets/geometric_peg_in_hole_2mm`` (repaired),
+2. The peg-in-hole pairs of ``geometric_peg_in_hole_2mm`` (repaired; the full set in
+   ``../shared/assets``, else the vendored subset in ``tests/data``),
    each scaled so that the inserted peg has 1 mm clearance, inserted with the exact
    source. What the assets really are is measured and documented at ``PAIRS`` (the "2mm"
    in the name does not hold for most pairs, and the U pair cannot be inserted at all).
@@ -46,12 +47,15 @@ from planner.validation import FclChecker
 
 try:  # tests/ as a package or as a plain directory on sys.path
     from . import oracle, shapes
+    from .conftest import asset
 except ImportError:
     import oracle
     import shapes
+    from conftest import asset
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
-ASSETS = Path(__file__).resolve().parents[2] / "shared" / "assets" / "geometric_peg_in_hole_2mm"
+PEG_IN_HOLE = "geometric_peg_in_hole_2mm"
+"""The peg-in-hole set, found by :func:`conftest.asset` (full set or vendored subset)."""
 
 
 # --------------------------------------------------------------------------------------
@@ -320,50 +324,47 @@ def turned(mesh: trimesh.Trimesh, scale: float) -> trimesh.Trimesh:
     return out
 
 
-@pytest.mark.assets
-def test_asset_pairs_are_what_the_comment_says():
-    for name, (clearance, dz) in PAIRS.items():
-        bottle = load_repaired(ASSETS / f"{name}_cube_bottle.obj", f"{name} bottle")
-        cap = load_repaired(ASSETS / f"{name}_cube_cap.obj", f"{name} cap")
-        np.testing.assert_allclose(bottle.bounds, [[-0.04] * 3, [0.04] * 3], atol=1e-9)
-        np.testing.assert_allclose(cap.bounds[:, 1], [-0.04, 0.06], atol=1e-9)
-        assert len(split_solid(cap)) == 2 and len(split_solid(bottle)) == 1
-        assert 0.08**3 - bottle.volume > 0.02 * 0.08**3         # a real hole
-        b = bottle.copy()
-        b.apply_scale(1000.0)
-        d = fcl_distance(b, turned(cap, 1000.0), [0.0, 90.0, dz])
-        assert d == pytest.approx(clearance, abs=1e-9), name
-
-
-@pytest.fixture(scope="module")
-def asset_scenarios(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("peg_in_hole_assets")
-    out = {}
-    for name, (clearance, dz) in PAIRS.items():
-        k = 1.0 / clearance
-        scale = 1000.0 * k
-        goal = [0.0, 81.0 * k, dz * k]             # cap's face 1k above the bottle's,
-        start = [60.0 * k, 110.0 * k, (dz + 30.0) * k]   # peg 19k deep; start beside, above
-        path = write_scenario(folder, name, f"""
-            name: {name}_peg_in_hole_1mm
-            units: mm
-            robot: {{name: cap, mesh: {ASSETS / f"{name}_cube_cap.obj"}, repair: true,
-                     scale: {scale!r}}}
-            obstacles:
-              - {{name: bottle, mesh: {ASSETS / f"{name}_cube_bottle.obj"}, repair: true,
-                  scale: {scale!r}}}
-            start: {{position: {start!r}, orientation: {{rpy: [0, 0, 180]}}}}
-            goal: {goal!r}
-            planner: {{exact: true, time_limit: 20}}
-            """)
-        out[name] = load_scenario(path)
-    return out
-
-
-@pytest.mark.assets
 @pytest.mark.parametrize("name", sorted(PAIRS))
-def test_asset_peg_inserted_with_1mm_clearance(asset_scenarios, name):
-    scenario = asset_scenarios[name]
+def test_asset_pair_is_what_the_comment_says(name):
+    clearance, dz = PAIRS[name]
+    bottle = load_repaired(asset(f"{PEG_IN_HOLE}/{name}_cube_bottle.obj"), f"{name} bottle")
+    cap = load_repaired(asset(f"{PEG_IN_HOLE}/{name}_cube_cap.obj"), f"{name} cap")
+    np.testing.assert_allclose(bottle.bounds, [[-0.04] * 3, [0.04] * 3], atol=1e-9)
+    np.testing.assert_allclose(cap.bounds[:, 1], [-0.04, 0.06], atol=1e-9)
+    assert len(split_solid(cap)) == 2 and len(split_solid(bottle)) == 1
+    assert 0.08**3 - bottle.volume > 0.02 * 0.08**3         # a real hole
+    b = bottle.copy()
+    b.apply_scale(1000.0)
+    d = fcl_distance(b, turned(cap, 1000.0), [0.0, 90.0, dz])
+    assert d == pytest.approx(clearance, abs=1e-9), name
+
+
+def asset_scenario(folder: Path, name: str):
+    """The ``name`` pair scaled to exactly 1 mm clearance, as a scenario: the cap starts
+    beside and above the bottle, turned, and ends with its peg inserted."""
+    clearance, dz = PAIRS[name]
+    cap_file = asset(f"{PEG_IN_HOLE}/{name}_cube_cap.obj")
+    bottle_file = asset(f"{PEG_IN_HOLE}/{name}_cube_bottle.obj")
+    k = 1.0 / clearance
+    scale = 1000.0 * k
+    goal = [0.0, 81.0 * k, dz * k]             # cap's face 1k above the bottle's,
+    start = [60.0 * k, 110.0 * k, (dz + 30.0) * k]   # peg 19k deep; start beside, above
+    path = write_scenario(folder, name, f"""
+        name: {name}_peg_in_hole_1mm
+        units: mm
+        robot: {{name: cap, mesh: {cap_file}, repair: true, scale: {scale!r}}}
+        obstacles:
+          - {{name: bottle, mesh: {bottle_file}, repair: true, scale: {scale!r}}}
+        start: {{position: {start!r}, orientation: {{rpy: [0, 0, 180]}}}}
+        goal: {goal!r}
+        planner: {{exact: true, time_limit: 20}}
+        """)
+    return load_scenario(path)
+
+
+@pytest.mark.parametrize("name", sorted(PAIRS))
+def test_asset_peg_inserted_with_1mm_clearance(tmp_path, name):
+    scenario = asset_scenario(tmp_path, name)
     bottle = scenario.obstacles[0].mesh
     # the goal: inserted, 1 mm clearance (lateral; the cap's face is 1/clearance mm up)
     assert fcl_distance(bottle, scenario.robot.mesh, scenario.goal) == pytest.approx(
@@ -382,12 +383,11 @@ def test_asset_peg_inserted_with_1mm_clearance(asset_scenarios, name):
     assert len(deep) and np.all(np.abs(deep[:, [0, 2]] - scenario.goal[[0, 2]]) < 5.0)
 
 
-@pytest.mark.assets
 def test_u_pair_cannot_be_inserted():
     """The U asset: the bottle's tongue is 20.0 mm wide, the peg's slot 19.2 mm, so no
     lateral offset lets the peg in even 1 mm. The exact source and FCL agree."""
-    bottle = load_repaired(ASSETS / "U_cube_bottle.obj", "U bottle")
-    cap = load_repaired(ASSETS / "U_cube_cap.obj", "U cap")
+    bottle = load_repaired(asset(f"{PEG_IN_HOLE}/U_cube_bottle.obj"), "U bottle")
+    cap = load_repaired(asset(f"{PEG_IN_HOLE}/U_cube_cap.obj"), "U cap")
     bottle.apply_scale(1000.0)
     cap = cap.copy()
     cap.apply_scale(1000.0)
@@ -564,7 +564,7 @@ def two_bodies(a: trimesh.Trimesh, b: trimesh.Trimesh) -> trimesh.Trimesh:
 
 
 def asset_cap() -> trimesh.Trimesh:
-    cap = load_repaired(ASSETS / "Cross_cube_cap.obj", "Cross cap")
+    cap = load_repaired(asset(f"{PEG_IN_HOLE}/Cross_cube_cap.obj"), "Cross cap")
     cap.apply_scale(1000.0)
     return cap
 
@@ -605,9 +605,7 @@ def membership_samples(obstacle, robot, seed=0, n_uniform=1500, n_boundary=300):
     return uniform, near
 
 
-@pytest.mark.parametrize("name", [
-    pytest.param(n, marks=pytest.mark.assets) if n.startswith("asset") else n
-    for n in PAIRS_MEMBERSHIP])
+@pytest.mark.parametrize("name", list(PAIRS_MEMBERSHIP))
 def test_c_obstacle_membership_agrees_with_fcl(name):
     make_o, make_r, nesting = PAIRS_MEMBERSHIP[name]
     obstacle, robot = make_o(), make_r()

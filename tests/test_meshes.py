@@ -5,11 +5,11 @@ from __future__ import annotations
 import dataclasses
 import logging
 import pickle
-from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from conftest import asset
 
 from planner.errors import (
     GeometryError,
@@ -29,8 +29,7 @@ from planner.meshes import (
 )
 from planner.tolerances import Tolerances, scale_of, tol
 
-ASSETS = Path(__file__).resolve().parents[2] / "shared" / "assets"
-PEG = ASSETS / "geometric_peg_in_hole_2mm"
+PEG = "geometric_peg_in_hole_2mm"
 CUBE = 0.08**3  # the 80 mm cube every peg-in-hole part is built on (metres)
 
 
@@ -360,7 +359,6 @@ HEXAGON_BOTTLE = CUBE - hexagon_prism_area(0.028713, 0.033) * 0.025
 ARROW_CAP = CUBE + (0.016 * 0.040 + 0.5 * 2 * 0.017321 * 0.020) * 0.020
 
 
-@pytest.mark.assets
 @pytest.mark.parametrize(
     ("filename", "expected"),
     [("Hexagon_cube_cap.obj", HEXAGON_CAP), ("Arrow_cube_cap.obj", ARROW_CAP)],
@@ -368,7 +366,7 @@ ARROW_CAP = CUBE + (0.016 * 0.040 + 0.5 * 2 * 0.017321 * 0.020) * 0.020
 def test_repair_real_asset_loaded_by_trimesh(filename, expected):
     # trimesh splits vertices along texture seams: nothing is watertight as loaded
     # (merging them, which validate_solid also does, closes the caps)
-    raw = trimesh.load(PEG / filename, force="mesh")
+    raw = trimesh.load(asset(f"{PEG}/{filename}"), force="mesh")
     assert not raw.is_watertight
     repaired, report = repair_mesh(raw, name=filename)
     assert repaired.is_watertight and repaired.is_winding_consistent
@@ -378,9 +376,8 @@ def test_repair_real_asset_loaded_by_trimesh(filename, expected):
     assert len(split_solid(repaired)) == 2  # the cube and the peg resting on it
 
 
-@pytest.mark.assets
 def test_trimesh_fans_real_bottle_wrongly_and_we_say_so():
-    raw = trimesh.load(PEG / "U_cube_bottle.obj", force="mesh")
+    raw = trimesh.load(asset(f"{PEG}/U_cube_bottle.obj"), force="mesh")
     with pytest.raises(InvalidMeshError, match=r"U_cube_bottle.*overlaps itself.*load_obj"):
         repair_mesh(raw, name="U_cube_bottle.obj")
 
@@ -390,10 +387,9 @@ PEG_FILES = [f"{shape}_cube_{part}.obj" for shape in ("Arrow", "Circle", "Cross"
 """The peg-in-hole set's meshes (its README lists the six shapes)."""
 
 
-@pytest.mark.assets
 @pytest.mark.parametrize("name", PEG_FILES)
 def test_load_mesh_reads_every_peg_in_hole_asset_as_a_solid(name):
-    path = PEG / name
+    path = asset(f"{PEG}/{name}")
     solid = validate_solid(load_mesh(path), name=path.name)
     assert solid.is_watertight and solid.is_winding_consistent
     if "cap" in path.name:  # cube + a 20 mm prism of cross-section < 60 x 60 mm

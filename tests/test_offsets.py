@@ -159,12 +159,11 @@ def test_the_offset_command_writes_the_mesh_and_says_its_bound(tmp_path, capsys)
     assert "radius" in capsys.readouterr().err
 
 
-@pytest.mark.assets
 def test_a_real_cad_part_with_t_junctions_is_offset_as_the_assembly_reads_it():
-    from conftest import SHARED_ASSETS
+    from conftest import asset
 
-    hole = planner.load_mesh(SHARED_ASSETS / "assemblies" / "factory_round_peg_8mm" / "meshes"
-                             / "factory_round_hole_8mm_subdiv_3x.obj")
+    hole = planner.load_mesh(asset("assemblies/factory_round_peg_8mm/meshes/"
+                                   "factory_round_hole_8mm_subdiv_3x.obj"))
     assert not hole.is_watertight  # 36 T-junctions; split, it is a solid
     shrunk = planner.offset(hole, -0.0005, eps=0.0005, name="hole")
     grown = planner.offset(hole, 0.0005, eps=0.0005, name="hole")

@@ -368,3 +368,23 @@ def test_easy_frame_is_the_only_closed_piece_that_is_no_solid():
             if (windings < 0).any():
                 found.append((dae.name, len(f)))
     assert found == [("Easy_env.dae", 52)]
+
+
+# ------------------------------------------------------- a problem authored in the format
+
+WINDOW = Path(__file__).resolve().parent / "data" / "omplapp_format" / "window.cfg"
+"""OMPL.app's format on files written in tests/data (OMPL.app's own may not be shared)."""
+
+
+def test_a_problem_in_omplapp_format_imports_in_omplapps_frame():
+    scenario = load_omplapp(WINDOW)
+    assert scenario.name == "window"
+    np.testing.assert_array_equal(scenario.start, [20, 10, -20])
+    np.testing.assert_array_equal(scenario.goal, [20, 10, -80])
+    # the file's wall box x in [0, 40], y in [45, 55], z in [0, 60] is app (x, z, -y)
+    world = read_app_mesh(WINDOW.with_name("window_env.dae"))
+    np.testing.assert_allclose(world.bounds, [[-20, 0, -120], [120, 60, 20]])
+    kinds = sorted((len(b.mesh.faces), b.solid) for b in scenario.obstacles)
+    assert kinds == [(2, False)] + [(12, True)] * 4   # the floor's doubled quad, 4 boxes
+    assert robot_reference_point(read_app_mesh(WINDOW.with_name("window_robot.dae"))) \
+        == pytest.approx([0, 0, 0])

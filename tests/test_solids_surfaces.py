@@ -181,14 +181,13 @@ def test_kinds_force_a_solid_or_a_surface():
         classify(box, name="box", kind="hollow")
 
 
-@pytest.mark.assets
 @pytest.mark.parametrize("name", ["factory_round_peg_8mm", "factory_rect_peg_8mm"])
 def test_factory_peg_assemblies_load_and_plan(name):
     """NVIDIA's Factory holes are open only at T-junctions: split, they are solids, and the
     pegs come out; every removal validated by FCL at the contact tolerance."""
-    from conftest import SHARED_ASSETS
+    from conftest import asset
 
-    assembly = planner.load_assembly(SHARED_ASSETS / "assemblies" / name / f"{name}.yaml")
+    assembly = planner.load_assembly(asset(f"assemblies/{name}/{name}.yaml"))
     hole = next(p for p in assembly.parts if p.name == "hole")
     assert hole.solid and hole.repairs.get("t_junctions_split", 0) > 0
     result = planner.plan_assembly(assembly)

@@ -44,6 +44,7 @@ import numpy as np
 
 from planner.errors import InvalidParameterError, MinkplanError, ResourceLimitError, ScenarioError
 from planner.problem import Assembly, Part, Scenario
+from planner.progress import StatusLine
 from planner.roles import FOUND, NO_PATH
 from planner.validation import FclChecker
 
@@ -146,6 +147,7 @@ class _Search:
         self._straight: dict[tuple[str, frozenset], AssemblyStep | None] = {}
         self._planned: dict[tuple[str, frozenset], tuple[AssemblyStep | None, dict]] = {}
         self.stats = {"planner_runs": 0, "planner_reused": 0, "runs": 0}
+        self.line = StatusLine(progress)
 
     # ---------------------------------------------------------------- one part
 
@@ -336,17 +338,21 @@ class _Search:
         while len(remaining) > 1 and movable():
             self.pairs.step += 1
             step = None
+            what = f"minkplan: {self.assembly.name}: step {self.pairs.step}"
             for part in movable():
+                self.line.show(f"{what}: straight removals of {part}")
                 step = self.straight(part, [n for n in remaining if n != part])
                 if step is not None:
                     break
             if step is None and self.plan_parts:
                 for part in movable():
+                    self.line.show(f"{what}: planning the removal of {part}")
                     step, attempt = self.planned(part, [n for n in remaining if n != part])
                     if step is not None:
                         break
                     attempts[part] = attempt
             if step is None and self.groups:
+                self.line.show(f"{what}: a group of parts that leaves as one")
                 step = self.group(remaining, base)
                 if step is not None:
                     inner = self._inner_stuck(step)
@@ -426,7 +432,7 @@ def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=No
         assembly: from :func:`load_assembly`.
         planner: for the full planning steps: ``"minkplan"`` or ``"ompl:NAME"``.
         cache_dir: decomposition cache (the planner's and the pair cache's).
-        progress: the planner's status line.
+        progress: a status line on stderr naming the step (and the planner's, nested).
         plan_parts: run the planner when no straight removal exists (else give up there).
         minimize: when stuck, shrink the stuck parts to an irreducible interlocked set
             (more searches on subsets, sharing every cache).
@@ -436,6 +442,13 @@ def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=No
     t_start = time.perf_counter()
     search = _Search(assembly, planner=planner, cache_dir=cache_dir, progress=progress,
                      plan_parts=plan_parts, groups=groups)
+    with search.line:
+        return _result(search, assembly, t_start, minimize=minimize, plan_parts=plan_parts)
+
+
+def _result(search: _Search, assembly: Assembly, t_start: float, *, minimize: bool,
+            plan_parts: bool) -> AssemblyResult:
+    """Run the search of :func:`plan_assembly` and build its result."""
     base = assembly.base
     run = search.disassemble([p.name for p in assembly.parts], base)
     source = {"used": search.source.kind, "why": search.source.why}

@@ -27,6 +27,8 @@ from typing import Any
 
 from planner.errors import InvalidParameterError
 from planner.output import schema_id
+from planner.progress import bar as progress_bar
+from planner.progress import shown
 
 from .execute import FAILURES
 from .results import ResultsFile
@@ -94,7 +96,7 @@ def _start_ray(settings: BatchSettings) -> float:
 
     where = f"the Ray cluster at {settings.address}" if settings.address else (
         f"a local Ray with {settings.workers or os.cpu_count() or 1} workers")
-    if settings.progress is not False and sys.stderr.isatty():
+    if shown(settings.progress):
         sys.stderr.write(f"minkplan: starting {where}...\n")
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="minkplan-batch-") as empty:
@@ -132,13 +134,6 @@ def _check_resume(tasks: Sequence[Task], records: Sequence[dict[str, Any]]) -> N
                     f"this batch asks {getattr(task, name)!r}; use another --out")
 
 
-def _progress_bar(total: int, enabled: bool | None):
-    from tqdm import tqdm
-
-    return tqdm(total=total, unit="task", dynamic_ncols=True, file=sys.stderr,
-                disable=not (sys.stderr.isatty() if enabled is None else enabled))
-
-
 def _lost(task: Task, error: Exception) -> dict[str, Any]:
     """The record of a task Ray gave no result for: its worker raised (``cause``), or
     Ray lost the worker more times than it retries."""
@@ -160,7 +155,8 @@ def _collect(pending: dict[Any, Task], results: ResultsFile, progress: bool | No
 
     failed = 0
     slots = int(ray.cluster_resources().get("CPU", 1))
-    with _progress_bar(len(pending), progress) as bar:
+    with progress_bar(total=len(pending), enabled=progress, unit="task",
+                      dynamic_ncols=True) as bar:
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=len(pending), timeout=0.25)
             for ref in ready:

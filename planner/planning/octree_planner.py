@@ -34,6 +34,7 @@ import numpy as np
 from planner import budget
 from planner.errors import ResourceLimitError
 from planner.problem import Scenario
+from planner.progress import StatusLine
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
 from planner.sources import Source, choose_for
 from planner.validation import FclChecker
@@ -41,7 +42,7 @@ from planner.validation import FclChecker
 from .certificates import certificate_document
 from .endpoints import Ends, attach_ends
 from .outcome import PlanOutcome
-from .report import Clock, Progress, cell_report, smallest_mixed_cell
+from .report import Clock, cell_report, smallest_mixed_cell
 from .search import SearchResult, SearchRun, search, search_without_margin
 from .validate import validate_path
 
@@ -124,7 +125,7 @@ class OctreePlanner:
         self.cache_dir = cache_dir
         self.validate = validate
         self.clock = Clock()
-        self.bar = Progress(progress)
+        self.bar = StatusLine(progress)
         self.report: dict[str, Any] = {}
         self.rounds: list[dict] = []
         self.cspace: Any = None
@@ -133,6 +134,12 @@ class OctreePlanner:
 
     def setup(self) -> None:
         """Choose the source, build the FCL checker and the C-space (with the margin)."""
+        try:
+            self._setup()
+        finally:
+            self.bar.close()
+
+    def _setup(self) -> None:
         sc, params = self.scenario, self.params
         self.t_start = time.perf_counter()
         self.delta = default_contact_tolerance(sc, params)
@@ -211,6 +218,12 @@ class OctreePlanner:
         """Plan from the scenario's start to its goal within ``planner.time_limit``."""
         if self.cspace is None:
             self.setup()
+        try:
+            return self._solve()
+        finally:
+            self.bar.close()
+
+    def _solve(self) -> PlanOutcome:
         sc = self.scenario
         deadline = time.perf_counter() + sc.settings.time_limit
         start = np.asarray(sc.start, dtype=np.float64)
@@ -268,6 +281,7 @@ class OctreePlanner:
             return self._finish(FOUND, "path", result.message, waypoints=candidates[0],
                                 space=space)
         failures = []
+        self.bar.show("minkplan: validating the path (FCL, OMPL)")
         for path in candidates:
             with self.clock.stage("validate"):
                 validation = validate_path(path, self.checker, self.bounds)

@@ -1,16 +1,15 @@
-"""Bookkeeping of a planning run: seconds per stage, the status line, and the parts of
+"""Bookkeeping of a planning run: seconds per stage and the parts of
 ``report.json`` that describe the octree (cells per label and level)."""
 
 from __future__ import annotations
 
-import sys
 import time
 from collections import Counter
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["LABELS", "Clock", "Progress", "cell_report", "smallest_mixed_cell"]
+__all__ = ["LABELS", "Clock", "cell_report", "smallest_mixed_cell"]
 
 LABELS = ("empty", "full", "mixed")
 """Octree labels in the core's order (``level_counts`` columns)."""
@@ -33,25 +32,6 @@ class Clock:
             yield
         finally:
             self.add(key, time.perf_counter() - t0)
-
-
-class Progress:
-    """One status line on stderr, rewritten in place (only when asked or on a TTY)."""
-
-    def __init__(self, enabled: bool | None) -> None:
-        self.enabled = sys.stderr.isatty() if enabled is None else bool(enabled)
-        self.shown = False
-
-    def show(self, text: str) -> None:
-        if self.enabled:
-            sys.stderr.write(f"\r\033[K{text}")
-            sys.stderr.flush()
-            self.shown = True
-
-    def close(self) -> None:
-        if self.shown:
-            sys.stderr.write("\r\033[K")
-            sys.stderr.flush()
 
 
 def smallest_mixed_cell(cs) -> float:

@@ -22,9 +22,10 @@ import numpy as np
 
 from planner import budget
 from planner.errors import ResourceLimitError
+from planner.progress import StatusLine
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
 
-from .report import Clock, Progress
+from .report import Clock
 
 __all__ = ["SearchResult", "SearchRun", "search", "search_without_margin"]
 
@@ -66,7 +67,7 @@ class SearchRun:
     clock: Clock
     rounds: list[dict]
     deadline: float
-    progress: Progress
+    progress: StatusLine
 
 
 def search(cs, start: np.ndarray, goal: np.ndarray, run: SearchRun) -> SearchResult:
