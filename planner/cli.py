@@ -172,6 +172,9 @@ def _parser() -> argparse.ArgumentParser:
         help="also write DIR/scene.html: the scene, C-obstacles, cells, roadmap and path "
         "(self-contained, opens offline)",
     )
+    pl.add_argument("--glb", default=None, metavar="FILE.glb",
+                    help="also write the scene as binary glTF for any 3D viewer (the "
+                    "layers the page opens with; cells and roadmap left out, said in it)")
     _add_viz_parsers(sub, computing)
     asm = sub.add_parser(
         "assemble", parents=[computing],
@@ -188,6 +191,9 @@ def _parser() -> argparse.ArgumentParser:
     asm.add_argument("--html", action="store_true",
                      help="also write DIR/assembly.html: the parts moving in one after "
                      "another (self-contained, opens offline)")
+    asm.add_argument("--glb", default=None, metavar="FILE.glb",
+                     help="also write the scene as binary glTF for any 3D viewer (each part "
+                     "where its insertion path starts; the motion is the page's)")
     asm.add_argument("--interference", type=float, default=None, metavar="DEPTH",
                      help="accept parts that overlap by up to DEPTH (units) in the "
                      "assembled pose, and plan with that much penetration allowed "
@@ -305,12 +311,11 @@ def _cmd_plan(args) -> int:
     scenario_path = Path(args.scenario)
     if not scenario_path.is_file():
         return _fail(f"scenario: file {str(scenario_path)!r} not found")
-    if args.export_path is not None:
-        from planner.output import unwritable
-
-        problem = unwritable(Path(args.export_path))
+    for flag, target, suffix in (("--export-path", args.export_path, None),
+                                 ("--glb", args.glb, ".glb")):
+        problem = _unwritable_file(target, suffix)
         if problem:
-            return _fail(f"--export-path {args.export_path}: {problem}")
+            return _fail(f"{flag} {target}: {problem}")
 
     from planner.io import load_scenario
     from planner.output import write_json
@@ -364,16 +369,39 @@ def _cmd_plan(args) -> int:
 
         write_omplapp_path(args.export_path, outcome.waypoints, scenario.orientation)
         sys.stdout.write(f"wrote {args.export_path} (OMPL's SE(3) path format)\n")
-    if args.html:
+    if args.html or args.glb:
         from planner import viz
         from planner.progress import StatusLine
 
         with StatusLine(False if args.no_progress else None) as line:
             line.show("minkplan: drawing the scene (C-obstacle surfaces)")
             scene = viz.scene_for_plan(scenario, outcome, c_obstacle=True)
-            page = viz.write_html(scene, out / "scene.html")
-        sys.stdout.write(f"wrote {page} (self-contained; open it in a browser)\n")
+            _write_views(scene, out / "scene.html" if args.html else None, args.glb)
     return outcome.exit_code
+
+
+def _unwritable_file(target: str | None, suffix: str | None = None) -> str | None:
+    """Why the file ``target`` (if given) cannot be written, or ``None``; ``suffix``: the
+    name must end so."""
+    if target is None:
+        return None
+    if suffix is not None and not target.lower().endswith(suffix):
+        return f"expected a file name ending in {suffix}"
+    from planner.output import unwritable
+
+    return unwritable(Path(target))
+
+
+def _write_views(scene, page: Path | None, glb: str | None) -> None:
+    """Write ``scene`` as the HTML ``page`` and as the GLB file ``glb`` (each if given)."""
+    from planner import viz
+
+    if page is not None:
+        viz.write_html(scene, page)
+        sys.stdout.write(f"wrote {page} (self-contained; open it in a browser)\n")
+    if glb is not None:
+        viz.write_glb(scene, glb)
+        sys.stdout.write(f"wrote {glb} (binary glTF, for any 3D viewer)\n")
 
 
 def _cmd_assemble(args) -> int:
@@ -383,6 +411,9 @@ def _cmd_assemble(args) -> int:
         return _fail(f"--out {out}: {problem}")
     if not Path(args.assembly).is_file():
         return _fail(f"assembly: file {args.assembly!r} not found")
+    problem = _unwritable_file(args.glb, ".glb")
+    if problem:
+        return _fail(f"--glb {args.glb}: {problem}")
     from planner.assembly import plan_assembly
     from planner.errors import ScenarioError
     from planner.io import load_assembly
@@ -406,11 +437,11 @@ def _cmd_assemble(args) -> int:
     sys.stdout.write(f"{assembly.name}: {result.message} (contact tolerance "
                      f"{result.contact_tolerance:.3g}{fits}); {result.seconds:.2f} s; "
                      f"wrote {out}/sequence.json, report.json\n")
-    if args.html:
-        from planner.viz import scene_for_assembly, write_html
+    if args.html or args.glb:
+        from planner.viz import scene_for_assembly
 
-        page = write_html(scene_for_assembly(result), out / "assembly.html")
-        sys.stdout.write(f"wrote {page} (self-contained; open it in a browser)\n")
+        _write_views(scene_for_assembly(result), out / "assembly.html" if args.html else None,
+                     args.glb)
     return result.exit_code
 
 

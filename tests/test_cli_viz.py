@@ -1,13 +1,18 @@
-"""`minkplan plan --html` writes a self-contained scene that a real browser draws, and
-`minkplan view` refuses bad input with one line (it serves otherwise; the live server
-itself is tested in test_viz.py)."""
+"""`minkplan plan --html` writes a self-contained scene that a real browser draws, `plan`
+and `assemble --glb` the same scene as binary glTF, and `minkplan view` refuses bad input
+with one line (it serves otherwise; the live server itself is tested in test_viz.py)."""
 
+import json
 import re
 from pathlib import Path
 
 import browser
+import trimesh
+import umsgpack
 
 from planner.cli import main
+from planner.viz.html import decode_commands
+from planner.viz.scene import ENCLOSING_OPACITY
 
 ROOT = Path(__file__).resolve().parent.parent
 OBSTACLE = 0xE8701A  # planner.viz's obstacle colour
@@ -27,11 +32,66 @@ def test_plan_html_is_drawn_in_a_browser(tmp_path, capsys):
     urls = set(re.findall(r"(?:https?|wss?)://[^\s\"'<>)]*", text))
     assert urls <= {"http://www.w3.org/1999/xhtml", "http://www.w3.org/2000/svg",
                     "ws://${location.host}`"}, urls
+    # the peg's goal lies in the block's hole: the block is drawn translucent, with its
+    # edges, so the peg shows inside it (and its orange is paler than an opaque block's)
+    block = _set_object(text, "/meshcat/workspace/obstacles/block")
+    assert block["object"]["materials"][0]["opacity"] == ENCLOSING_OPACITY
+    assert _set_object(text, "/meshcat/workspace/obstacles/block.edges")
     shot = browser.screenshot(page, tmp_path / "shot.png", budget_ms=8000)
     assert not [m for m in shot.console if "Uncaught" in m], shot.console
-    assert browser.pixels_like(shot.rgb, OBSTACLE) > 3000
+    assert browser.pixels_like(shot.rgb, OBSTACLE, min_saturation=0.2) > 1500
     assert browser.pixels_like(shot.rgb, PATH) > 100
     assert "scene.html" in capsys.readouterr().out
+
+
+def _set_object(page: str, path: str) -> dict:
+    """The page's command creating ``path`` (run at once or on demand)."""
+    texts = [re.search(r'var atOnce = "([A-Za-z0-9+/=]*)";', page).group(1),
+             *json.loads(re.search(r"var onDemand = (\{.*?\});", page).group(1)).values()]
+    commands = [umsgpack.unpackb(c) for t in texts for c in decode_commands(t)]
+    (created,) = [c for c in commands if c["type"] == "set_object" and c["path"] == path]
+    return created
+
+
+def test_plan_and_assemble_write_glb(tmp_path, capsys):
+    scenario = ROOT / "scenarios" / "peg_in_hole.yaml"
+    target = tmp_path / "views" / "peg.glb"
+    code = main(["plan", str(scenario), "--out", str(tmp_path / "peg"), "--glb", str(target),
+                 "--no-progress"])
+    assert code == 0 and f"wrote {target}" in capsys.readouterr().out
+    back = trimesh.load(target)
+    from planner.io import load_scenario
+
+    loaded = load_scenario(scenario)
+    (block,) = loaded.obstacles
+    block_mesh = back.geometry[back.graph["workspace/obstacles/block"][1]]
+    assert len(block_mesh.faces) == len(block.mesh.faces)
+    assert {"workspace/robot/start", "workspace/robot/goal", "cspace/c_obstacle/block",
+            "path/line", "path/tube", "workspace/obstacles/block.edges"} \
+        <= set(back.graph.nodes_geometry)
+    assert not (tmp_path / "peg" / "scene.html").exists()  # --glb alone: no page
+
+    parts = ROOT / "scenarios" / "assemblies" / "pegs_and_holes.yaml"
+    code = main(["assemble", str(parts), "--out", str(tmp_path / "asm"), "--glb",
+                 str(tmp_path / "asm.glb"), "--no-progress"])
+    assert code == 0
+    back = trimesh.load(tmp_path / "asm.glb")
+    assert set(back.graph.nodes_geometry) == {"assembly/lower", "assembly/upper"}
+
+
+def test_glb_names_are_checked_before_any_work(tmp_path, capsys):
+    scenario = str(ROOT / "scenarios" / "peg_in_hole.yaml")
+    for bad, reason in ((tmp_path / "scene.gltf", "ending in .glb"),
+                        (tmp_path / "a_file" / "x.glb", "is a file")):
+        (tmp_path / "a_file").write_text("")
+        out = tmp_path / "out"
+        assert main(["plan", scenario, "--out", str(out), "--glb", str(bad)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and "--glb" in err and reason in err, err
+        assert not out.exists() or not any(out.iterdir())  # nothing written
+    assemble = ["assemble", str(ROOT / "scenarios" / "assemblies" / "pegs_and_holes.yaml"),
+                "--out", str(tmp_path / "asm"), "--glb", str(tmp_path / "x.obj")]
+    assert main(assemble) == 2 and "ending in .glb" in capsys.readouterr().err
 
 
 def test_view_rejects_bad_input(tmp_path, capsys):

@@ -101,6 +101,11 @@ def test_notebook_runs_and_shows_its_scenes(path, monkeypatch, tmp_path):
         assert len(pages) == 2
     # the colour the first scene must show beside the orange obstacles / fixed parts
     second, saturation = viz.COLORS["sum"], 0.2
+    # how orange the obstacles are: opaque, but the peg's block encloses its goal (in the
+    # hole) and is drawn translucent with its edges (test_viz checks that it shows through)
+    orange_saturation, min_orange = 0.3, 5000
+    if path.name == "02_peg_in_hole.ipynb":
+        orange_saturation, min_orange = 0.2, 1500
     if path.name == "03_assembly.ipynb":
         from planner.viz.assembly import PART_COLORS
 
@@ -124,7 +129,8 @@ def test_notebook_runs_and_shows_its_scenes(path, monkeypatch, tmp_path):
     shot = browser.screenshot(page, tmp_path / "cell.png")
     # the operand (obstacle orange) seen through the translucent sum (blue): both hues,
     # paler than when drawn alone, but far from the grey background and grid
-    orange = browser.pixels_like(shot.rgb, viz.COLORS["obstacle"], min_saturation=0.3)
+    orange = browser.pixels_like(shot.rgb, viz.COLORS["obstacle"],
+                                 min_saturation=orange_saturation)
     blue = browser.pixels_like(shot.rgb, second, min_saturation=saturation)
-    assert orange >= 5000 and blue >= 5000 and not shot.errors, (orange, blue, shot.errors,
+    assert orange >= min_orange and blue >= 5000 and not shot.errors, (orange, blue, shot.errors,
                                                                   shot.png)

@@ -8,7 +8,7 @@ script, WebGL switched off) must fail that same check, so the check can fail.
 
 from __future__ import annotations
 
-import base64
+import html as html_lib
 import io
 import json
 import re
@@ -289,10 +289,15 @@ def test_minkowski_scene_and_show(monkeypatch):
 
 # ---- the static page -------------------------------------------------------------------
 
-def _commands_in(page: str) -> list[dict]:
-    block = page[page.index("var commands = ["):page.index("];", page.index("var commands"))]
-    return [umsgpack.unpackb(base64.b64decode(x)) for x in re.findall(r'"([A-Za-z0-9+/=]+)"',
-                                                                      block)]
+def _commands_in(page: str) -> tuple[list[dict], dict[str, list[dict]]]:
+    """The page's commands: those run at once, and per layer those loaded on demand."""
+    at_once = re.search(r'var atOnce = "([A-Za-z0-9+/=]*)";', page).group(1)
+    on_demand = json.loads(re.search(r"var onDemand = (\{.*?\});", page).group(1))
+
+    def decoded(text):
+        return [umsgpack.unpackb(c) for c in viz.html.decode_commands(text)]
+
+    return decoded(at_once), {path: decoded(text) for path, text in on_demand.items()}
 
 
 def test_html_is_self_contained_and_deterministic(scenario):
@@ -307,10 +312,15 @@ def test_html_is_self_contained_and_deterministic(scenario):
                     "ws://${location.host}`"}, urls
     assert "connect(" not in page.split("var viewer = new MeshCat.Viewer")[1]
     assert "fetch(" not in page.split("var viewer = new MeshCat.Viewer")[1]
-    assert page.count("</script>") == 2  # the bundle cannot close its element early
+    # the bundle cannot close its element early
+    assert page.count("</script>") == page.count("<script>") == 3
     assert page == viz.to_html(plan_scene(scenario))  # stable uuids: reproducible files
-    decoded = _commands_in(page)
-    assert [c["type"] for c in decoded] == [c["type"] for c in lower.lowered(s)]
+    at_once, on_demand = _commands_in(page)
+    hidden = [{"type": "set_property", "path": f"/meshcat/{path}", "property": "visible",
+               "value": False} for path in on_demand]
+    # the page's commands are the scene's, the hidden layers' created when switched on
+    assert at_once + [c for path, h in zip(on_demand, hidden) for c in [*on_demand[path], h]] \
+        == lower.lowered(s)
     with pytest.raises(TypeError, match="as_scene"):
         viz.to_html(scenario)
 
@@ -461,3 +471,236 @@ def test_a_large_roadmap_is_drawn_nearest_the_path_and_counted_whole():
     assert kept.max() <= dropped_floor  # the nearest ones, none farther than one left out
     small = segments[:10]
     np.testing.assert_array_equal(shown_roadmap(small, near), small)
+
+
+# ---- compact pages, layers on demand ---------------------------------------------------
+
+ROOT = Path(__file__).resolve().parent.parent
+PAGE_LIMIT_MB = 5.0  # issue 19: every bundled scenario's page under 5 MB
+
+
+def _switch_on(page: str, node: str) -> str:
+    """``page`` with a script that ticks the legend's box for ``node`` once the scene is
+    built, as a user's click would (the ``change`` event)."""
+    script = ("<script>(function wait() { if (!window.minkplanReady) return setTimeout(wait, 50);"
+              f" var box = document.querySelector('input[data-node=\"{node}\"]');"
+              " box.checked = true; box.dispatchEvent(new Event('change')); })();</script>")
+    return page.replace("</body>", script + "</body>")
+
+
+def test_hidden_layers_are_loaded_on_demand(scenario, cspace):
+    s = plan_scene(scenario, cspace=cspace)
+    page = viz.to_html(s)
+    at_once, on_demand = _commands_in(page)
+    dense = {"cspace/cells/empty", "cspace/cells/mixed", "cspace/cells/full", "cspace/roadmap"}
+    assert set(on_demand) == dense
+    created_at_once = {c["path"] for c in at_once if c["type"] == "set_object"}
+    assert not {f"/meshcat/{p}" for p in dense} & created_at_once
+    assert "/meshcat/path/tube" in created_at_once
+    for path, created in on_demand.items():
+        assert [c["path"] for c in created if c["type"] == "set_object"] == [f"/meshcat/{path}"]
+        # the legend's switch for it names what it loads
+        assert f"data-node=\"{path}\" data-load='[&quot;{path}&quot;]'" in page
+    # a layer shown at the start is not deferred
+    s.set_visible("cspace/roadmap", True)
+    assert "cspace/roadmap" not in _commands_in(viz.to_html(s))[1]
+
+
+def test_a_switched_on_layer_is_drawn_in_chromium(chromium, scenario, cspace, tmp_path):
+    page = viz.to_html(viz.scene_for_plan(scenario, {"status": "not_found"}, cspace))
+    amber = {}
+    for name, text in (("off", page), ("on", _switch_on(page, "cspace/cells/mixed"))):
+        (tmp_path / f"{name}.html").write_text(text)
+        shot = browser.screenshot(tmp_path / f"{name}.html", tmp_path / f"{name}.png")
+        assert not shot.errors, shot.errors
+        amber[name] = browser.pixels_like(shot.rgb, viz.COLORS["cells_mixed"], hue_tolerance=8)
+    # (off: only where the green start ghost tints an obstacle)
+    assert amber["on"] >= 5000 and amber["on"] > 10 * amber["off"], amber
+
+
+@pytest.mark.parametrize("yaml", sorted((ROOT / "scenarios").glob("*.yaml")),
+                         ids=lambda p: p.stem)
+def test_bundled_scenario_pages_are_small(yaml, tmp_path):
+    from planner.io import load_scenario
+    from planner.planning import plan
+
+    scenario = load_scenario(yaml)
+    outcome = plan(scenario, progress=False)
+    s = viz.scene_for_plan(scenario, outcome, c_obstacle=True)
+    page = viz.write_html(s, tmp_path / "scene.html")
+    size_mb = page.stat().st_size / 1e6
+    assert size_mb < PAGE_LIMIT_MB, f"{yaml.name}: {size_mb:.2f} MB"
+    at_once, on_demand = _commands_in(page.read_text())
+    assert set(on_demand) == {p for p in s.layers if not s.is_visible(p)}
+    # nothing dropped: every layer's geometry is in the page, whole
+    created = {c["path"]: c for c in at_once + [c for cs in on_demand.values() for c in cs]
+               if c["type"] == "set_object"}
+    for path, layer in s.layers.items():
+        geometry = created[f"/meshcat/{path}"]["object"]["geometries"][0]["data"]
+        position = geometry["attributes"]["position"]
+        assert len(position["array"].data) == 4 * 3 * len(layer.vertices), path
+
+
+# ---- see-through obstacles -------------------------------------------------------------
+
+def _opacity(scene_, path: str) -> float:
+    (command,) = [c for c in lower.lowered(scene_) if c["type"] == "set_object"
+                  and c["path"] == f"/meshcat/{path}"]
+    return command["object"]["materials"][0]["opacity"]
+
+
+def test_obstacles_enclosing_the_path_are_see_through(scenario):
+    from planner.io import load_scenario
+
+    # beside the path, not around it: opaque
+    beside = plan_scene(scenario)
+    assert _opacity(beside, "workspace/obstacles/left_wall") == 1.0
+    assert not [p for p in beside.layers if p.endswith(".edges")]
+    # the sealed chamber holds the start and the goal: translucent, with its edges drawn
+    chamber = load_scenario(ROOT / "scenarios" / "sealed_chamber.yaml")
+    s = viz.scene_for_plan(chamber, {"status": "no_path", "waypoints": []})
+    (name,) = [b.name for b in chamber.obstacles]
+    path = f"workspace/obstacles/{scene.node_name(name)}"
+    lo, hi = s.layers[path].world_bounds()
+    assert np.all((lo < chamber.start) & (chamber.start < hi))
+    assert _opacity(s, path) == scene.ENCLOSING_OPACITY < 1.0
+    edges = s.layers[f"{path}.edges"]
+    assert edges.kind == "segments" and edges.opacity == 1.0 and edges.count >= 12
+    # its edges lie on the chamber's surface
+    mesh = chamber.obstacles[0].mesh
+    _, distance, _ = trimesh.proximity.closest_point(mesh, edges.vertices)
+    assert np.max(distance) < 1e-9 * mesh.scale
+    assert "translucent" in " ".join(e.notes[0] for e in viz.legend(s)
+                                     if e.label == "Obstacles")
+
+
+def test_the_certificate_shows_through_the_chamber_in_chromium(chromium, tmp_path):
+    import dataclasses
+
+    from planner.io import load_scenario
+    from planner.planning import plan
+
+    chamber = load_scenario(ROOT / "scenarios" / "sealed_chamber.yaml")
+    outcome = plan(chamber, progress=False)
+    assert outcome.status == "no_path"
+    s = viz.scene_for_plan(chamber, outcome)
+    red = {}
+    for name in ("see-through", "opaque"):
+        if name == "opaque":  # the negative control: the chamber as it was drawn before
+            for path in [p for p in s.layers if p.startswith("workspace/obstacles/")]:
+                s.layers[path] = dataclasses.replace(s.layers[path], opacity=1.0)
+        shot = browser.screenshot(viz.write_html(s, tmp_path / f"{name}.html"),
+                                  tmp_path / f"{name}.png")
+        assert not shot.errors, shot.errors
+        red[name] = browser.pixels_like(shot.rgb, viz.COLORS["walls"], min_saturation=0.3)
+    assert red["see-through"] >= 5000 and red["opaque"] < red["see-through"] / 5, red
+
+
+# ---- the legend ------------------------------------------------------------------------
+
+def test_the_legend_names_every_colour_and_what_is_drawn(scenario, cspace, c_obstacles):
+    s = plan_scene(scenario, cspace=cspace, c_obstacle=c_obstacles)
+    entries = {e.label: e for e in viz.legend(s)}
+    assert set(entries) == {"Obstacles", "Robot at start", "Robot at goal", "Robot moving",
+                            "C-obstacle", "EMPTY cells", "MIXED cells", "FULL cells",
+                            "Roadmap", "Path"}
+    expected = {"Obstacles": "obstacle", "Robot at start": "robot_start",
+                "Robot at goal": "robot_goal", "C-obstacle": "c_obstacle",
+                "EMPTY cells": "cells_empty", "Roadmap": "roadmap", "Path": "path"}
+    for label, key in expected.items():
+        assert entries[label].color == viz.COLORS[key], label
+    assert entries["Obstacles"].layers == ("workspace/obstacles/left_wall",
+                                           "workspace/obstacles/right")
+    boxes, labels = viz.cells_from_cspace(cspace)
+    n_mixed = int(np.count_nonzero(labels == scene.MIXED))
+    assert entries["MIXED cells"].notes == (f"{n_mixed:,}, drawn as box edges",)
+    assert not entries["MIXED cells"].visible and entries["Path"].visible
+    assert entries["Roadmap"].notes[0].startswith("all ")
+    # the page shows it: a row per entry with its colour and its notes
+    page = viz.to_html(s)
+    legend_html = page[page.index('<div id="minkplan-legend">'):page.index("<script>")]
+    for entry in entries.values():
+        assert f"</span>{entry.label}<" in legend_html
+        assert "rgba({}, {}, {}".format(*bytes.fromhex(entry.css_color[1:])) in legend_html
+        for note in entry.notes:
+            assert html_lib.escape(note) in legend_html
+    # a roadmap cut to the nearest segments says so
+    many = np.stack([np.zeros((scene_max := 41_000, 3)), np.ones((scene_max, 3))], axis=1)
+    cut = viz.scene_for_plan(scenario, {"status": "found", "waypoints": WAYPOINTS},
+                             {"roadmap": many})
+    (roadmap,) = [e for e in viz.legend(cut) if e.label == "Roadmap"]
+    assert roadmap.notes == ("the 40,000 segments nearest the path, of 41,000",)
+
+
+def test_assembly_legend_has_a_row_per_part():
+    from planner.assembly import plan_assembly
+    from planner.io import load_assembly
+
+    result = plan_assembly(load_assembly(ROOT / "scenarios/assemblies/pegs_and_holes.yaml"),
+                           progress=False)
+    entries = viz.legend(viz.scene_for_assembly(result))
+    assert [e.label for e in entries] == [p.name for p in result.assembly.parts]
+    assert len({e.color for e in entries}) == len(entries)
+
+
+# ---- GLB -------------------------------------------------------------------------------
+
+def _world(glb_scene, node: str) -> np.ndarray:
+    """``node``'s vertices in minkplan's z-up world, from a GLB read back by trimesh."""
+    from planner.viz.glb import Z_UP_TO_Y_UP
+
+    transform, geometry = glb_scene.graph[node]
+    vertices = np.asarray(glb_scene.geometry[geometry].vertices, dtype=np.float64)
+    to_world = np.linalg.inv(Z_UP_TO_Y_UP) @ transform
+    return vertices @ to_world[:3, :3].T + to_world[:3, 3]
+
+
+def test_glb_holds_the_scene(scenario, cspace, c_obstacles, tmp_path):
+    s = plan_scene(scenario, cspace=cspace, c_obstacle=c_obstacles)
+    target = viz.write_glb(s, tmp_path / "scene.glb")
+    back = trimesh.load(target)
+    assert isinstance(back, trimesh.Scene)
+    shown = {"workspace/obstacles/left_wall", "workspace/obstacles/right",
+             "workspace/robot/start", "workspace/robot/goal", "cspace/c_obstacle/left_wall",
+             "cspace/c_obstacle/right", "path/line", "path/tube"}
+    assert set(back.graph.nodes_geometry) == shown
+    kinds = {n: type(back.geometry[back.graph[n][1]]).__name__ for n in shown}
+    assert kinds["path/line"] == "Path3D" and kinds["workspace/robot/goal"] == "Trimesh"
+    # where it is: the goal ghost at the goal, the obstacles as posed, the path's waypoints
+    robot = scenario.robot.mesh
+    np.testing.assert_allclose(_world(back, "workspace/robot/goal"),
+                               np.asarray(robot.vertices) + scenario.goal, atol=1e-4)
+    wall = scenario.obstacles[0].mesh
+    np.testing.assert_allclose(np.sort(_world(back, "workspace/obstacles/left_wall"), axis=0),
+                               np.sort(np.asarray(wall.vertices), axis=0), atol=1e-4)
+    # (the polyline as glTF line segments: consecutive pairs of waypoints)
+    np.testing.assert_allclose(_world(back, "path/line").reshape(-1, 2, 3),
+                               shapes.polyline_segments(WAYPOINTS), atol=1e-4)
+    # colours and opacities as the page's
+    goal = back.geometry[back.graph["workspace/robot/goal"][1]].visual.material
+    np.testing.assert_array_equal(goal.baseColorFactor,
+                                  [0x2F, 0x6F, 0xDE, round(255 * scene.GHOST_OPACITY)])
+    assert goal.alphaMode == "BLEND"
+    obstacle = back.geometry[back.graph["workspace/obstacles/right"][1]].visual.material
+    assert obstacle.alphaMode == "OPAQUE" and obstacle.baseColorFactor[3] == 255
+    # what glTF leaves out, said in the file
+    info = back.metadata["minkplan"]
+    assert set(info["left_out"]) == {"cspace/cells/empty", "cspace/cells/mixed",
+                                     "cspace/cells/full", "cspace/roadmap",
+                                     "workspace/robot/moving"}
+    assert set(info["layers"]) == shown and info["title"] == s.title
+    # and the hidden layers on request, as many cells as the scene has
+    every = trimesh.load(viz.write_glb(s, tmp_path / "all.glb", include_hidden=True))
+    mixed = every.geometry[every.graph["cspace/cells/mixed"][1]]
+    assert len(mixed.vertices) == len(s.layers["cspace/cells/mixed"].vertices)
+
+
+def test_the_legend_is_drawn_and_folds_in_small_views(chromium, scenario, cspace, tmp_path):
+    # the roadmap is hidden at first: its colour on screen is the legend's swatch alone
+    page = viz.write_html(plan_scene(scenario, cspace=cspace), tmp_path / "scene.html")
+    swatch = {}
+    for size in ((1200, 820), (800, 600)):  # viewports of about 1200 x 680 and 800 x 460
+        shot = browser.screenshot(page, tmp_path / f"{size[0]}.png", size=size)
+        assert not shot.errors, shot.errors
+        swatch[size] = browser.pixels_like(shot.rgb[:, :300], viz.COLORS["roadmap"])
+    assert swatch[(1200, 820)] >= 50 and swatch[(800, 600)] == 0, swatch

@@ -7,7 +7,11 @@ it one of three ways:
   no network (meshcat's viewer is inlined);
 - :func:`show` -- inline in a Jupyter notebook (the same page in an iframe);
 - :func:`serve` -- meshcat's live server on localhost, URL printed, serving until
-  interrupted (:func:`open_live` for a handle that does not block).
+  interrupted (:func:`open_live` for a handle that does not block);
+- :func:`write_glb` -- binary glTF of the same layers, for any 3D viewer
+  (:mod:`planner.viz.glb`).
+
+The page's legend (:func:`legend`) says what each colour is and what of it is drawn.
 
 Scenes for minkplan's results: :func:`scene_for_minkowski`, :func:`scene_for_plan`
 (scenario + plan + C-space + C-obstacles), :func:`scene_for_assembly` (the parts moving
@@ -25,6 +29,7 @@ Example::
 """
 
 from .assembly import scene_for_assembly
+from .glb import write_glb
 from .html import notebook_html, show, to_html, write_html
 from .layout import (
     as_scene,
@@ -35,6 +40,7 @@ from .layout import (
     scene_for_minkowski,
     scene_for_plan,
 )
+from .legend import Entry, legend
 from .live import LiveView, open_live, serve
 from .lower import commands
 from .scene import COLORS, Camera, Layer, Scene, Track
@@ -42,6 +48,7 @@ from .scene import COLORS, Camera, Layer, Scene, Track
 __all__ = [
     "COLORS",
     "Camera",
+    "Entry",
     "Layer",
     "LiveView",
     "Scene",
@@ -50,6 +57,7 @@ __all__ = [
     "cells_from_cspace",
     "commands",
     "compute_c_obstacles",
+    "legend",
     "notebook_html",
     "open_live",
     "plan_parts",
@@ -60,5 +68,6 @@ __all__ = [
     "serve",
     "show",
     "to_html",
+    "write_glb",
     "write_html",
 ]

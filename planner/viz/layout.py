@@ -126,6 +126,14 @@ def shown_roadmap(segments: np.ndarray, near: np.ndarray) -> np.ndarray:
     return segments[np.sort(keep)]
 
 
+def roadmap_note(shown: int, total: int, near_path: bool) -> str:
+    """What a roadmap layer of ``shown`` of ``total`` segments draws, in words."""
+    if shown >= total:
+        return f"all {total:,} segments"
+    return (f"the {shown:,} segments nearest the {'path' if near_path else 'start and goal'}, "
+            f"of {total:,}")
+
+
 def _densified(points: np.ndarray, pieces: int = 64) -> np.ndarray:
     """Points along the polyline ``points`` (``pieces`` per segment)."""
     if len(points) < 2:
@@ -309,10 +317,13 @@ def scene_for_plan(scenario, plan=None, cspace=None, *, c_obstacle=None, certifi
         goal_color=COLORS["robot_collision"] if reason == "goal_in_collision" else None,
     )
 
+    note = ""
     if c_obstacle is True:  # on the source the plan used, if it says
         c_obstacle = compute_c_obstacles(scenario, source=parts["source"])
+        note = (f"drawn at a display resolution of {display_eps(scenario):.3g} "
+                f"{scenario.units} (a picture: the planner's are exact)")
     if c_obstacle is not None and c_obstacle is not False:
-        scene.add_c_obstacle(c_obstacle)
+        scene.add_c_obstacle(c_obstacle, note=note)
 
     arrays = _cspace_arrays(cspace if cspace is not None else parts["cspace"])
     if arrays.get("boxes") is not None and arrays.get("labels") is not None:
@@ -323,8 +334,9 @@ def scene_for_plan(scenario, plan=None, cspace=None, *, c_obstacle=None, certifi
         ends = np.stack([scenario.start, scenario.goal])
         near = _densified(np.asarray(waypoints, dtype=np.float64).reshape(-1, 3)) \
             if len(waypoints) else ends
-        scene.add_segments(ROADMAP, shown_roadmap(np.asarray(roadmap), near),
-                           color=COLORS["roadmap"], count=len(roadmap))
+        shown = shown_roadmap(np.asarray(roadmap), near)
+        scene.add_segments(ROADMAP, shown, color=COLORS["roadmap"], count=len(roadmap),
+                           note=roadmap_note(len(shown), len(roadmap), bool(len(waypoints))))
 
     if len(waypoints):
         scene.add_path(waypoints)
@@ -335,6 +347,9 @@ def scene_for_plan(scenario, plan=None, cspace=None, *, c_obstacle=None, certifi
                                           else parts["certificate"])
     if len(walls) or component is not None:
         scene.add_certificate(walls, component)
+    # an obstacle enclosing what the answer is about would hide it
+    scene.see_through(np.vstack([np.reshape(waypoints, (-1, 3)), [scenario.start],
+                                 [scenario.goal], walls.mean(axis=1)]))
     return scene
 
 

@@ -2,7 +2,9 @@
 
 :func:`commands` turns a scene into meshcat-python command objects (``SetObject``,
 ``SetTransform``, ``SetProperty``, ``SetAnimation``), each with ``.lower()`` giving the
-dict that meshcat's viewer decodes; :func:`packed` msgpack-encodes them. Transport
+dict that meshcat's viewer decodes; :func:`packed` msgpack-encodes them;
+:func:`staged_commands` splits them into what builds the scene at once and what creates
+each hidden layer (a page loads those on demand). Transport
 (HTML file, notebook, live server) lives in :mod:`planner.viz.html` and
 :mod:`planner.viz.live` and only ever sees these commands.
 
@@ -25,7 +27,7 @@ from ._meshcat import Path as MeshcatPath
 from ._meshcat import geometry as mg
 from .scene import Camera, Layer, Scene
 
-__all__ = ["ROOT", "commands", "lowered", "packed"]
+__all__ = ["ROOT", "commands", "lowered", "on_demand", "packed", "staged_commands"]
 
 ROOT = "meshcat"
 """Root of the layers in meshcat's scene tree (as meshcat-python's ``Visualizer``)."""
@@ -184,8 +186,16 @@ def _round_125(x: float) -> float:
     return min(candidates, key=lambda c: abs(math.log(c / x)))
 
 
-def commands(scene: Scene) -> list:
-    """The meshcat commands that build ``scene`` in an empty viewer, in order."""
+def on_demand(scene: Scene) -> list[str]:
+    """Paths of the layers created hidden (their own flag off, e.g. the octree cells and
+    the roadmap): a page loads them only when they are switched on."""
+    return [path for path in scene.layers if scene.visibility.get(path) is False]
+
+
+def staged_commands(scene: Scene) -> tuple[list, dict[str, list]]:
+    """The commands that build ``scene``: those to run at once, in order, and per
+    :func:`on_demand` layer the ones that create it (run them, then make it visible)."""
+    later = set(on_demand(scene))
     out: list = [
         SetProperty("top_color", BACKGROUND_TOP, _path("Background")),
         SetProperty("bottom_color", BACKGROUND_BOTTOM, _path("Background")),
@@ -208,14 +218,31 @@ def commands(scene: Scene) -> list:
     root[:3, 3] = shift
     out.append(SetTransform(root, _path(ROOT)))
     for path, layer in scene.layers.items():
-        node = _path(ROOT, path)
-        out.append(SetObject(layer_object(path, layer), path=node))
-        if not np.allclose(layer.transform, np.eye(4)):
-            out.append(SetTransform(layer.transform, node))
+        if path not in later:
+            out += _layer_commands(path, layer)
     for path, visible in scene.visibility.items():
-        out.append(SetProperty("visible", bool(visible), _path(ROOT, path)))
+        if path not in later:
+            out.append(SetProperty("visible", bool(visible), _path(ROOT, path)))
     if scene.tracks:
         out.append(_animation(scene))
+    return out, {path: _layer_commands(path, scene.layers[path]) for path in scene.layers
+                 if path in later}
+
+
+def commands(scene: Scene) -> list:
+    """The meshcat commands that build ``scene`` in an empty viewer, in order (every
+    layer, the hidden ones created hidden)."""
+    now, later = staged_commands(scene)
+    for path, created in later.items():
+        now += [*created, SetProperty("visible", False, _path(ROOT, path))]
+    return now
+
+
+def _layer_commands(path: str, layer: Layer) -> list:
+    node = _path(ROOT, path)
+    out: list = [SetObject(layer_object(path, layer), path=node)]
+    if not np.allclose(layer.transform, np.eye(4)):
+        out.append(SetTransform(layer.transform, node))
     return out
 
 

@@ -8,6 +8,7 @@ layer: all octree cells of one label are one line-segment, point or triangle buf
 The layout every entry point uses (constants of this module)::
 
     workspace/obstacles/<name>    obstacle meshes                       OBSTACLES
+    workspace/obstacles/<name>.edges  its creases, when it encloses the path (see_through)
     workspace/robot/start         robot at the start, ghosted           ROBOT_START
     workspace/robot/goal          robot at the goal, ghosted            ROBOT_GOAL
     workspace/robot/moving        robot animated along the path         ROBOT_MOVING
@@ -22,7 +23,10 @@ The layout every entry point uses (constants of this module)::
 
 All layers live under meshcat's root ``/meshcat``. Hidden by default (toggle them in the
 controls, or :meth:`Scene.set_visible`): the octree cells, the roadmap and the
-certificate's component (:data:`HIDDEN_BY_DEFAULT`).
+certificate's component (:data:`HIDDEN_BY_DEFAULT`). An obstacle that holds the path, the
+robot's start or goal or a certificate's walls inside its bounding box is drawn
+translucent, its creases as lines (:meth:`Scene.see_through`). A layer's ``note`` says
+what of it is drawn; :mod:`planner.viz.legend` collects them.
 
 Inputs are plain arrays: meshes as ``trimesh.Trimesh``, cells as ``(n, 2, 3)`` boxes
 ``[lo, hi]`` with ``(n,)`` labels (0 EMPTY, 1 FULL, 2 MIXED, as the core numbers them,
@@ -32,6 +36,7 @@ waypoints.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from collections.abc import Mapping
@@ -125,6 +130,11 @@ GHOST_OPACITY = 0.35
 C_OBSTACLE_OPACITY = 0.3
 WALL_OPACITY = 0.55
 CELL_FACE_OPACITY = 0.25
+ENCLOSING_OPACITY = 0.4
+"""Opacity of an obstacle that encloses the path, the robot or a certificate (see
+:meth:`Scene.see_through`)."""
+CREASE_DEGREES = 30.0
+"""Edges where faces meet at more than this are drawn on a translucent obstacle."""
 TUBE_RADIUS_FRACTION = 0.004
 """Default path-tube radius as a fraction of the scene's bounding-box diagonal."""
 MAX_CELL_EDGES = 20_000
@@ -155,6 +165,9 @@ class Layer:
         size: point size in scene units (points only).
         transform: ``(4, 4)`` pose of the layer's node.
         count: what the layer stands for (cells, edges, waypoints), for captions.
+        note: what is drawn, in words, when it is not simply the whole thing (e.g.
+            "the 40,000 segments nearest the path, of 612,442"); the page's legend shows
+            it.
     """
 
     path: str
@@ -167,6 +180,7 @@ class Layer:
     size: float = 1.0
     transform: np.ndarray = field(default_factory=lambda: np.eye(4))
     count: int = 0
+    note: str = ""
 
     def world_bounds(self) -> np.ndarray | None:
         """``(2, 3)`` axis-aligned bounds in the world, or ``None`` if empty."""
@@ -289,6 +303,23 @@ def _mesh_arrays(mesh) -> tuple[np.ndarray, np.ndarray]:
             np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3))
 
 
+def _any_inside(points: np.ndarray, bounds: np.ndarray) -> bool:
+    """Whether any of ``points`` ``(n, 3)`` lies strictly inside ``bounds`` ``(2, 3)``
+    (by more than a millionth of the box's size: a point on a face is not enclosed)."""
+    margin = 1e-6 * float(np.max(bounds[1] - bounds[0]))
+    inside = np.all((points > bounds[0] + margin) & (points < bounds[1] - margin), axis=1)
+    return bool(np.any(inside))
+
+
+def _creases(layer: Layer) -> np.ndarray:
+    """``(m, 2, 3)`` edges of a mesh layer where its faces meet at more than
+    :data:`CREASE_DEGREES`, and its open edges."""
+    mesh = trimesh.Trimesh(layer.vertices, layer.faces, process=True)
+    sharp = mesh.face_adjacency_edges[mesh.face_adjacency_angles > math.radians(CREASE_DEGREES)]
+    open_edges = mesh.edges_sorted[trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1)]
+    return mesh.vertices[np.vstack([sharp.reshape(-1, 2), open_edges.reshape(-1, 2)])]
+
+
 def _translation(t) -> np.ndarray:
     matrix = np.eye(4)
     matrix[:3, 3] = np.asarray(t, dtype=np.float64).reshape(3)
@@ -360,14 +391,15 @@ class Scene:
         return layer
 
     def add_mesh(self, path: str, mesh, *, color: int, opacity: float = 1.0, lit: bool = True,
-                 transform=None) -> Layer:
+                 transform=None, note: str = "") -> Layer:
         """A triangle mesh (``trimesh.Trimesh`` or anything with ``.mesh``)."""
         vertices, faces = _mesh_arrays(mesh)
         return self.add_triangles(path, vertices, faces, color=color, opacity=opacity, lit=lit,
-                                  transform=transform, count=len(faces))
+                                  transform=transform, count=len(faces), note=note)
 
     def add_triangles(self, path: str, vertices, faces, *, color: int, opacity: float = 1.0,
-                      lit: bool = True, transform=None, count: int | None = None) -> Layer:
+                      lit: bool = True, transform=None, count: int | None = None,
+                      note: str = "") -> Layer:
         """A triangle mesh from vertices ``(n, 3)`` and faces ``(m, 3)``."""
         v = _points(vertices, f"{path}: vertices")
         f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
@@ -375,30 +407,32 @@ class Scene:
             raise InvalidParameterError(f"{path}: face index out of range")
         return self._add(Layer(path, "mesh", v, f, int(color), float(opacity), bool(lit),
                                transform=self._transform(transform),
-                               count=len(f) if count is None else int(count)))
+                               count=len(f) if count is None else int(count), note=note))
 
     def add_segments(self, path: str, segments, *, color: int, opacity: float = 1.0,
-                     count: int | None = None) -> Layer:
+                     count: int | None = None, note: str = "") -> Layer:
         """Line segments ``(m, 2, 3)`` as ONE LineSegments object."""
         s = _segments(segments, f"{path}: segments")
         return self._add(Layer(path, "segments", s.reshape(-1, 3), None, int(color),
                                float(opacity), False,
-                               count=len(s) if count is None else int(count)))
+                               count=len(s) if count is None else int(count), note=note))
 
-    def add_polyline(self, path: str, points, *, color: int, opacity: float = 1.0) -> Layer:
+    def add_polyline(self, path: str, points, *, color: int, opacity: float = 1.0,
+                     note: str = "") -> Layer:
         """An open polyline through ``(k, 3)`` points."""
         p = _points(points, f"{path}: points")
         return self._add(Layer(path, "polyline", p, None, int(color), float(opacity), False,
-                               count=len(p)))
+                               count=len(p), note=note))
 
     def add_points(self, path: str, points, *, color: int, size: float,
-                   opacity: float = 1.0, count: int | None = None) -> Layer:
+                   opacity: float = 1.0, count: int | None = None, note: str = "") -> Layer:
         """Points ``(n, 3)`` drawn as squares of ``size`` scene units."""
         p = _points(points, f"{path}: points")
         if not (math.isfinite(size) and size > 0):
             raise InvalidParameterError(f"{path}: point size must be positive, got {size!r}")
         return self._add(Layer(path, "points", p, None, int(color), float(opacity), False,
-                               size=float(size), count=len(p) if count is None else int(count)))
+                               size=float(size), count=len(p) if count is None else int(count),
+                               note=note))
 
     def add_boxes(self, path: str, boxes, *, color: int, style: str = "auto",
                   opacity: float | None = None, max_edges: int = MAX_CELL_EDGES) -> Layer | None:
@@ -412,16 +446,21 @@ class Scene:
             style = "edges" if len(b) <= max_edges else "points"
         if style == "edges":
             return self.add_segments(path, shapes.box_edges(b), color=color,
-                                     opacity=1.0 if opacity is None else opacity, count=len(b))
+                                     opacity=1.0 if opacity is None else opacity, count=len(b),
+                                     note=f"{len(b):,}, drawn as box edges")
         if style == "faces":
             vertices, faces = shapes.box_faces(b)
             return self.add_triangles(path, vertices, faces, color=color,
                                       opacity=CELL_FACE_OPACITY if opacity is None else opacity,
-                                      count=len(b))
+                                      count=len(b), note=f"{len(b):,}, drawn as boxes")
         if style == "points":
             size = float(np.median(np.max(b[:, 1] - b[:, 0], axis=1))) * 0.35
+            note = f"{len(b):,}, drawn as centre points"
+            if len(b) > max_edges:
+                note += f" (over {max_edges:,}, too many for edges)"
             return self.add_points(path, b.mean(axis=1), color=color, size=max(size, 1e-12),
-                                   opacity=1.0 if opacity is None else opacity, count=len(b))
+                                   opacity=1.0 if opacity is None else opacity, count=len(b),
+                                   note=note)
         raise InvalidParameterError(
             f"box style {style!r}: use 'auto', 'edges', 'faces' or 'points'")
 
@@ -478,7 +517,7 @@ class Scene:
                                             transform=_translation(where)))
         return layers
 
-    def add_c_obstacle(self, c_obstacle) -> list[Layer]:
+    def add_c_obstacle(self, c_obstacle, *, note: str = "") -> list[Layer]:
         """C-obstacle surface(s): one mesh (or ``MinkowskiResult``) at
         ``cspace/c_obstacle``, or a mapping ``{name: mesh}`` at
         ``cspace/c_obstacle/<name>``."""
@@ -486,9 +525,10 @@ class Scene:
             return []
         if isinstance(c_obstacle, Mapping):
             return [self.add_mesh(f"{C_OBSTACLE}/{node_name(n)}", m, color=COLORS["c_obstacle"],
-                                  opacity=C_OBSTACLE_OPACITY) for n, m in c_obstacle.items()]
+                                  opacity=C_OBSTACLE_OPACITY, note=note)
+                    for n, m in c_obstacle.items()]
         return [self.add_mesh(C_OBSTACLE, c_obstacle, color=COLORS["c_obstacle"],
-                              opacity=C_OBSTACLE_OPACITY)]
+                              opacity=C_OBSTACLE_OPACITY, note=note)]
 
     def add_cells(self, boxes, labels, *, style: str = "auto",
                   max_edges: int = MAX_CELL_EDGES) -> list[Layer]:
@@ -524,7 +564,8 @@ class Scene:
             radius = TUBE_RADIUS_FRACTION * diagonal if diagonal > 0 else 1e-3
         vertices, faces = shapes.tube(p, radius)
         return [
-            self.add_polyline(f"{PATH}/line", p, color=COLORS["path"]),
+            self.add_polyline(f"{PATH}/line", p, color=COLORS["path"],
+                              note=f"{len(p):,} waypoints"),
             self.add_triangles(f"{PATH}/tube", vertices, faces, color=COLORS["path"], lit=False,
                                count=len(p)),
         ]
@@ -537,7 +578,8 @@ class Scene:
         if len(p) == 0:
             return None
         layer = self.add_mesh(ROBOT_MOVING, robot, color=COLORS["robot_moving"],
-                              transform=_translation(p[0]))
+                              transform=_translation(p[0]),
+                              note="along the path (play it under Open Controls > Animations)")
         step = np.linalg.norm(np.diff(p, axis=0), axis=1)
         arc = np.concatenate([[0.0], np.cumsum(step)])
         if seconds is None:
@@ -559,6 +601,28 @@ class Scene:
                                         _boxes(component, "certificate component"),
                                         color=COLORS["component"]))
         return [layer for layer in added if layer is not None]
+
+    def see_through(self, points) -> list[Layer]:
+        """Draw translucent, outlined by its creases, every obstacle whose bounding box
+        holds one of ``points`` ``(n, 3)`` (the path, the robot's start and goal, a
+        certificate's walls) strictly inside: an enclosing obstacle would hide them. The
+        creases (edges where faces meet at more than :data:`CREASE_DEGREES`) are a layer
+        ``<obstacle>.edges`` beside it. Returns the layers changed or added."""
+        p = _points(points, "see-through points")
+        changed = []
+        for path, layer in list(self.layers.items()):
+            bounds = layer.world_bounds()
+            if (not path.startswith(OBSTACLES + "/") or layer.kind != "mesh"
+                    or bounds is None or len(p) == 0 or not _any_inside(p, bounds)):
+                continue
+            note = (f"{path.rsplit('/', 1)[-1]} translucent with its edges drawn: it "
+                    f"encloses the path or the robot")
+            self.layers[path] = dataclasses.replace(layer, opacity=ENCLOSING_OPACITY, note=note)
+            edges = self.add_segments(f"{path}.edges", _creases(layer), color=layer.color,
+                                      note=note)
+            self.layers[f"{path}.edges"] = dataclasses.replace(edges, transform=layer.transform)
+            changed += [self.layers[path], self.layers[f"{path}.edges"]]
+        return changed
 
     # ---- framing -----------------------------------------------------------------------
 
