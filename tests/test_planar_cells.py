@@ -98,10 +98,11 @@ def test_cube_plus_octahedron_has_the_closed_form_volume():
 
 
 def test_exact_edges_next_to_the_sampled_band_fall_back_to_sampling():
-    # the comb's edges meet the ball's small facets: cells with more planes than a cut
-    # takes are sampled, and an exact edge next to that band is not joined to it (the
-    # band chamfers it), so the whole sum is sampled: closed and within the bound
-    a, b = shapes.comb(), shapes.icosphere(2, 0.3)
+    # the fine torus's facets meet the ball's near its vertices: a cell with more planes
+    # than a cut takes, even split below the lattice, is sampled, and an exact edge next
+    # to that band is not joined to it (the band chamfers it), so the whole sum is
+    # sampled: closed and within the bound
+    a, b = shapes.torus(10.0, 3.0, 64, 32), shapes.icosphere(2, 0.9)
     r = exact_sum(a, b)
     assert r.stats["planar_cells"] == 0 and r.stats["planes_fallback_edges"] > 0
     truth = manifold_sum(a, b)

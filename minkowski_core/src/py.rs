@@ -200,6 +200,7 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("triangles_extracted", r.triangles_extracted)?;
     d.set_item("planar_cells", s.planar_cells)?;
     d.set_item("planar_pieces", s.planar_pieces)?;
+    d.set_item("planar_deviation", s.planar_deviation)?;
     d.set_item("planes_fallback_edges", r.planes_fallback_edges)?;
     Ok(d)
 }

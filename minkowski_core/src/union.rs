@@ -77,15 +77,16 @@ pub fn grid_error_bound(h: f64) -> f64 {
 }
 
 /// The bound that holds for `surface` extracted at cell size `h` (infinite while complex
-/// cells remain).
+/// cells remain): the grid's, or the plane-resolved cells' deviation where that is larger.
 pub fn surface_error_bound(surface: &Surface, h: f64) -> f64 {
-    if surface.complex_cells > 0 {
+    let grid = if surface.complex_cells > 0 {
         f64::INFINITY
     } else if surface.unresolved_cells > 0 {
         2.0 * grid_error_bound(h)
     } else {
         grid_error_bound(h)
-    }
+    };
+    grid.max(surface.planar_deviation)
 }
 
 /// Approximate the boundary of the union of `set` at resolution `params.eps`: the grid has

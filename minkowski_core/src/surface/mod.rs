@@ -17,6 +17,7 @@
 //! Entry point: [`extract`].
 
 pub mod planar;
+mod resolve;
 mod simplify;
 pub mod stitch;
 #[cfg(test)]
@@ -74,6 +75,9 @@ pub struct Surface {
     pub planar_cells: usize,
     /// Exact polygons those cells gave.
     pub planar_pieces: usize,
+    /// How far the true boundary may lie from those polygons: 0 where they are exact, the
+    /// gap of nearly coincident facet planes taken as one where there were such.
+    pub planar_deviation: f64,
     /// Edges left open (or used twice), or vertices pinched, where those polygons met the
     /// band: 0 for a closed manifold surface (the caller samples there instead when not).
     pub open_edges: usize,
@@ -247,6 +251,7 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
     let mut s = sample_band(oct, src, &planar);
     s.planar_cells = planar.cells;
     s.planar_pieces = planar.polys.len();
+    s.planar_deviation = planar.deviation;
     if !planar.polys.is_empty() {
         stitch::join(&mut s, &planar.polys, STITCH_TOL * oct.h, (oct.origin, oct.h));
         s.slivers_dropped = stitch::drop_slivers(&mut s, 2.0 * oct.h, 1e-4 * oct.h.powi(3));
@@ -289,60 +294,37 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
         l.label == Label::Mixed && (l.level > 0 || !sampled.iter().any(|b| b.overlaps(&oct.cell_box(l))))
     };
     let cells: Vec<usize> = (0..oct.leaves.len()).filter(|&i| tried(i)).collect();
-    let per_cell: Vec<CellPolygons> = cells
+    let per_cell: Vec<(usize, Option<resolve::CellSurface>)> = cells
         .par_iter()
         .map(|&li| {
             let leaf = &oct.leaves[li];
-            let (recs, cell) = (oct.records(leaf), oct.cell_box(leaf));
-            let Some((cut, pieces)) = src.plane_cut(recs).and_then(|cut| Some((cut, cut.pieces(&cell)?))) else {
-                // a finest cell not resolvable is sampled; above, the stitch check sees the hole
-                return (li, None, false);
-            };
-            // one point query per region of the cut (pieces share them)
-            let mut region_inside: [Option<bool>; 1 << planar::MAX_PLANES] = [None; 1 << planar::MAX_PLANES];
-            let mut inside = |p: Vec3| *region_inside[cut.region(p)].get_or_insert_with(|| src.cell_contains(recs, p));
-            let mut planes_used = 0u32; // a bit per plane with a polygon
-            let polys = pieces
-                .into_iter()
-                .filter_map(|p| {
-                    let (front, behind) = (inside(p.sides[0]), inside(p.sides[1]));
-                    let polygon = match (front, behind) {
-                        (false, true) => p.polygon,
-                        (true, false) => p.polygon.into_iter().rev().collect(),
-                        _ => return None, // the same on both sides: no boundary there
-                    };
-                    planes_used |= 1 << p.plane;
-                    Some(polygon)
-                })
-                .collect();
-            (li, Some(polys), planes_used.count_ones() >= 2)
+            // a finest cell is split below the lattice if need be; above, a cell the octree
+            // kept as resolvable that is not after all leaves a hole the stitch check sees
+            let sub_levels = if leaf.level == 0 { resolve::SUB_LEVELS } else { 0 };
+            (li, resolve::resolve_cell(src, &oct.cell_box(leaf), oct.records(leaf), sub_levels))
         })
         .collect();
     let mut out = PlanarPolygons { resolved: vec![false; oct.leaves.len()], ..Default::default() };
-    for (li, p, creased) in per_cell {
+    for (li, cell) in per_cell {
         let l = &oct.leaves[li];
-        if p.is_none() && l.level == 0 {
+        if cell.is_none() && l.level == 0 {
             continue; // sampled
         }
         out.resolved[li] = true;
         out.cells += 1;
-        let p = p.unwrap_or_default();
-        if !p.is_empty() {
-            let l = &oct.leaves[li];
+        let cell = cell.unwrap_or_default();
+        out.deviation = out.deviation.max(cell.deviation);
+        if !cell.polys.is_empty() {
             let k = (l.level, key(l.ijk[0], l.ijk[1], l.ijk[2]));
             out.with_surface.insert(k);
-            if creased {
+            if cell.creased {
                 out.creased.insert(k);
             }
-            out.polys.extend(p);
+            out.polys.extend(cell.polys);
         }
     }
     out
 }
-
-/// One cell's exact polygons (`None`: not resolvable by planes) and whether they lie on
-/// two planes or more, by leaf index.
-type CellPolygons = (usize, Option<Vec<Vec<Vec3>>>, bool);
 
 /// What the plane-resolved cells gave.
 #[derive(Default)]
@@ -357,6 +339,8 @@ struct PlanarPolygons {
     cells: usize,
     /// Per leaf, whether it was resolved by planes (empty: none was).
     resolved: Vec<bool>,
+    /// How far the boundary may lie from their polygons (0: exact).
+    deviation: f64,
 }
 
 /// Whether the finest cell at `(x, y, z)` lies in a plane-resolved cell with a surface.

@@ -17,11 +17,21 @@
 use crate::math::{Aabb, Vec3};
 
 /// Most planes a resolved cell may have (a cell where more meet is split).
-pub const MAX_PLANES: usize = 8;
+pub const MAX_PLANES: usize = 16;
 
 /// Pieces thinner than this fraction of the cell (from their centre to any other plane or
 /// a cell face) are not resolved.
 const THIN: f64 = 1e-6;
+
+/// Planes closer to parallel than this (`1 − |n_i · n_j|`) and nearer each other than
+/// [`MERGE`] of the cell everywhere in it are taken as one (the first): the boundary on
+/// them then lies within that distance of the pieces ([`Piece::deviation`]). Tessellated
+/// curved operands make such pairs (facets at angles of 1e-5 crossing in a cell), whose
+/// pieces between them are far too thin to tell their sides apart.
+const NEAR_PARALLEL: f64 = 1e-8;
+
+/// See [`NEAR_PARALLEL`].
+const MERGE: f64 = 1e-4;
 
 /// The distinct planes `(n, w)` (`n · x = w`, `n` unit) of the boundary candidates in one cell.
 #[derive(Clone, Copy, Debug)]
@@ -44,6 +54,13 @@ pub struct Piece {
     pub plane: usize,
     /// A point just in front of the piece (along `normal`) and one just behind it.
     pub sides: [Vec3; 2],
+    /// How far the planes taken as this piece's plane ([`MERGE`]) lie from it in the
+    /// cell: 0 when none (the piece is exact).
+    pub deviation: f64,
+    /// With planes taken as its own: a point between them, off both, which must be on the
+    /// side the piece's sides are when they agree (else a sheet thinner than the
+    /// deviation lies there and the cell is not resolved).
+    pub slab: Option<Vec3>,
 }
 
 impl Cut {
@@ -80,23 +97,59 @@ impl Cut {
     pub fn pieces(&self, cell: &Aabb) -> Option<Vec<Piece>> {
         let size = cell.extent().max_element();
         let planes = &self.planes[..self.n];
+        let merged = Merged::of(planes, cell, MERGE * size);
         let mut out = Vec::new();
-        for (i, &(n, w)) in planes.iter().enumerate() {
+        for (i, &(n, w)) in planes.iter().enumerate().filter(|&(i, _)| merged.rep[i] == i) {
             let section = plane_section(cell, n, w);
             if section.len() < 3 {
                 continue;
             }
-            // the section split by the line of every other plane in it
+            // the section split by the line of every other (kept) plane in it
             let mut parts = vec![section];
-            for (_, &(m, v)) in planes.iter().enumerate().filter(|&(j, _)| j != i) {
+            for (_, &(m, v)) in planes.iter().enumerate().filter(|&(j, _)| j != i && merged.rep[j] == j) {
                 parts = parts.iter().flat_map(|poly| [clip(poly, m, v), clip(poly, -m, -v)]).filter(|p| area(p) > THIN * THIN * size * size).collect();
             }
             for poly in parts {
-                out.push(piece(cell, &poly, (i, n), planes, size)?);
+                out.push(piece(cell, &poly, (i, n), planes, &merged, size)?);
             }
         }
         Some(out)
     }
+}
+
+/// Which planes of a cut are taken as one ([`MERGE`]): per plane, the plane it is taken as
+/// (itself for a kept one), and per kept plane how far those lie from it in the cell.
+struct Merged {
+    rep: [usize; MAX_PLANES],
+    deviation: [f64; MAX_PLANES],
+}
+
+impl Merged {
+    fn of(planes: &[(Vec3, f64)], cell: &Aabb, tol: f64) -> Merged {
+        let mut m = Merged { rep: std::array::from_fn(|i| i), deviation: [0.0; MAX_PLANES] };
+        for j in 0..planes.len() {
+            for i in (0..j).filter(|&i| m.rep[i] == i) {
+                if let Some(gap) = gap_in_cell(planes[i], planes[j], cell).filter(|&g| g <= tol) {
+                    m.rep[j] = i;
+                    m.deviation[i] = m.deviation[i].max(gap);
+                    break;
+                }
+            }
+        }
+        m
+    }
+}
+
+/// The largest distance between two nearly parallel planes over the cell (at its corners:
+/// the difference of two affine functions), `None` when they are not nearly parallel.
+fn gap_in_cell((n, w): (Vec3, f64), (m, v): (Vec3, f64), cell: &Aabb) -> Option<f64> {
+    let c = n.dot(m);
+    if 1.0 - c.abs() >= NEAR_PARALLEL {
+        return None;
+    }
+    let s = c.signum();
+    let corners = (0..8).map(|k| Vec3::new([cell.min.x, cell.max.x][k & 1], [cell.min.y, cell.max.y][(k >> 1) & 1], [cell.min.z, cell.max.z][(k >> 2) & 1]));
+    Some(corners.map(|x| ((n.dot(x) - w) - s * (m.dot(x) - v)).abs()).fold(0.0, f64::max))
 }
 
 impl Default for Cut {
@@ -107,14 +160,14 @@ impl Default for Cut {
 
 /// A piece for the polygon `poly` on the plane with normal `n`, with its side points;
 /// `None` when it is too thin for them.
-fn piece(cell: &Aabb, poly: &[Vec3], (plane, n): (usize, Vec3), planes: &[(Vec3, f64)], size: f64) -> Option<Piece> {
+fn piece(cell: &Aabb, poly: &[Vec3], (plane, n): (usize, Vec3), planes: &[(Vec3, f64)], merged: &Merged, size: f64) -> Option<Piece> {
     let c = poly.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / poly.len() as f64;
-    // room around the centre: to every other plane and every cell face
+    // room around the centre: to every plane not taken as this one, and every cell face
     // (a side point moved by d along n changes its distance to a plane by at most d, so
     // both stay in the regions next to the piece; parallel planes count with their gap)
     let mut room = f64::INFINITY;
     for (j, &(m, v)) in planes.iter().enumerate() {
-        if j != plane {
+        if merged.rep[j] != plane {
             room = room.min((m.dot(c) - v).abs());
         }
     }
@@ -123,11 +176,32 @@ fn piece(cell: &Aabb, poly: &[Vec3], (plane, n): (usize, Vec3), planes: &[(Vec3,
     }
     // a polygon whose corners all hug its centre is a sliver
     let reach = poly.iter().map(|&p| (p - c).length()).fold(0.0f64, f64::max);
-    if room < THIN * size || reach < THIN * size {
+    let deviation = merged.deviation[plane];
+    let d = 0.5 * room;
+    // the side points must clear the planes taken as this one, with room to spare
+    if room < THIN * size || reach < THIN * size || d <= 4.0 * deviation {
         return None;
     }
-    let d = 0.5 * room;
-    Some(Piece { polygon: poly.to_vec(), normal: n, plane, sides: [c + n * d, c - n * d] })
+    let slab = (deviation > 0.0).then(|| slab_point(poly, c, (plane, n), planes, merged));
+    Some(Piece { polygon: poly.to_vec(), normal: n, plane, sides: [c + n * d, c - n * d], deviation, slab })
+}
+
+/// A point off the piece's plane between it and a plane taken as it, where they part most
+/// over the polygon (near the corner of widest gap, a little inside it towards `c`).
+fn slab_point(poly: &[Vec3], c: Vec3, (plane, n): (usize, Vec3), planes: &[(Vec3, f64)], merged: &Merged) -> Vec3 {
+    let along = |x: Vec3, (m, v): (Vec3, f64)| (v - m.dot(x)) / m.dot(n); // to plane (m, v) from x along n
+    let others: Vec<(Vec3, f64)> = planes.iter().enumerate().filter(|&(j, _)| j != plane && merged.rep[j] == plane).map(|(_, &p)| p).collect();
+    let mut best = (c, others[0], 0.0f64);
+    for &x in poly {
+        for &o in &others {
+            let t = along(x, o);
+            if t.abs() > best.2.abs() {
+                best = (x, o, t);
+            }
+        }
+    }
+    let q = best.0 + (c - best.0) * 0.01;
+    q + n * (0.5 * along(q, best.1))
 }
 
 /// The area of a planar polygon (a fan from its first corner).
@@ -259,16 +333,7 @@ mod tests {
         let mut cut = Cut::new();
         cut.add(Vec3::Z, 1e-9, 1e-15);
         assert!(cut.pieces(&cell).is_none(), "a plane hugging a face");
-        let mut cut = Cut::new();
-        cut.add(Vec3::Z, 0.5, 1e-15);
-        cut.add(Vec3::Z, 0.5 + 1e-9, 1e-15);
-        assert!(cut.pieces(&cell).is_none(), "nearly coincident planes");
-        let mut cut = Cut::new();
-        let grazing = Vec3::new(0.0, -1e-7, 1.0).normalize();
-        cut.add(Vec3::Z, 0.5, 1e-15);
-        cut.add(grazing, grazing.dot(Vec3::new(0.0, 0.5, 0.5)), 1e-15);
-        assert!(cut.pieces(&cell).is_none(), "planes crossing at a grazing angle");
-        // parallel planes well apart (two faces of a slab) are two pieces
+        // parallel planes well apart (two faces of a slab) are two exact pieces
         let mut cut = Cut::new();
         cut.add(Vec3::Z, 0.2, 1e-15);
         cut.add(Vec3::new(0.0, 1e-4, 1.0).normalize(), 0.5, 1e-15);
@@ -276,6 +341,36 @@ mod tests {
         assert_eq!(pieces.len(), 2);
         for p in &pieces {
             assert_eq!(cut.region(p.sides[0]) ^ cut.region(p.sides[1]), 1 << p.plane);
+            assert!(p.deviation == 0.0 && p.slab.is_none());
         }
+    }
+
+    /// Planes nearly coincident in the cell (a gap of 1e-9, or crossing at an angle of
+    /// 1e-7) are taken as one: one piece, its deviation the largest gap in the cell, its
+    /// side points clear of both planes and its slab point between them.
+    #[test]
+    fn nearly_coincident_planes_are_taken_as_one_within_their_gap() {
+        let cell = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let grazing = Vec3::new(0.0, -1e-7, 1.0).normalize();
+        for (second, gap) in [((Vec3::Z, 0.5 + 1e-9), 1e-9), ((grazing, grazing.dot(Vec3::new(0.0, 0.5, 0.5))), 0.5e-7)] {
+            let mut cut = Cut::new();
+            cut.add(Vec3::Z, 0.5, 1e-15);
+            cut.add(second.0, second.1, 1e-15);
+            assert_eq!(cut.n, 2);
+            let pieces = cut.pieces(&cell).expect("resolved as one plane");
+            assert_eq!(pieces.len(), 1);
+            let p = &pieces[0];
+            assert!((p.deviation - gap).abs() < 1e-3 * gap, "{} vs {gap}", p.deviation);
+            let side = |q: Vec3| [Vec3::Z.dot(q) > 0.5, second.0.dot(q) > second.1];
+            assert_eq!(side(p.sides[0]), [true, true]);
+            assert_eq!(side(p.sides[1]), [false, false]);
+            let slab = side(p.slab.expect("a point between the planes"));
+            assert!(slab[0] != slab[1], "the slab point lies between them");
+        }
+        // not taken as one when they part by more than the tolerance in the cell
+        let mut cut = Cut::new();
+        cut.add(Vec3::Z, 0.5, 1e-15);
+        cut.add(Vec3::Z, 0.5 + 1e-3, 1e-15);
+        assert_eq!(cut.pieces(&cell).expect("a thin slab").len(), 2);
     }
 }

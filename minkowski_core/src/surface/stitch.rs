@@ -44,6 +44,46 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], tol: f64, lattice: (Vec3, f64)
     }
     split_t_junctions(s, tol);
     fill_face_gaps(s, tol, lattice);
+    cancel_opposite_twins(&mut s.faces);
+}
+
+/// Remove every pair of a triangle and its reverse (the same corners, facing the other
+/// way): a sheet of no thickness, left where two cells' polygons or fills overlap within
+/// the weld tolerance. Each edge of such a pair is used once each way by the pair itself,
+/// so without it the rest of the surface keeps its edge pairing. Returns how many went.
+pub fn cancel_opposite_twins(faces: &mut Vec<[u32; 3]>) -> usize {
+    // key: the corners rotated to start at the smallest, and whether that order is reversed
+    let canonical = |f: &[u32; 3]| {
+        let r = (0..3).min_by_key(|&i| f[i]).unwrap_or(0);
+        let (a, b, c) = (f[r], f[(r + 1) % 3], f[(r + 2) % 3]);
+        if b < c {
+            ((a, b, c), false)
+        } else {
+            ((a, c, b), true)
+        }
+    };
+    let mut by_key: HashMap<(u32, u32, u32), [Vec<usize>; 2]> = HashMap::new();
+    for (i, f) in faces.iter().enumerate() {
+        let (k, rev) = canonical(f);
+        by_key.entry(k).or_default()[rev as usize].push(i);
+    }
+    let mut gone = vec![false; faces.len()];
+    let mut pairs = 0;
+    for [fwd, back] in by_key.values() {
+        for (&i, &j) in fwd.iter().zip(back) {
+            gone[i] = true;
+            gone[j] = true;
+            pairs += 1;
+        }
+    }
+    if pairs > 0 {
+        let mut k = 0;
+        faces.retain(|_| {
+            k += 1;
+            !gone[k - 1]
+        });
+    }
+    pairs
 }
 
 /// Remove closed components that are slivers: at most `size` across and enclosing less

@@ -1,0 +1,112 @@
+//! The exact surface of one MIXED cell from the planes of its candidates ([`super::planar`]), or
+//! of its sub-cells where the cell itself has too many planes or too thin a piece.
+//!
+//! A cell resolved by planes gives the plane pieces whose two sides differ in membership
+//! (one point query per region of the cut, shared by the pieces). A finest cell that is not
+//! resolvable is split below the lattice a few times ([`SUB_LEVELS`]): its sub-cells take
+//! their own records from the source (as any child cell does) and are resolved the same
+//! way, so a vertex where many facets meet, or two facets crossing at a grazing angle, is
+//! still exact. Their polygons meet each other exactly inside the cell, and the cell's
+//! neighbours on its faces as any resolved cell's do.
+//!
+//! Entry point: [`resolve_cell`].
+
+use super::planar::{Cut, Piece};
+use crate::math::{Aabb, Vec3};
+use crate::octree::{CellSource, Label};
+
+/// How many times a finest cell is split below the lattice when it is not resolvable.
+pub const SUB_LEVELS: u32 = 3;
+
+/// The exact surface in one cell.
+#[derive(Default)]
+pub struct CellSurface {
+    /// Polygons, outward (counter-clockwise seen from outside).
+    pub polys: Vec<Vec<Vec3>>,
+    /// Whether they lie on two planes or more (an edge or a corner of the surface).
+    pub creased: bool,
+    /// How far the boundary may lie from them ([`Piece::deviation`]).
+    pub deviation: f64,
+}
+
+/// The surface in `cell` (records `recs`), splitting it up to `sub_levels` times where it
+/// is not resolvable by planes; `None` when some part of it is not.
+pub fn resolve_cell<S: CellSource>(src: &S, cell: &Aabb, recs: &[u32], sub_levels: u32) -> Option<CellSurface> {
+    if let Some(surface) = src.plane_cut(recs).and_then(|cut| Some((cut, cut.pieces(cell)?))).and_then(|(cut, pieces)| cut_surface(src, recs, &cut, pieces)) {
+        return Some(surface);
+    }
+    if sub_levels == 0 {
+        return None;
+    }
+    let mut out = CellSurface::default();
+    let mut planes_seen: Vec<Vec3> = Vec::new();
+    let mut own = Vec::new();
+    for child in octants(cell) {
+        own.clear();
+        if src.classify(&child, recs, true, &mut own) != Label::Mixed {
+            continue;
+        }
+        let part = resolve_cell(src, &child, &own, sub_levels - 1)?;
+        out.creased |= part.creased;
+        out.deviation = out.deviation.max(part.deviation);
+        for poly in &part.polys {
+            let n = (poly[1] - poly[0]).cross(poly[2] - poly[0]).normalize_or_zero();
+            if !planes_seen.iter().any(|m| m.dot(n) > 1.0 - 1e-9) {
+                planes_seen.push(n);
+            }
+        }
+        out.polys.extend(part.polys);
+    }
+    out.creased |= planes_seen.len() >= 2;
+    Some(out)
+}
+
+/// The pieces of `cut` whose sides differ, oriented outward; `None` when a sheet thinner
+/// than the planes taken as one lies between them ([`Piece::slab`]).
+fn cut_surface<S: CellSource>(src: &S, recs: &[u32], cut: &Cut, pieces: Vec<Piece>) -> Option<CellSurface> {
+    // one point query per region of the cut (pieces share them)
+    let mut region_inside: Vec<(usize, bool)> = Vec::new();
+    let mut inside = |p: Vec3| {
+        let region = cut.region(p);
+        if let Some(&(_, known)) = region_inside.iter().find(|r| r.0 == region) {
+            return known;
+        }
+        let known = src.cell_contains(recs, p);
+        region_inside.push((region, known));
+        known
+    };
+    let mut planes_used = 0u32; // a bit per plane with a polygon
+    let mut out = CellSurface::default();
+    for p in pieces {
+        let (front, behind) = (inside(p.sides[0]), inside(p.sides[1]));
+        let polygon = match (front, behind) {
+            (false, true) => p.polygon,
+            (true, false) => p.polygon.into_iter().rev().collect(),
+            _ => {
+                // the same on both sides: no boundary there, unless a sheet thinner than
+                // the planes taken as this one lies between them
+                if p.slab.is_some_and(|q| inside(q) != front) {
+                    return None;
+                }
+                continue;
+            }
+        };
+        planes_used |= 1 << p.plane;
+        out.deviation = out.deviation.max(p.deviation);
+        out.polys.push(polygon);
+    }
+    out.creased = planes_used.count_ones() >= 2;
+    Some(out)
+}
+
+/// The eight octants of a box.
+fn octants(cell: &Aabb) -> [Aabb; 8] {
+    let c = cell.center();
+    std::array::from_fn(|k| {
+        let pick = |bit: usize, lo: f64, mid: f64, hi: f64| if k & bit == 0 { (lo, mid) } else { (mid, hi) };
+        let (x0, x1) = pick(1, cell.min.x, c.x, cell.max.x);
+        let (y0, y1) = pick(2, cell.min.y, c.y, cell.max.y);
+        let (z0, z1) = pick(4, cell.min.z, c.z, cell.max.z);
+        Aabb::new(Vec3::new(x0, y0, z0), Vec3::new(x1, y1, z1))
+    })
+}
