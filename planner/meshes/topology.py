@@ -78,9 +78,9 @@ def merge_vertices(vertices: np.ndarray, faces: np.ndarray, distance: float):
     vertex of each cluster. Returns ``(vertices, faces, merged_count)``.
 
     Kept by hand, measured (``tests/benchmarks/bench_libraries.py``): trimesh's
-    ``merge_vertices`` is as fast (1.1x this on the IndustReal large gear's 25k vertices)
-    but rounds coordinates to a fixed absolute grid (``tol.merge = 1e-8``), so two
-    vertices 2e-12 apart on either side of a grid line stay apart, and its tolerance does
+    ``merge_vertices`` is as fast (0.9x to 1.3x this on the IndustReal large gear's 25k
+    vertices) but rounds coordinates to a fixed absolute grid (``tol.merge = 1e-8``), so
+    two vertices 2e-12 apart on either side of a grid line stay apart, and its tolerance does
     not follow the part's size; ``trimesh.grouping.clusters`` is these same cKDTree pairs
     and components, returning groups that still need this renumbering.
     """
@@ -159,8 +159,8 @@ def closed_candidate(faces, degenerate, opposite):
 
 def group_rows(rows: np.ndarray):
     """Group equal rows of an integer array (``trimesh.grouping.unique_rows``, which packs
-    a row into one integer where it fits: 2.1x faster than the lexsort this replaced, on
-    the 151k edges of the IndustReal large gear; ``tests/benchmarks/bench_libraries.py``).
+    a row into one integer where it fits: 2x to 3x faster than the lexsort this replaced,
+    on the 151k edges of the IndustReal large gear; ``tests/benchmarks/bench_libraries.py``).
 
     Returns ``(inverse, counts, first)``: each row's group id (groups in an arbitrary but
     deterministic order), the size of each group, and the first row index of each group.
@@ -202,7 +202,7 @@ def boundary_loops(faces: np.ndarray) -> tuple[list[list[int]], int]:
 
     Kept by hand, measured (``tests/benchmarks/bench_libraries.py``): trimesh finds
     boundary cycles only inside ``repair.fill_holes``, with networkx's ``cycle_basis``
-    (networkx is no dependency here): 1.25x this on the IndustReal large gear with 1,000
+    (networkx is no dependency here): 1.2x this on the IndustReal large gear with 1,000
     faces removed, and its cycles are undirected, with pinches split or joined
     arbitrarily (976 cycles where this finds 533 loops and sets 1,342 edges apart).
     """
@@ -312,7 +312,7 @@ def orient_consistently(faces: np.ndarray):
     first face as it is. Returns ``(faces, flipped_mask, orientable)``.
 
     Kept by hand, measured (``tests/benchmarks/bench_libraries.py``):
-    ``trimesh.repair.fix_winding`` takes 31x this on the IndustReal large gear (50k
+    ``trimesh.repair.fix_winding`` takes 30x to 50x this on the IndustReal large gear (50k
     faces, a tenth flipped; a Python loop over networkx's BFS edges), needs networkx, and
     says nothing when a surface cannot be oriented, which this reports.
     """
