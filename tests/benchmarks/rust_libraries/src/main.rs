@@ -120,7 +120,7 @@ fn empty_leaf_near(oct: &Octree, index: &LeafIndex, p: Vec3) -> usize {
                 return id;
             }
         }
-        q = q + Vec3::splat(0.01 * (0.5 - p.x).signum());
+        q += Vec3::splat(0.01 * (0.5 - p.x).signum());
     }
 }
 
