@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import platformdirs
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
@@ -81,12 +82,14 @@ class Decomposition:
 
 
 def default_cache_dir() -> Path:
-    """Cache directory: ``$MINKPLAN_CACHE_DIR`` if set, else
-    ``~/.cache/minkplan/decompositions``."""
+    """Cache directory: ``$MINKPLAN_CACHE_DIR`` if set, else ``decompositions`` in the
+    platform's user cache folder (platformdirs: ``$XDG_CACHE_HOME/minkplan`` or
+    ``~/.cache/minkplan`` on Linux, ``~/Library/Caches/minkplan`` on macOS,
+    ``%LOCALAPPDATA%\\minkplan\\Cache`` on Windows)."""
     env = os.environ.get(CACHE_ENV)
     if env:
         return Path(env).expanduser()
-    return Path.home() / ".cache" / "minkplan" / "decompositions"
+    return platformdirs.user_cache_path("minkplan", appauthor=False) / "decompositions"
 
 
 def decompose(

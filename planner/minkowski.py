@@ -364,7 +364,7 @@ def minkowski_sum(
         threshold: CoACD concavity threshold for non-convex bodies.
         seed: CoACD seed (results are deterministic for a seed).
         cache_dir: decomposition cache; default ``$MINKPLAN_CACHE_DIR`` or
-            ``~/.cache/minkplan/decompositions``.
+            the user cache folder, see :func:`planner.decompose.default_cache_dir`.
         progress: a status line on stderr naming the stage (:mod:`planner.progress`;
             default: when stderr is a terminal).
         max_cells: octree leaf budget (default ``tol.max_cells``, else derived from the

@@ -11,9 +11,8 @@ against.  Conventions (DESIGN.md):
 Membership is decided with python-fcl (triangle–triangle tests on BVHs) plus an explicit
 containment test, because FCL's mesh–mesh ``collide`` only reports intersecting
 triangles and says "no contact" when one solid lies wholly inside the other.  The
-containment test is a signed ray-crossing count (the winding number of a closed mesh)
-along a randomly rotated vertical ray, accelerated by a 2D bin grid; see
-:func:`winding_numbers`.
+containment test is libigl's generalised winding number (solid angles; shares no code
+with the native core's ray-cast one); see :func:`winding_numbers`.
 
 Entry points: :func:`points_in_mesh`, :class:`MinkowskiOracle` (batched membership and
 exact outside distance), :func:`in_minkowski_sum`, :class:`CollisionOracle`,
@@ -27,10 +26,10 @@ import hashlib
 from collections import OrderedDict, defaultdict
 
 import fcl
+import igl
 import numpy as np
 import trimesh
 from scipy.spatial import ConvexHull
-from scipy.spatial.transform import Rotation
 
 __all__ = [
     "CollisionOracle",
@@ -53,132 +52,23 @@ __all__ = [
     "winding_numbers",
 ]
 
-# pairs of (point, candidate triangle) processed per numpy batch
-_PAIR_CHUNK = 2_000_000
-
-
 # --------------------------------------------------------------------------------------
 # point in mesh
 # --------------------------------------------------------------------------------------
 
-def _cross2(ax, ay, bx, by):
-    return ax * by - ay * bx
-
-
-class _ColumnGrid:
-    """Triangles of a mesh binned by their xy bounding box in a rotated frame."""
-
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray, rotation: np.ndarray):
-        self.rotation = rotation
-        self.rv = vertices @ rotation.T                   # vertices in the rotated frame
-        self.faces = faces
-        f = len(faces)
-        xy = self.rv[:, :2][faces]                        # (F, 3, 2)
-        lo = xy.min(axis=1)
-        hi = xy.max(axis=1)
-        del xy
-        self.origin = lo.min(axis=0)
-        span = np.maximum(hi.max(axis=0) - self.origin, 1e-300)
-        g = int(np.clip(np.sqrt(f), 1, 1024))
-        self.g = g
-        self.cell = span / g * (1 + 1e-9)
-        i0 = np.clip(((lo - self.origin) / self.cell).astype(np.int64), 0, g - 1)
-        i1 = np.clip(((hi - self.origin) / self.cell).astype(np.int64), 0, g - 1)
-        del lo, hi
-        nx = i1[:, 0] - i0[:, 0] + 1
-        ny = i1[:, 1] - i0[:, 1] + 1
-        count = nx * ny
-        tri_id = np.repeat(np.arange(f, dtype=np.int32 if f < 2**31 else np.int64), count)
-        k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
-        cell_id = (i0[tri_id, 0] + k % nx[tri_id]) * g + (i0[tri_id, 1] + k // nx[tri_id])
-        del k
-        order = np.argsort(cell_id, kind="stable")
-        self.cell_tri = tri_id[order]
-        self.cell_start = np.searchsorted(cell_id[order], np.arange(g * g + 1))
-        self.scale = float(np.max(span))
-
-    def winding(self, points: np.ndarray):
-        """Signed crossing count of the upward ray from each point; and a flag for points
-        whose ray grazes a triangle edge (ambiguous: recompute in another frame)."""
-        q = points @ self.rotation.T
-        n = len(q)
-        wind = np.zeros(n, dtype=np.int64)
-        ambiguous = np.zeros(n, dtype=bool)
-        ij = np.floor((q[:, :2] - self.origin) / self.cell).astype(np.int64)
-        ok = np.all((ij >= 0) & (ij < self.g), axis=1)
-        idx = np.flatnonzero(ok)
-        if idx.size == 0:
-            return wind, ambiguous
-        cid = ij[idx, 0] * self.g + ij[idx, 1]
-        start = self.cell_start[cid]
-        cnt = self.cell_start[cid + 1] - start
-        # process in chunks of points so the pair arrays stay bounded
-        csum = np.cumsum(cnt)
-        eps_e = 1e-13 * self.scale**2
-        lo_pt = 0
-        while lo_pt < len(idx):
-            base = csum[lo_pt - 1] if lo_pt else 0
-            hi_pt = max(int(np.searchsorted(csum, base + _PAIR_CHUNK, side="right")), lo_pt + 1)
-            sl = slice(lo_pt, hi_pt)
-            c = cnt[sl]
-            pt_local = np.repeat(np.arange(hi_pt - lo_pt), c)
-            k = np.arange(c.sum()) - np.repeat(np.cumsum(c) - c, c)
-            t = self.cell_tri[np.repeat(start[sl], c) + k]
-            p = q[idx[sl]][pt_local]
-            tri = self.rv[self.faces[t]]
-            px, py = p[:, 0], p[:, 1]
-            ax, ay = tri[:, 0, 0] - px, tri[:, 0, 1] - py
-            bx, by = tri[:, 1, 0] - px, tri[:, 1, 1] - py
-            cx, cy = tri[:, 2, 0] - px, tri[:, 2, 1] - py
-            wa = _cross2(bx, by, cx, cy)    # twice the signed area of (p, b, c)
-            wb = _cross2(cx, cy, ax, ay)
-            wc = _cross2(ax, ay, bx, by)
-            area = wa + wb + wc
-            s = np.sign(area)
-            inside = (wa * s > 0) & (wb * s > 0) & (wc * s > 0)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                z = (wa * tri[:, 0, 2] + wb * tri[:, 1, 2] + wc * tri[:, 2, 2]) / area
-            above = z > p[:, 2]
-            hit = inside & above
-            # the ray passes within rounding of an edge or vertex of a triangle above
-            graze = (np.minimum(np.minimum(np.abs(wa), np.abs(wb)), np.abs(wc)) <= eps_e) & (
-                (wa * s >= -eps_e) & (wb * s >= -eps_e) & (wc * s >= -eps_e)) & above
-            contrib = np.where(hit, s, 0).astype(np.int64)
-            wind[idx[sl]] += np.bincount(pt_local, weights=contrib,
-                                         minlength=hi_pt - lo_pt).astype(np.int64)
-            amb = np.bincount(pt_local, weights=graze, minlength=hi_pt - lo_pt) > 0
-            ambiguous[idx[sl]] |= amb
-            lo_pt = hi_pt
-        return wind, ambiguous
-
-
 class _PointInMesh:
     """Reusable point-in-closed-mesh classifier (see :func:`winding_numbers`)."""
 
-    def __init__(self, mesh: trimesh.Trimesh, seed: int = 12345):
-        self.vertices = np.array(mesh.vertices, dtype=np.float64)
-        faces = np.asarray(mesh.faces)
-        self.faces = faces.astype(np.int32 if len(self.vertices) < 2**31 else np.int64)
-        self._rng = np.random.default_rng(seed)
-        self._grids = [self._new_grid()]
-
-    def _new_grid(self):
-        rot = Rotation.random(random_state=self._rng).as_matrix()
-        return _ColumnGrid(self.vertices, self.faces, rot)
+    def __init__(self, mesh: trimesh.Trimesh):
+        self.vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
+        self.faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
 
     def winding(self, points: np.ndarray) -> np.ndarray:
-        points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        wind, amb = self._grids[0].winding(points)
-        attempt = 1
-        while amb.any() and attempt < 8:
-            if attempt >= len(self._grids):
-                self._grids.append(self._new_grid())
-            w2, a2 = self._grids[attempt].winding(points[amb])
-            redo = np.flatnonzero(amb)
-            wind[redo] = w2
-            amb[redo] = a2
-            attempt += 1
-        return wind
+        points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        if len(points) == 0:
+            return np.zeros(0, dtype=np.int64)
+        solid_angles = igl.winding_number(self.vertices, self.faces, points)
+        return np.rint(solid_angles).astype(np.int64)
 
     def contains(self, points: np.ndarray) -> np.ndarray:
         return self.winding(points) != 0
@@ -220,10 +110,10 @@ def _pim(mesh: trimesh.Trimesh) -> _PointInMesh:
 def winding_numbers(mesh: trimesh.Trimesh, points) -> np.ndarray:
     """Winding number of a closed triangle mesh around each of ``(n, 3)`` points.
 
-    Counted as signed crossings of an upward ray in a randomly rotated frame (+1 for a
-    triangle facing the ray's direction, −1 against), which equals the winding number for
-    a closed mesh.  A ray that grazes an edge is re-cast in another random frame.  Points
-    on the surface get either answer.  ``(n,)`` int64.
+    libigl's generalised winding number (the direct sum of the triangles' signed solid
+    angles / 4π, exact up to rounding; not its approximate ``fast_winding_number``),
+    rounded to the nearest integer, which is the winding number for a closed mesh.
+    Points on the surface get either answer.  ``(n,)`` int64.
     """
     return _pim(mesh).winding(points)
 

@@ -5,9 +5,12 @@ from __future__ import annotations
 import logging
 import os
 import shutil
+import sys
+from pathlib import Path
 
 import manifold3d
 import numpy as np
+import platformdirs
 import pytest
 import trimesh
 from scipy.spatial import ConvexHull
@@ -179,7 +182,20 @@ def test_env_var_sets_cache_dir(monkeypatch, tmp_path):
     assert len(entry_of(tmp_path / "from-env")) == 1
     assert decompose(box).cache_hit
     monkeypatch.delenv(CACHE_ENV)
-    assert default_cache_dir().parts[-3:] == (".cache", "minkplan", "decompositions")
+    assert default_cache_dir().parts[-2:] == ("minkplan", "decompositions")
+
+
+def test_default_cache_dir_is_the_platforms_user_cache(monkeypatch, tmp_path):
+    """Without the variable, the cache lives where the platform keeps user caches
+    (platformdirs): on Linux under ``$XDG_CACHE_HOME``, else ``~/.cache``."""
+    monkeypatch.delenv(CACHE_ENV, raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    expected = platformdirs.user_cache_path("minkplan", appauthor=False) / "decompositions"
+    assert default_cache_dir() == expected
+    if sys.platform.startswith("linux"):
+        assert expected == tmp_path / "xdg" / "minkplan" / "decompositions"
+        monkeypatch.delenv("XDG_CACHE_HOME")
+        assert default_cache_dir() == Path.home() / ".cache" / "minkplan" / "decompositions"
 
 
 def test_leftover_temp_file_of_killed_writer_is_ignored(bracket_cache, tmp_path):

@@ -27,6 +27,8 @@ from planner.meshes import (
     split_solid,
     validate_solid,
 )
+from planner.meshes.topology import boundary_loops, group_rows
+from planner.meshes.triangulation import ear_clip
 from planner.tolerances import Tolerances, scale_of, tol
 
 PEG = "geometric_peg_in_hole_2mm"
@@ -326,6 +328,121 @@ def test_obj_ngons_are_ear_clipped(tmp_path, start):
     assert solid.volume == pytest.approx(3.0)
     assert solid.area == pytest.approx(2 * 3.0 + 8.0)  # caps + perimeter 8 x height 1
     assert load_obj(path).metadata["polygon_problems"] == 0
+
+
+# ---------------------------------------------------- triangulation and bookkeeping
+
+
+def _twice_areas(xy: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    a, b, c = (xy[triangles[:, k]] for k in range(3))
+    return (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+
+
+@pytest.mark.parametrize(
+    ("outline", "area"),
+    [
+        # corners on straight sides must be kept, or the neighbour gets a T-junction
+        ([(0, 0), (1, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2), (0, 1)], 3.0),
+        # a keyhole: a square with a square hole, joined by a bridge walked both ways
+        ([(0, 0), (4, 0), (4, 4), (0, 4), (0, 0), (1, 1), (1, 3), (3, 3), (3, 1), (1, 1)],
+         12.0),
+        ([(0, 0), (5, 0), (5, 3), (4, 3), (4, 1), (3, 1), (3, 3), (2, 3), (2, 1), (1, 1),
+          (1, 3), (0, 3)], 11.0),  # a comb
+    ],
+)
+def test_ear_clip_tiles_non_convex_polygons_with_every_corner(outline, area):
+    xy = np.asarray(outline, dtype=np.float64)
+    tilted = np.column_stack([xy, 0.5 * xy[:, 0]])  # in the plane z = x / 2
+    triangles, ok = ear_clip(tilted)
+    assert ok and triangles.shape == (len(xy) - 2, 3)
+    areas = _twice_areas(xy, triangles) / 2
+    assert (areas > 0).all()  # every triangle wound like the polygon
+    assert areas.sum() == pytest.approx(area)
+
+
+def test_ear_clip_of_a_reversed_polygon_keeps_its_winding():
+    xy = np.array([(0, 0), (0, 2), (1, 2), (1, 1), (2, 1), (2, 0)], dtype=np.float64)
+    triangles, ok = ear_clip(np.column_stack([xy, np.zeros(len(xy))]))
+    assert ok and (_twice_areas(xy, triangles) < 0).all()  # clockwise, like the input
+
+
+@pytest.mark.parametrize(
+    "outline",
+    [[(0, 0), (1, 0), (2, 0), (1, 0)],  # no area
+     [(0, 0), (2, 2), (2, 0), (0, 2), (-1, 1)]],  # crosses itself
+)
+def test_ear_clip_says_when_a_polygon_cannot_be_tiled(outline):
+    points = np.column_stack([np.asarray(outline, float), np.zeros(len(outline))])
+    triangles, ok = ear_clip(points)
+    assert not ok and triangles.shape == (len(outline) - 2, 3)
+
+
+def test_group_rows_groups_equal_rows_and_finds_the_first():
+    rng = np.random.default_rng(4)
+    small = rng.integers(0, 5, size=(400, 2))
+    large = np.column_stack([rng.integers(0, 3, 400), rng.integers(0, 2, 400) * 2**40,
+                             rng.integers(0, 2, 400)])  # too large to pack in one integer
+    for rows in (small, large):
+        inverse, counts, first = group_rows(rows)
+        unique, want_first, want_inverse, want_counts = np.unique(
+            rows, axis=0, return_index=True, return_inverse=True, return_counts=True)
+        assert np.array_equal(np.sort(first), np.sort(want_first))
+        assert np.array_equal(rows[first][inverse], rows)  # each row is its group's row
+        assert np.array_equal(np.sort(counts), np.sort(want_counts))
+    assert [len(a) for a in group_rows(np.zeros((0, 3), dtype=np.int64))] == [0, 0, 0]
+
+
+def open_box(faces_removed) -> np.ndarray:
+    mesh = trimesh.creation.box([2.0, 2.0, 2.0]).subdivide()
+    keep = np.ones(len(mesh.faces), dtype=bool)
+    keep[list(faces_removed)] = False
+    return np.asarray(mesh.faces, dtype=np.int64)[keep]
+
+
+def test_boundary_loops_follow_the_faces():
+    mesh = trimesh.creation.box([2.0, 2.0, 2.0]).subdivide()
+    top = np.flatnonzero(mesh.triangles_center[:, 2] > 0.99)[:1]
+    bottom = np.flatnonzero(mesh.triangles_center[:, 2] < -0.99)
+    faces = np.asarray(mesh.faces)
+    pair = [f for f in bottom if len(set(faces[f]) & set(faces[bottom[0]])) == 2][:1]
+    faces = open_box([*top, bottom[0], *pair])  # a triangle hole and a quad hole
+    loops, tangled = boundary_loops(faces)
+    assert tangled == 0 and sorted(len(loop) for loop in loops) == [3, 4]
+    directed = {tuple(edge) for edge in faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).tolist()}
+    for loop in loops:
+        assert all((a, b) in directed for a, b in zip(loop, loop[1:] + loop[:1]))
+
+
+def test_boundary_loops_set_a_pinch_apart():
+    """Two holes that share one vertex: that vertex has four boundary edges, so no loop
+    through it is simple."""
+    mesh = trimesh.creation.box([2.0, 2.0, 2.0]).subdivide()
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    corner = faces[0, 0]
+    around = np.flatnonzero((faces == corner).any(axis=1))
+    apart = [int(around[0])]
+    for f in around[1:]:  # faces at the vertex sharing no edge with the chosen ones
+        shared = [len(set(faces[f]) & set(faces[g])) for g in apart]
+        if max(shared) == 1:
+            apart.append(int(f))
+            break
+    assert len(apart) == 2
+    loops, tangled = boundary_loops(open_box(apart))
+    assert loops == [] and tangled == 6
+
+
+def test_repair_fills_a_non_convex_hole():
+    """An L-shaped hole (8 corners, two on straight sides) cut in a box's top face: the
+    fill restores the box (trimesh's fill_holes fills only triangles and quads)."""
+    box4 = trimesh.creation.box([4.0, 4.0, 1.0]).subdivide().subdivide()
+    c = box4.triangles_center
+    hole = (c[:, 2] > 0.49) & (((c[:, 0] < 0) & (c[:, 1] < -1)) | ((c[:, 0] < -1) & (c[:, 1] < 0)))
+    holed = trimesh.Trimesh(box4.vertices, box4.faces[~hole], process=False)
+    (loop,), _ = boundary_loops(np.asarray(holed.faces))
+    assert len(loop) == 8
+    repaired, report = repair_mesh(holed, name="holed")
+    assert report["filled_holes"] == 1 and report["added_faces"] == 6
+    assert repaired.volume == pytest.approx(16.0)
 
 
 # ---------------------------------------------------------------------- mirror

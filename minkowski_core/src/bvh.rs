@@ -1,5 +1,13 @@
 //! A bounding-volume hierarchy over primitive AABBs: which primitives can touch a point,
 //! a box or a segment.
+//!
+//! Kept by hand, measured (`tests/benchmarks/rust_libraries`, 200k random boxes and 200k
+//! queries of each kind): parry3d-f64's `partitioning::Bvh` builds 1.8x to 2.6x slower;
+//! for queries it returns each primitive whose own box is hit, where this returns every
+//! primitive of a hit leaf (up to four: 10x the exact hits there, each then tested exactly
+//! by the caller), in 0.9x to 1.5x this time (1.4x faster than this filtered by each
+//! box); and it has no segment or within-distance query (custom traversals). Whether its
+//! tighter candidate lists pay for its slower build end to end is not measured yet.
 
 use crate::math::{Aabb, Vec3};
 

@@ -35,6 +35,7 @@ import trimesh
 
 from planner.errors import InvalidMeshError
 from planner.meshes import SOLID_REASON, load_mesh, not_solid_reason, validate_solid
+from planner.meshes.topology import boundary_loops, group_rows
 from planner.tolerances import scale_of, tol
 
 __all__ = ["APP_FROM_ZUP", "read_app_mesh", "robot_reference_point",
@@ -97,7 +98,7 @@ def single_sided(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, int]:
     merged = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
     merged.merge_vertices(merge_tex=True, merge_norm=True)
     faces = np.asarray(merged.faces, dtype=np.int64)
-    _, first = np.unique(np.sort(faces, axis=1), axis=0, return_index=True)
+    first = group_rows(np.sort(faces, axis=1))[2]
     keep = np.sort(first)
     return trimesh.Trimesh(merged.vertices, faces[keep], process=False), len(faces) - len(keep)
 
@@ -119,38 +120,6 @@ def _thickness(points: np.ndarray) -> float:
     """Smallest extent of a point set over all directions (0 for coplanar points)."""
     centred = points - points.mean(axis=0)
     return float(np.linalg.svd(centred, compute_uv=False)[-1]) if len(points) > 3 else 0.0
-
-
-def _boundary_loops(faces: np.ndarray) -> list[list[int]] | None:
-    """Cycles of boundary edges (edges of one face), or None if they are not simple
-    cycles (a vertex on more than two boundary edges)."""
-    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    unique, counts = np.unique(edges, axis=0, return_counts=True)
-    boundary = unique[counts == 1]
-    neighbours: dict[int, list[int]] = {}
-    for a, b in boundary.tolist():
-        neighbours.setdefault(a, []).append(b)
-        neighbours.setdefault(b, []).append(a)
-    if any(len(n) != 2 for n in neighbours.values()):
-        return None
-    loops, seen = [], set()
-    for start in sorted(neighbours):
-        if start in seen:
-            continue
-        loop, previous, current = [start], None, start
-        seen.add(start)
-        while True:
-            a, b = neighbours[current]
-            following = b if a == previous else a
-            if following == start:
-                break
-            if following in seen:
-                return None
-            loop.append(following)
-            seen.add(following)
-            previous, current = current, following
-        loops.append(loop)
-    return loops
 
 
 def _loop_plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -199,8 +168,8 @@ def _bridge_openings(piece: trimesh.Trimesh) -> tuple[trimesh.Trimesh, int] | No
     band. Returns ``(mesh, pairs)`` or None when the boundary is not of that kind."""
     vertices = np.asarray(piece.vertices, dtype=np.float64)
     faces = np.asarray(piece.faces, dtype=np.int64)
-    loops = _boundary_loops(faces)
-    if not loops or len(loops) % 2:
+    loops, tangled = boundary_loops(faces)
+    if tangled or not loops or len(loops) % 2:
         return None
     planes = [_loop_plane(vertices[loop]) for loop in loops]
     sizes = [float(np.ptp(vertices[loop], axis=0).max()) for loop in loops]

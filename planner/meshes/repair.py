@@ -17,6 +17,7 @@ from planner.tolerances import scale_of, tol
 
 from .solids import clean, obj_hint, orient_shells, validate_solid
 from .topology import (
+    boundary_loops,
     checked_arrays,
     clean_faces,
     compact,
@@ -121,7 +122,12 @@ def _repair_attempt(vertices, faces, label, single_sided: bool):
     report["single_sided_faces"] = kept
     faces, flipped, _ = orient_consistently(faces)
     report["fixed_winding_faces"] = int(flipped.sum())
-    loops, _ = _boundary_loops(faces)
+    # Hole filling by hand: trimesh.repair.fill_holes fills only triangular and quad
+    # holes, larger ones only as fans (use_fan), wrong for a non-convex hole: an L-shaped
+    # one stays open either way (tests/benchmarks/bench_libraries.py); pymeshfix is
+    # GPL-3.0 and rebuilds the whole mesh (one watertight body, self-intersections and
+    # small components removed), which moves geometry that repair must keep.
+    loops, _ = boundary_loops(faces)
     added = []
     for loop in loops:
         hole = loop[::-1]  # the fill traverses the boundary edges the other way
@@ -134,38 +140,3 @@ def _repair_attempt(vertices, faces, label, single_sided: bool):
     boundary, nonmanifold, shells = shell_edge_stats(faces)
     report["edge_stats"] = (boundary, nonmanifold)
     return vertices, faces, report, boundary + nonmanifold, shells
-
-
-def _boundary_loops(faces: np.ndarray):
-    """Closed loops of boundary edges, each a list of vertex indices in the direction
-    the existing faces traverse them. Loops through a vertex with several boundary
-    edges are returned separately in ``tangled`` (count of skipped edges)."""
-    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    undirected = np.sort(directed, axis=1)
-    inverse, counts, _ = group_rows(undirected)
-    boundary = directed[counts[inverse] == 1]
-    nxt: dict[int, int] = {}
-    tangled = set()
-    for a, b in boundary:
-        if a in nxt:
-            tangled.add(int(a))
-        nxt[int(a)] = int(b)
-    loops = []
-    visited = set()
-    for start in sorted(nxt):
-        if start in visited or start in tangled:
-            continue
-        loop: list[int] | None = [start]
-        visited.add(start)
-        current = nxt[start]
-        while current != start:
-            if current in visited or current in tangled or current not in nxt:
-                loop = None
-                break
-            assert loop is not None
-            loop.append(current)
-            visited.add(current)
-            current = nxt[current]
-        if loop is not None and len(loop) >= 3:
-            loops.append(loop)
-    return loops, len(boundary)

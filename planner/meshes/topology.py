@@ -1,5 +1,5 @@
-"""Index bookkeeping of triangle meshes: grouping equal rows, edge usage, face adjacency
-and components, consistent winding, vertex merging, face cleaning.
+"""Index bookkeeping of triangle meshes: grouping equal rows, edge usage, boundary loops,
+face adjacency and components, consistent winding, vertex merging, face cleaning.
 
 Everything here works on plain ``(n, 3)`` float64 vertex and ``(m, 3)`` int64 face arrays
 and knows nothing of solids; :mod:`planner.meshes.solids` and :mod:`planner.meshes.repair`
@@ -17,6 +17,7 @@ from scipy.spatial import cKDTree
 from planner.errors import InvalidMeshError
 
 __all__ = [
+    "boundary_loops",
     "checked_arrays",
     "clean_faces",
     "closed_candidate",
@@ -74,7 +75,15 @@ def compact(vertices: np.ndarray, faces: np.ndarray):
 
 def merge_vertices(vertices: np.ndarray, faces: np.ndarray, distance: float):
     """Merge vertices closer than ``distance`` (clusters, transitively), keeping the first
-    vertex of each cluster. Returns ``(vertices, faces, merged_count)``."""
+    vertex of each cluster. Returns ``(vertices, faces, merged_count)``.
+
+    Kept by hand, measured (``tests/benchmarks/bench_libraries.py``): trimesh's
+    ``merge_vertices`` is as fast (0.9x to 1.3x this on the IndustReal large gear's 25k
+    vertices) but rounds coordinates to a fixed absolute grid (``tol.merge = 1e-8``), so
+    two vertices 2e-12 apart on either side of a grid line stay apart, and its tolerance does
+    not follow the part's size; ``trimesh.grouping.clusters`` is these same cKDTree pairs
+    and components, returning groups that still need this renumbering.
+    """
     tree = cKDTree(vertices)
     pairs = tree.query_pairs(distance, output_type="ndarray")
     if len(pairs) == 0:
@@ -149,22 +158,20 @@ def closed_candidate(faces, degenerate, opposite):
 
 
 def group_rows(rows: np.ndarray):
-    """Group equal rows of an integer array (a fast ``np.unique(axis=0)``).
+    """Group equal rows of an integer array (``trimesh.grouping.unique_rows``, which packs
+    a row into one integer where it fits: 2x to 3x faster than the lexsort this replaced,
+    on the 151k edges of the IndustReal large gear; ``tests/benchmarks/bench_libraries.py``).
 
-    Returns ``(inverse, counts, first)``: each row's group id (groups numbered in sorted
-    row order), the size of each group, and the first row index of each group."""
+    Returns ``(inverse, counts, first)``: each row's group id (groups in an arbitrary but
+    deterministic order), the size of each group, and the first row index of each group.
+    """
     rows = np.asarray(rows)
     if len(rows) == 0:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty, empty
-    order = np.lexsort(rows.T[::-1])
-    ordered = rows[order]
-    new = np.ones(len(rows), dtype=bool)
-    new[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
-    group = np.cumsum(new) - 1
-    inverse = np.zeros(len(rows), dtype=np.int64)
-    inverse[order] = group
-    return inverse, np.bincount(group), order[new]
+    first, inverse = trimesh.grouping.unique_rows(rows)
+    inverse = np.asarray(inverse, dtype=np.int64).reshape(-1)
+    return inverse, np.bincount(inverse, minlength=len(first)), np.asarray(first, np.int64)
 
 
 def edge_stats(faces: np.ndarray):
@@ -181,6 +188,61 @@ def edge_stats(faces: np.ndarray):
     counts = group_rows(undirected)[1]
     dcounts = group_rows(directed)[1]
     return int((counts == 1).sum()), int((counts > 2).sum()), bool((dcounts == 1).all())
+
+
+def boundary_loops(faces: np.ndarray) -> tuple[list[list[int]], int]:
+    """Closed loops of boundary edges (edges used by one face).
+
+    A loop is a cycle through vertices that each lie on exactly two boundary edges; it
+    runs the way most of its edges are traversed by their faces (all of them on a
+    consistently wound mesh). Returns ``(loops, tangled)``: the loops, each a list of
+    vertex indices, and how many boundary edges lie on no loop (they meet a vertex with
+    more than two boundary edges: a pinch, or holes that touch). Used by hole filling
+    (:func:`planner.meshes.repair_mesh`) and by OMPL.app's facing openings.
+
+    Kept by hand, measured (``tests/benchmarks/bench_libraries.py``): trimesh finds
+    boundary cycles only inside ``repair.fill_holes``, with networkx's ``cycle_basis``
+    (networkx is no dependency here): 1.2x this on the IndustReal large gear with 1,000
+    faces removed, and its cycles are undirected, with pinches split or joined
+    arbitrarily (976 cycles where this finds 533 loops and sets 1,342 edges apart).
+    """
+    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    inverse, counts, _ = group_rows(np.sort(directed, axis=1))
+    boundary = directed[counts[inverse] == 1]
+    neighbours: dict[int, list[int]] = {}
+    for a, b in boundary.tolist():
+        neighbours.setdefault(a, []).append(b)
+        neighbours.setdefault(b, []).append(a)
+    forward = {(int(a), int(b)) for a, b in boundary}
+    loops: list[list[int]] = []
+    seen: set[int] = set()
+    for start in sorted(neighbours):
+        if start in seen or len(neighbours[start]) != 2:
+            continue
+        loop = _walk_loop(neighbours, start, seen)
+        if loop is None:
+            continue
+        steps = zip(loop, loop[1:] + loop[:1], strict=True)
+        along = sum((a, b) in forward for a, b in steps)
+        loops.append(loop if 2 * along >= len(loop) else loop[::-1])
+    return loops, len(boundary) - sum(len(loop) for loop in loops)
+
+
+def _walk_loop(neighbours: dict[int, list[int]], start: int, seen: set[int]) -> list[int] | None:
+    """The cycle of boundary edges through ``start``, or ``None`` when it reaches a
+    vertex that is not on exactly two boundary edges. Marks its vertices in ``seen``."""
+    loop, previous, current = [start], -1, start
+    seen.add(start)
+    while True:
+        a, b = neighbours[current]
+        following = b if a == previous else a
+        if following == start:
+            return loop if len(loop) >= 3 else None
+        if following in seen or len(neighbours[following]) != 2:
+            return None
+        loop.append(following)
+        seen.add(following)
+        previous, current = current, following
 
 
 def shell_edge_stats(faces: np.ndarray):
@@ -248,6 +310,11 @@ def orient_consistently(faces: np.ndarray):
 
     Works per connected component (over manifold edges), keeping each component's
     first face as it is. Returns ``(faces, flipped_mask, orientable)``.
+
+    Kept by hand, measured (``tests/benchmarks/bench_libraries.py``):
+    ``trimesh.repair.fix_winding`` takes 30x to 50x this on the IndustReal large gear (50k
+    faces, a tenth flipped; a Python loop over networkx's BFS edges), needs networkx, and
+    says nothing when a surface cannot be oriented, which this reports.
     """
     nf = len(faces)
     pairs, same = face_graph(faces)

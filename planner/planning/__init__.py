@@ -44,7 +44,7 @@ def plan(scenario: Scenario, *, planner: str = "minkplan", cache_dir=None,
         planner: ``"minkplan"`` or ``"ompl:NAME"`` (``ompl:RRTConnect``, ``ompl:PRM``,
             ``ompl:BITstar``, ...).
         cache_dir: decomposition cache directory (default ``$MINKPLAN_CACHE_DIR`` or
-            ``~/.cache/minkplan/decompositions``).
+            the user cache folder, see :func:`planner.decompose.default_cache_dir`).
         progress: status line on stderr; ``None``: only on a TTY.
         params: octree planner parameters (scale-free defaults).
         validate: validate found paths with FCL and OMPL on the original meshes.

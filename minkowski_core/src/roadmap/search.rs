@@ -4,6 +4,13 @@
 //! shared face (the portal) and on to `v`'s centre; each piece costs its length times the
 //! weight of the leaf it lies in. Weights are `>= 1`, so the Euclidean distance to the
 //! goal point is a consistent heuristic and the first goal reached is optimal.
+//!
+//! Kept by hand, measured (`tests/benchmarks/rust_libraries`: corner to corner through a
+//! 585k-leaf octree, 94k expansions, same costs): `pathfinding`'s `astar` fed by the same
+//! octree walk took 0.9x to 1.75x this (1.3x to 1.5x in most runs), `petgraph`'s 1.6x to
+//! 3x once its `Graph` of the free leaves is built. Neither takes several sources with
+//! start costs and targets with exit costs (virtual nodes), nor counts expansions (the
+//! reports give them), and both want `Ord` costs (an `OrderedFloat` around every f64).
 
 use super::adjacency::{neighbors, Neighbor};
 use super::index::LeafIndex;

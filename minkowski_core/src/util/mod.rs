@@ -4,5 +4,7 @@
 //! Entry points: [`UnionFind`].
 
 mod union_find;
+#[cfg(test)]
+mod union_find_tests;
 
 pub use union_find::UnionFind;
