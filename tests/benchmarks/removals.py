@@ -19,7 +19,7 @@ from planner.assembly import AssemblyResult, removal_problems, removal_scenario 
 from planner.assembly.enclosure import prove_enclosed  # noqa: E402
 from planner.assembly.geometry import direction_vector  # noqa: E402
 from planner.assembly.search import validate_removal  # noqa: E402
-from planner.errors import InvalidParameterError  # noqa: E402
+from planner.errors import InvalidParameterError, ResourceLimitError  # noqa: E402
 from planner.output import jsonable  # noqa: E402
 from planner.planning import FOUND, NO_PATH, NOT_FOUND, plan  # noqa: E402
 from planner.sources import choose_for  # noqa: E402
@@ -72,8 +72,18 @@ def benchmark_removals(result: AssemblyResult, planners=("minkplan", "ompl:RRTCo
                     rows.append({**_enclosure_row(result, problem, settings.time_limit),
                                  "direction": direction, "run": run, "seed": seed})
                     continue
-                outcome = plan(dataclasses.replace(scenario, settings=settings), planner=name,
-                               cache_dir=cache_dir, progress=False)
+                try:
+                    outcome = plan(dataclasses.replace(scenario, settings=settings),
+                                   planner=name, cache_dir=cache_dir, progress=False)
+                except ResourceLimitError as error:  # a refusal is a row, not a crash
+                    rows.append({"part": problem["part"], "method": problem["method"],
+                                 "obstacles": problem["obstacles"], "direction": direction,
+                                 "expected": problem["expected"], "planner": name,
+                                 "run": run, "seed": seed, "status": "refused",
+                                 "reason": str(error), "seconds": time.perf_counter() - t0,
+                                 "planning_seconds": time.perf_counter() - t0,
+                                 "length": float("nan"), "valid": None})
+                    continue
                 seconds = time.perf_counter() - t0
                 valid = None
                 if outcome.status == FOUND:
