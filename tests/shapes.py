@@ -26,6 +26,7 @@ __all__ = [
     "nonconvex_part_2k",
     "plate_with_hole",
     "random_convex",
+    "roofed_channel",
     "slotted_bar",
     "to_manifold",
     "torus",
@@ -271,3 +272,26 @@ def grate(holes: int, size: float, thickness: float, bar: float) -> trimesh.Trim
             [-size / 2 + pitch * (i + 0.5), -size / 2 + pitch * (j + 0.5), 0.0])
         for i in range(holes) for j in range(holes)]
     return from_manifold(plate - reduce(lambda a, b: a + b, cutters), f"grate{holes}")
+
+
+ROOFED_CHANNEL_BOXES = (
+    ((-1.0, -0.5, 0.0), (1.0, 0.5, 0.2)),      # floor
+    ((-1.0, -0.5, 0.1), (1.0, -0.3, 0.8)),     # side walls
+    ((-1.0, 0.3, 0.1), (1.0, 0.5, 0.8)),
+    ((-0.95, -0.45, 0.7), (0.95, 0.45, 1.2)),  # thick roof
+    ((0.8, -0.35, 0.1), (1.0, 0.35, 0.75)),    # end wall (+x)
+    ((-1.0, -0.35, 0.1), (-0.8, 0.35, 0.4)),   # low stop (-x)
+)
+"""``(lo, hi)`` corners of the boxes of :func:`roofed_channel`."""
+
+
+def roofed_channel() -> trimesh.Trimesh:
+    """A roofed channel along x, open on its floor at ``z = 0.2``, for a slider of up to
+    0.5 x 0.5 wide: +z is blocked by a thick roof, +x by an end wall, -x by a low stop (top
+    at ``z = 0.4``) that a slider on the floor must climb over; so it has no straight exit.
+    Overlapping boxes, not booleaned (every body convex, so decompositions are exact)."""
+    boxes = []
+    for lo, hi in ROOFED_CHANNEL_BOXES:
+        lo_, hi_ = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+        boxes.append(box(hi_ - lo_, (lo_ + hi_) / 2))
+    return trimesh.util.concatenate(boxes)

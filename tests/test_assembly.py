@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from benchmarks.removals import benchmark_removals
+from shapes import roofed_channel
 
 import planner.sources as sources_module
 from planner.assembly import (
@@ -391,14 +392,10 @@ def test_with_groups_the_rings_leave_the_post_together_and_only_they_are_stuck(t
 
 
 def _tunnel(tmp_path: Path) -> Path:
-    """A slider on the floor of a roofed channel (the base): +z is blocked by a thick
-    roof, +x by an end wall, -x by a low stop it must climb over (no straight exit)."""
-    _union(([-1.0, -0.5, 0.0], [1.0, 0.5, 0.2]),
-           ([-1.0, -0.5, 0.1], [1.0, -0.3, 0.8]),
-           ([-1.0, 0.3, 0.1], [1.0, 0.5, 0.8]),
-           ([-0.95, -0.45, 0.7], [0.95, 0.45, 1.2]),
-           ([0.8, -0.35, 0.1], [1.0, 0.35, 0.75]),
-           ([-1.0, -0.35, 0.1], [-0.8, 0.35, 0.4])).export(tmp_path / "tunnel.stl")
+    """A slider on the floor of a roofed channel (the base, :func:`shapes.roofed_channel`):
+    +z is blocked by a thick roof, +x by an end wall, -x by a low stop it must climb over
+    (no straight exit)."""
+    roofed_channel().export(tmp_path / "tunnel.stl")
     _union(([-0.6, -0.25, 0.2], [0.2, 0.25, 0.35])).export(tmp_path / "slider.stl")
     path = tmp_path / "tunnel.yaml"
     path.write_text("base: tunnel\nplanner: {time_limit: 20}\nparts:\n"

@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_assembly import _box, _revalidate, _union
+from shapes import roofed_channel
+from test_assembly import _box, _revalidate
 
 from planner.assembly import plan_assembly, removal_problems
 from planner.cli import main
@@ -139,12 +140,7 @@ def test_an_interference_tolerance_plans_the_overlapping_pair(tmp_path):
 def test_an_interfering_slider_is_planned_out_of_its_channel(tmp_path):
     """The planner starts from an overlapping pose: a slider pressed 0.02 into the floor
     of a roofed channel must climb over a low stop (no straight exit)."""
-    _union(([-1.0, -0.5, 0.0], [1.0, 0.5, 0.2]),
-           ([-1.0, -0.5, 0.1], [1.0, -0.3, 0.8]),
-           ([-1.0, 0.3, 0.1], [1.0, 0.5, 0.8]),
-           ([-0.95, -0.45, 0.7], [0.95, 0.45, 1.2]),
-           ([0.8, -0.35, 0.1], [1.0, 0.35, 0.75]),
-           ([-1.0, -0.35, 0.1], [-0.8, 0.35, 0.4])).export(tmp_path / "tunnel.stl")
+    roofed_channel().export(tmp_path / "tunnel.stl")
     _box([-0.6, -0.25, 0.18], [0.2, 0.25, 0.33]).export(tmp_path / "slider.stl")
     path = tmp_path / "tunnel.yaml"
     path.write_text("base: tunnel\ninterference: 0.025\nplanner: {time_limit: 20}\n"

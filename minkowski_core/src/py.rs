@@ -840,31 +840,26 @@ impl PyCSpace {
         let (s, g) = (vec3_any(&start, "start")?, vec3_any(&goal, "goal")?);
         let cs = &self.inner;
         let Some(c) = py.detach(|| cs.certificate(s, g)) else { return Ok(None) };
-        let d = PyDict::new(py);
-        d.set_item("walls_around_start", c.walls_around_start)?;
-        d.set_item("verified", c.verified)?;
-        d.set_item("start_component_size", c.start_component.len())?;
-        d.set_item("goal_component_size", c.goal_component_size)?;
-        d.set_item("n_components", c.n_components)?;
         let comp: Vec<usize> = if c.walls_around_start {
             c.start_component.clone()
         } else {
             let lg = cs.locate(g).map(|i| c.labels[i]).unwrap_or(u32::MAX);
             (0..c.labels.len()).filter(|&i| lg != u32::MAX && c.labels[i] == lg).collect()
         };
-        d.set_item("component_leaves", comp)?;
-        d.set_item("wall_leaves", c.walls.iter().map(|w| w.0 as i64).collect::<Vec<_>>().into_pyarray(py))?;
-        d.set_item("wall_prims", c.walls.iter().map(|w| if w.1 == usize::MAX { -1 } else { w.1 as i64 }).collect::<Vec<_>>().into_pyarray(py))?;
-        let flat: Vec<f64> = c
-            .walls
-            .iter()
-            .flat_map(|w| {
-                let b = cs.oct.cell_box(&cs.oct.leaves[w.0]);
-                [b.min.to_array(), b.max.to_array()].into_iter().flatten()
-            })
-            .collect();
-        d.set_item("wall_boxes", numpy::ndarray::Array3::from_shape_vec((c.walls.len(), 2, 3), flat).expect("n x 2 x 3").into_pyarray(py))?;
-        Ok(Some(d))
+        certificate_dict(py, cs, &c, comp).map(Some)
+    }
+
+    /// The component of the EMPTY ∪ MIXED leaves holding `start` and the FULL leaves around
+    /// it, as a dict like :meth:`certificate`'s (`walls_around_start` True,
+    /// `goal_component_size` 0): with `verified` and every `wall_prims` entry below
+    /// `n_obstacle_prims` (none a wall outside the bounds), no path leaves the component.
+    /// None when `start` is outside the root or in a FULL leaf.
+    fn enclosure<'py>(&self, py: Python<'py>, start: Vec<f64>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let s = vec3_any(&start, "start")?;
+        let cs = &self.inner;
+        let Some(c) = py.detach(|| cs.enclosure(s)) else { return Ok(None) };
+        let comp = c.start_component.clone();
+        certificate_dict(py, cs, &c, comp).map(Some)
     }
 
     /// Facet planes of primitive `i` (walls included): (normals (k, 3), offsets (k,));
@@ -876,4 +871,28 @@ impl PyCSpace {
         let p = set.polys.get(i).ok_or_else(|| InvalidParameterError::new_err(format!("primitive index {i} out of range")))?;
         Ok((to_array2(p.normals.iter().map(|n| n.to_array())).into_pyarray(py), p.offsets.clone().into_pyarray(py)))
     }
+}
+
+/// A [`crate::roadmap::Certificate`] as the dict `CSpace.certificate` and `CSpace.enclosure`
+/// return; `comp`: the walled component's leaves.
+fn certificate_dict<'py>(py: Python<'py>, cs: &crate::roadmap::CSpace, c: &crate::roadmap::Certificate, comp: Vec<usize>) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("walls_around_start", c.walls_around_start)?;
+    d.set_item("verified", c.verified)?;
+    d.set_item("start_component_size", c.start_component.len())?;
+    d.set_item("goal_component_size", c.goal_component_size)?;
+    d.set_item("n_components", c.n_components)?;
+    d.set_item("component_leaves", comp)?;
+    d.set_item("wall_leaves", c.walls.iter().map(|w| w.0 as i64).collect::<Vec<_>>().into_pyarray(py))?;
+    d.set_item("wall_prims", c.walls.iter().map(|w| if w.1 == usize::MAX { -1 } else { w.1 as i64 }).collect::<Vec<_>>().into_pyarray(py))?;
+    let flat: Vec<f64> = c
+        .walls
+        .iter()
+        .flat_map(|w| {
+            let b = cs.oct.cell_box(&cs.oct.leaves[w.0]);
+            [b.min.to_array(), b.max.to_array()].into_iter().flatten()
+        })
+        .collect();
+    d.set_item("wall_boxes", numpy::ndarray::Array3::from_shape_vec((c.walls.len(), 2, 3), flat).expect("n x 2 x 3").into_pyarray(py))?;
+    Ok(d)
 }

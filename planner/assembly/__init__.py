@@ -5,6 +5,8 @@ order that puts the parts together.
   ``report.json``).
 - :mod:`.geometry` -- exit boxes, exit points, the six directions.
 - :mod:`.pairs` -- :class:`PairCache`: each pair's C-obstacle and ray verdicts, once.
+- :mod:`.enclosure` -- :func:`~.enclosure.prove_enclosed`: a part walled in near its
+  start, proved on a small box (before any planning).
 - :mod:`.search` -- :func:`plan_assembly`, :func:`removal_scenario`,
   :func:`removal_problems`.
 

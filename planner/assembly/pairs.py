@@ -82,6 +82,7 @@ class PairCache:
         self._rays: dict[tuple[str, str, str], tuple[bool, float]] = {}
         self._samples: dict[tuple[str, str, str], tuple[bool, np.ndarray]] = {}
         self._detours: dict[tuple[str, str, str], float] = {}
+        self._runs: dict[tuple[str, str, str], float] = {}
         self._plane_cache: dict[tuple[str, str], list[tuple[np.ndarray, np.ndarray]]] = {}
         self._far: dict[tuple[str, str], np.ndarray] = {}
         self._contacts: dict[tuple[str, str], list[np.ndarray]] = {}
@@ -269,3 +270,29 @@ class PairCache:
         self._verdicts[key] = result
         self.stats["verdicts_computed"] += 1
         return result
+
+    def record_blocked(self, moving: str, obstacle: str, dname: str, vec: np.ndarray) -> None:
+        """Record that FCL found the straight removal of ``moving`` along ``vec`` blocked
+        with ``obstacle`` alone present (a prefix of the ray: the ray is blocked too), so
+        that :meth:`verdict` does not check it again."""
+        key = (moving, obstacle, dname)
+        if key not in self._verdicts:
+            _, depth = self.ray(moving, obstacle, dname, vec)
+            self._verdicts[key] = RayVerdict(True, "fcl", depth)
+            self.stats["verdicts_computed"] += 1
+
+    def free_run(self, moving: str, obstacle: str, dname: str, vec: np.ndarray) -> float:
+        """How far ``moving`` translates along ``vec`` before it meets ``CO_ij`` (``inf``
+        when it never does, ``0`` when it starts in contact); ``0`` when the pair has no
+        C-obstacle (undecided)."""
+        key = (moving, obstacle, dname)
+        if key not in self._runs:
+            prims = self.primitives(moving, obstacle)
+            run = 0.0
+            if prims is not None:
+                far = self.far_point(moving, dname, vec)
+                intervals = prims.segment_intervals(np.zeros(3), far)
+                run = (float(intervals[0][0]) * float(np.linalg.norm(far)) if intervals
+                       else float("inf"))
+            self._runs[key] = run
+        return self._runs[key]

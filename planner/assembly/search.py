@@ -48,6 +48,7 @@ from planner.progress import StatusLine
 from planner.roles import FOUND, NO_PATH
 from planner.validation import FclChecker
 
+from .enclosure import HALF_SIZES_REL, prove_enclosed
 from .geometry import (
     DIRECTIONS,
     ESCAPE_MARGIN_REL,
@@ -131,7 +132,7 @@ class _Search:
     """The disassembly search of one assembly, with every cache shared by its runs."""
 
     def __init__(self, assembly: Assembly, *, planner: str, cache_dir, progress,
-                 plan_parts: bool, groups: bool = True) -> None:
+                 plan_parts: bool, groups: bool = True, enclosures: bool = True) -> None:
         self.assembly = assembly
         self.parts = {p.name: p for p in assembly.parts}
         self.order = [p.name for p in assembly.parts]
@@ -146,7 +147,9 @@ class _Search:
         self.source = self.pairs.source
         self._straight: dict[tuple[str, frozenset], AssemblyStep | None] = {}
         self._planned: dict[tuple[str, frozenset], tuple[AssemblyStep | None, dict]] = {}
-        self.stats = {"planner_runs": 0, "planner_reused": 0, "runs": 0}
+        self.enclosures = enclosures
+        self.stats = {"planner_runs": 0, "planner_reused": 0, "runs": 0,
+                      "enclosures_tried": 0, "enclosures_proved": 0}
         self.line = StatusLine(progress)
 
     # ---------------------------------------------------------------- one part
@@ -187,8 +190,11 @@ class _Search:
                                     time.perf_counter() - t0, validation)
                 break
             # blocked: find out which grazing parts block it alone, once, for later steps
-            for o in grazing:
-                self.pairs.verdict(part, o, dname, vec)
+            if others == grazing and len(others) == 1:  # that was the pair alone
+                self.pairs.record_blocked(part, others[0], dname, vec)
+            else:
+                for o in grazing:
+                    self.pairs.verdict(part, o, dname, vec)
         self._straight[key] = step
         return step
 
@@ -221,6 +227,10 @@ class _Search:
         t0 = time.perf_counter()
         body = self.parts[part]
         bodies = [self.parts[n] for n in others]
+        enclosed = self.enclosed(part, others)
+        if enclosed is not None:
+            self._planned[key] = (None, enclosed)
+            return None, enclosed
         sides: list[dict[str, Any]] = []
         step, attempt = None, None
         for dname in self.goal_sides(part, others):
@@ -268,6 +278,41 @@ class _Search:
                            seconds=time.perf_counter() - t0)
         self._planned[key] = (step, attempt or {})
         return step, attempt or {}
+
+    def free_reach(self, part: str, others: list[str]) -> float:
+        """How far the part moves along the freest axis before it meets a present part
+        (cheap: the pair cache's rays; ``inf`` when some axis is clear): a box of
+        enclosure no larger than that cannot wall it in."""
+        return max(min(self.pairs.free_run(part, o, dname, vec) for o in others)
+                   for dname, vec in DIRECTIONS.items())
+
+    def enclosed(self, part: str, others: list[str]) -> dict[str, Any] | None:
+        """The attempt of a part proved unable to leave by a local enclosure
+        (:func:`~planner.assembly.enclosure.prove_enclosed`: its start's free component
+        walled off inside a small box), or ``None`` (then the planner decides)."""
+        if not self.enclosures:
+            return None
+        reach = self.free_reach(part, others)
+        if reach >= max(HALF_SIZES_REL) * self.assembly.diagonal:
+            return None
+        t0 = time.perf_counter()
+        log.info("is %s enclosed? (a local proof before planning)", part)
+        proof = prove_enclosed(self.source, self.parts[part], [self.parts[n] for n in others],
+                               delta=self.delta, diagonal=self.assembly.diagonal,
+                               deadline=t0 + self.assembly.settings.time_limit,
+                               min_half=reach)
+        self.stats["enclosures_tried"] += 1
+        if proof is None:
+            return None
+        self.stats["enclosures_proved"] += 1
+        message = (f"no path: {part} is walled off within {proof['half_size']:.3g} of "
+                   f"{'its start' if not any(proof['start']) else 'a free pose next to its start'}"
+                   f" by {proof['wall_cells']} FULL cells")
+        log.info("%s", message)
+        return {"status": NO_PATH, "reason": "enclosure", "message": message,
+                "direction": None, "proved": True, "enclosure": proof,
+                "obstacles": list(others), "sides": [],
+                "seconds": time.perf_counter() - t0}
 
     # ---------------------------------------------------------------- a group of parts
 
@@ -425,7 +470,8 @@ class _Search:
 
 def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=None,
                   progress: bool | None = False, plan_parts: bool = True,
-                  minimize: bool = True, groups: bool = True) -> AssemblyResult:
+                  minimize: bool = True, groups: bool = True,
+                  enclosures: bool = True) -> AssemblyResult:
     """Find an assembly sequence by disassembly (see the module docstring).
 
     Args:
@@ -438,10 +484,13 @@ def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=No
             (more searches on subsets, sharing every cache).
         groups: when no part can leave alone, look for a group that leaves as one
             (a subassembly), then take it apart on its own.
+        enclosures: before planning the removal of a part that meets a present part
+            within a short way along every axis, try to prove it cannot leave by a local
+            enclosure (:mod:`.enclosure`).
     """
     t_start = time.perf_counter()
     search = _Search(assembly, planner=planner, cache_dir=cache_dir, progress=progress,
-                     plan_parts=plan_parts, groups=groups)
+                     plan_parts=plan_parts, groups=groups, enclosures=enclosures)
     with search.line:
         return _result(search, assembly, t_start, minimize=minimize, plan_parts=plan_parts)
 
@@ -473,8 +522,9 @@ def removal_problems(result: AssemblyResult) -> list[dict[str, Any]]:
     ``found``; the goal on the side it left by, or along its straight direction; a
     group's step, then its own steps among its members) and,
     for an interlocked result, each movable part of the interlocked set with the rest of
-    the set present (expected ``no_path`` when that was proved)."""
-    problems = []
+    the set present (expected ``no_path`` when that was proved; ``proof``: how, e.g.
+    ``"enclosure"`` or ``"certificate"``)."""
+    problems: list[dict[str, Any]] = []
 
     def add(steps: list[AssemblyStep]) -> None:
         for step in steps:
@@ -493,5 +543,5 @@ def removal_problems(result: AssemblyResult) -> list[dict[str, Any]]:
         problems.append({"part": name, "obstacles": list(attempt["obstacles"]),
                          "direction": attempt.get("direction") or GOAL_SIDE,
                          "expected": NO_PATH if attempt.get("proved") else "unknown",
-                         "method": "interlocked"})
+                         "method": "interlocked", "proof": attempt.get("reason")})
     return problems

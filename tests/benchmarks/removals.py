@@ -1,5 +1,6 @@
 """The benchmark driver of assembly removals: per-step planning time of several planners
-on the removal problems an assembly result was decided on. Used by bench_assembly.py and
+on the removal problems an assembly result was decided on (an interlocked part proved by
+an enclosure: minkplan's row is that proof, timed). Used by bench_assembly.py and
 bench_exact.py, and by the tests of the assembly search."""
 
 from __future__ import annotations
@@ -15,11 +16,13 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from planner.assembly import AssemblyResult, removal_problems, removal_scenario  # noqa: E402
+from planner.assembly.enclosure import prove_enclosed  # noqa: E402
 from planner.assembly.geometry import direction_vector  # noqa: E402
 from planner.assembly.search import validate_removal  # noqa: E402
-from planner.errors import InvalidParameterError  # noqa: E402
+from planner.errors import InvalidParameterError, ResourceLimitError  # noqa: E402
 from planner.output import jsonable  # noqa: E402
-from planner.planning import FOUND, plan  # noqa: E402
+from planner.planning import FOUND, NO_PATH, NOT_FOUND, plan  # noqa: E402
+from planner.sources import choose_for  # noqa: E402
 
 __all__ = ["benchmark_removals"]
 
@@ -65,8 +68,22 @@ def benchmark_removals(result: AssemblyResult, planners=("minkplan", "ompl:RRTCo
                     time_limit=scenario.settings.time_limit if time_limit is None
                     else time_limit)
                 t0 = time.perf_counter()
-                outcome = plan(dataclasses.replace(scenario, settings=settings), planner=name,
-                               cache_dir=cache_dir, progress=False)
+                if name == "minkplan" and problem.get("proof") == "enclosure":
+                    rows.append({**_enclosure_row(result, problem, settings.time_limit),
+                                 "direction": direction, "run": run, "seed": seed})
+                    continue
+                try:
+                    outcome = plan(dataclasses.replace(scenario, settings=settings),
+                                   planner=name, cache_dir=cache_dir, progress=False)
+                except ResourceLimitError as error:  # a refusal is a row, not a crash
+                    rows.append({"part": problem["part"], "method": problem["method"],
+                                 "obstacles": problem["obstacles"], "direction": direction,
+                                 "expected": problem["expected"], "planner": name,
+                                 "run": run, "seed": seed, "status": "refused",
+                                 "reason": str(error), "seconds": time.perf_counter() - t0,
+                                 "planning_seconds": time.perf_counter() - t0,
+                                 "length": float("nan"), "valid": None})
+                    continue
                 seconds = time.perf_counter() - t0
                 valid = None
                 if outcome.status == FOUND:
@@ -84,3 +101,23 @@ def benchmark_removals(result: AssemblyResult, planners=("minkplan", "ompl:RRTCo
                     - outcome.timings.get("validate", 0.0),
                     "length": outcome.length, "valid": valid})
     return jsonable(rows)
+
+
+def _enclosure_row(result: AssemblyResult, problem: dict[str, Any],
+                   time_limit: float) -> dict[str, Any]:
+    """minkplan's answer to an interlocked part that the search proved by an enclosure:
+    the same proof (:func:`planner.assembly.enclosure.prove_enclosed`) on a fresh source,
+    timed (the planner over the whole exit box is not what ``minkplan assemble`` runs)."""
+    assembly = result.assembly
+    parts = {p.name: p for p in assembly.parts}
+    present = [parts[n] for n in problem["obstacles"]]
+    t0 = time.perf_counter()
+    source = choose_for([parts[problem["part"]], *present], assembly.settings)
+    proof = prove_enclosed(source, parts[problem["part"]], present, delta=assembly.tolerance,
+                           diagonal=assembly.diagonal, deadline=t0 + time_limit)
+    seconds = time.perf_counter() - t0
+    return {"part": problem["part"], "method": problem["method"],
+            "obstacles": problem["obstacles"], "expected": problem["expected"],
+            "planner": "minkplan", "status": NO_PATH if proof else NOT_FOUND,
+            "reason": "enclosure", "seconds": seconds, "planning_seconds": seconds,
+            "length": float("nan"), "valid": None}

@@ -530,24 +530,58 @@ impl CSpace {
         let (ms, mg) = (members(cs), members(cg));
         let around_start = ms.len() <= mg.len();
         let walled = if around_start { &ms } else { &mg };
-        let mut walls = BTreeSet::new();
-        for &i in walled {
-            for m in self.neighbors(i) {
-                if leaves[m.leaf].label == Label::Full {
-                    walls.insert(m.leaf);
-                }
-            }
-        }
+        let mut walls = self.full_neighbours(walled);
         // A FULL end leaf walls itself off: the point is in collision.
         for (c, leaf) in [(cs, s), (cg, g)] {
             if c == u32::MAX && walled.is_empty() {
                 walls.insert(leaf);
             }
         }
+        let (walls, verified) = self.verified_walls(walls);
+        Some(Certificate { labels: labels.clone(), goal_component_size: mg.len(), start_component: ms, walls_around_start: around_start, walls, verified, n_components })
+    }
+
+    /// The component of the non-FULL leaves that holds `start` and the FULL leaves around
+    /// it, each re-verified ([`CSpace::verify_leaf`]), as a [`Certificate`] walling off the
+    /// start (no goal: `goal_component_size` is 0). When it is `verified` and no wall leaf is
+    /// a wall outside the bounds (every primitive `< n_obstacle`), no path leaves the
+    /// component, whatever lies beyond the bounds. `None` when `start` is outside the root
+    /// or in a FULL leaf.
+    pub fn enclosure(&self, start: Vec3) -> Option<Certificate> {
+        let s = self.locate(start)?;
+        let leaves = &self.oct.leaves;
+        if leaves[s].label == Label::Full {
+            return None;
+        }
+        let free = |i: usize| leaves[i].label != Label::Full;
+        let pairs = face_adjacency(&self.oct, &self.index, free);
+        let labels = components(leaves.len(), &pairs, free);
+        let n_components = labels.iter().filter(|&&c| c != u32::MAX).max().map_or(0, |&m| m as usize + 1);
+        let members: Vec<usize> = (0..leaves.len()).filter(|&i| labels[i] == labels[s]).collect();
+        let (walls, verified) = self.verified_walls(self.full_neighbours(&members));
+        Some(Certificate { labels, goal_component_size: 0, start_component: members, walls_around_start: true, walls, verified, n_components })
+    }
+
+    /// FULL leaves face-adjacent to a leaf of `component`.
+    fn full_neighbours(&self, component: &[usize]) -> BTreeSet<usize> {
+        let mut walls = BTreeSet::new();
+        for &i in component {
+            for m in self.neighbors(i) {
+                if self.oct.leaves[m.leaf].label == Label::Full {
+                    walls.insert(m.leaf);
+                }
+            }
+        }
+        walls
+    }
+
+    /// Each wall leaf with the primitive shown to contain it (`usize::MAX` where none
+    /// was), and whether all were shown.
+    fn verified_walls(&self, walls: BTreeSet<usize>) -> (Vec<(usize, usize)>, bool) {
         let mut budget = VERIFY_BUDGET;
         let walls: Vec<(usize, usize)> = walls.into_iter().map(|w| (w, self.verify_leaf(w, &mut budget).unwrap_or(usize::MAX))).collect();
         let verified = walls.iter().all(|w| w.1 != usize::MAX);
-        Some(Certificate { labels: labels.clone(), goal_component_size: mg.len(), start_component: ms, walls_around_start: around_start, walls, verified, n_components })
+        (walls, verified)
     }
 }
 

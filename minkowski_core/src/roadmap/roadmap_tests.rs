@@ -325,3 +325,21 @@ fn shortcut_keeps_segments_free_and_shortens() {
         assert!(cs.segment_is_free(w[0], w[1], 0.0));
     }
 }
+
+#[test]
+fn enclosure_of_a_sealed_cavity_needs_no_goal() {
+    let bounds = Aabb::new(Vec3::splat(-3.0), Vec3::splat(3.0));
+    let cs = CSpace::build(&sealed_shell(0.3), bounds, 1e-3, 6.0 / 32.0, 0.0, 5_000_000).unwrap();
+    let inside = cs.enclosure(Vec3::ZERO).expect("the start is free");
+    assert!(inside.walls_around_start && inside.verified && inside.goal_component_size == 0);
+    assert!(!inside.walls.is_empty());
+    assert!(inside.walls.iter().all(|&(_, prim)| prim < cs.n_obstacle), "walled by the shell alone");
+    // the same component as the two-point certificate's
+    let cert = cs.certificate(Vec3::ZERO, Vec3::splat(2.0)).unwrap();
+    assert_eq!(inside.start_component, cert.start_component);
+    // outside the shell, the component reaches the bounds: walls outside them take part
+    let outside = cs.enclosure(Vec3::splat(2.0)).unwrap();
+    assert!(outside.walls.iter().any(|&(_, prim)| prim >= cs.n_obstacle && prim != usize::MAX));
+    // a start in a FULL leaf has no enclosure
+    assert!(cs.enclosure(Vec3::new(1.15, 0.0, 0.0)).is_none());
+}

@@ -1,0 +1,137 @@
+"""Real assemblies (../shared/assets/assemblies, NVIDIA Factory) and the local enclosure
+proof (planner.assembly.enclosure): Factory's M12 nut on its threaded bolt cannot be
+undone by translations, and that is proved, not timed out; a part shut in a closed box
+is proved enclosed without a search of the whole exit box."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from shapes import box
+
+from planner.assembly import plan_assembly
+from planner.assembly.enclosure import prove_enclosed
+from planner.cli import main
+from planner.errors import ScenarioError
+from planner.io import load_assembly
+from planner.sources import choose_for
+from planner.validation import FclChecker
+
+ASSETS = Path(__file__).resolve().parents[1].parent / "shared" / "assets" / "assemblies"
+NUT_BOLT = ASSETS / "factory_nut_bolt_m12" / "factory_nut_bolt_m12.yaml"
+NUT_INTERFERENCE = 0.0016
+"""The nut rests on the bolt's head 1.55-1.70 mm below a pose its thread fits (FCL); an
+interference tolerance of 1.6 mm accepts that assembled pose."""
+
+needs_assets = pytest.mark.skipif(not ASSETS.is_dir(),
+                                  reason=f"{ASSETS} is absent (the shared real assets)")
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("MINKPLAN_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "dec"))
+
+
+@needs_assets
+def test_the_nut_pose_overlaps_the_thread_and_is_refused_without_a_tolerance():
+    with pytest.raises(ScenarioError) as info:
+        load_assembly(NUT_BOLT)
+    message = str(info.value)
+    assert "\n" not in message and "factory_nut_bolt_m12.yaml" in message
+    assert "part 'bolt' collides with 'nut'" in message
+
+
+@needs_assets
+def test_the_nut_on_the_bolt_proved_interlocked_under_translation(tmp_path, capsys):
+    """With the interference tolerance that accepts the assembled pose, the nut is
+    stepped out of its overlap to a free pose up the thread and proved unable to leave
+    it: its free component is walled off by verified FULL cells of the bolt's
+    C-obstacle within a fraction of a millimetre (no time-out of the planner)."""
+    assembly = load_assembly(NUT_BOLT, interference=NUT_INTERFERENCE)
+    assert [(o["part"], o["other"]) for o in assembly.overlaps] == [("bolt", "nut")]
+    result = plan_assembly(assembly)
+    assert result.status == "interlocked" and result.proved, result.message
+    assert result.interlocked == ["bolt", "nut"] and result.stuck == ["nut"]
+    attempt = result.core_attempts["nut"]
+    assert attempt["status"] == "no_path" and attempt["reason"] == "enclosure"
+    proof = attempt["enclosure"]
+    assert proof["exact"] and set(proof["wall_cells_by_obstacle"]) == {"bolt"}
+    assert result.reuse["planner_runs"] == 0 and result.reuse["enclosures_proved"] == 1
+    # the proof starts at a pose that is free, no farther than the tolerance from the
+    # assembled one (every pose of the step is within the tolerance of it)
+    parts = {p.name: p for p in assembly.parts}
+    start = np.asarray(proof["start"])
+    assert 0 < np.linalg.norm(start) <= NUT_INTERFERENCE
+    assert not FclChecker.for_parts(parts["nut"], [parts["bolt"]]).collides(start)
+    # the walled-off component is small: the nut moves within the box of the proof
+    assert proof["half_size"] < 0.01 * assembly.diagonal
+    # the answer says it was planned with that tolerance
+    sequence = result.sequence_json()
+    assert sequence["interference"] == NUT_INTERFERENCE and sequence["proved"]
+    assert sequence["overlaps"][0]["other"] == "nut"
+    # the command line says the same, with exit code 1 (no sequence)
+    code = main(["assemble", str(NUT_BOLT), "--out", str(tmp_path), "--no-progress",
+                 "--interference", str(NUT_INTERFERENCE)])
+    assert code == 1
+    out = capsys.readouterr().out
+    assert "interlocked parts bolt, nut (proved)" in out and "interference 0.0016" in out
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["interlocked_attempts"]["nut"]["reason"] == "enclosure"
+
+
+def _shut_box(tmp_path: Path, slot: float) -> Path:
+    """A cube of 1.9 in a closed box (the base: six walls 0.2 thick around a hollow of 2,
+    one part), free to move by 0.05 or so either way but not out; ``slot``: a slot of that
+    width across the roof (0: none)."""
+    walls = [((-1.2, -1.2, -1.2), (1.2, 1.2, -1.0)), ((-1.2, -1.2, -1.0), (-1.0, 1.2, 1.0)),
+             ((1.0, -1.2, -1.0), (1.2, 1.2, 1.0)), ((-1.0, -1.2, -1.0), (1.0, -1.0, 1.0)),
+             ((-1.0, 1.0, -1.0), (1.0, 1.2, 1.0))]
+    if slot:
+        walls += [((-1.2, -1.2, 1.0), (-slot / 2, 1.2, 1.2)),
+                  ((slot / 2, -1.2, 1.0), (1.2, 1.2, 1.2))]
+    else:
+        walls += [((-1.2, -1.2, 1.0), (1.2, 1.2, 1.2))]
+    shell = trimesh.util.concatenate([box(np.subtract(hi, lo), np.add(hi, lo) / 2)
+                                      for lo, hi in walls])
+    shell.export(tmp_path / f"shell_{slot}.stl")
+    path = tmp_path / f"shut_{slot}.yaml"
+    path.write_text(f"base: shell\nplanner: {{time_limit: 20}}\nparts:\n"
+                    f"  - {{name: shell, mesh: shell_{slot}.stl}}\n"
+                    f"  - {{name: cube, box: [1.9, 1.9, 1.9], position: [0, 0, -0.04]}}\n")
+    return path
+
+
+def test_a_cube_shut_in_a_box_is_proved_enclosed(tmp_path):
+    assembly = load_assembly(_shut_box(tmp_path, 0.0))
+    parts = {p.name: p for p in assembly.parts}
+    source = choose_for(assembly.parts, assembly.settings)
+    proof = prove_enclosed(source, parts["cube"], [parts["shell"]], delta=assembly.tolerance,
+                           diagonal=assembly.diagonal, deadline=time.perf_counter() + 60)
+    assert proof is not None and proof["exact"]
+    assert proof["start"] == [0.0, 0.0, 0.0]  # free as assembled
+    # walled by the shell alone, none of the cells a wall of the proof's box
+    assert proof["wall_cells"] > 0 and set(proof["wall_cells_by_obstacle"]) == {"shell"}
+    assert proof["half_size"] >= 0.05  # the cube's play fits in the proof's box
+    result = plan_assembly(assembly)
+    assert not result.found and result.proved
+    assert result.interlocked == ["cube", "shell"]
+    assert result.core_attempts["cube"]["reason"] == "enclosure"
+    assert result.reuse["planner_runs"] == 0
+
+
+def test_a_cube_under_a_slotted_roof_is_not_claimed_enclosed(tmp_path):
+    """With a slot in the roof wider than the cube, it can leave: no enclosure is
+    claimed, and it is taken out."""
+    assembly = load_assembly(_shut_box(tmp_path, 2.0))
+    parts = {p.name: p for p in assembly.parts}
+    source = choose_for(assembly.parts, assembly.settings)
+    assert prove_enclosed(source, parts["cube"], [parts["shell"]], delta=assembly.tolerance,
+                          diagonal=assembly.diagonal,
+                          deadline=time.perf_counter() + 60) is None
+    result = plan_assembly(assembly)
+    assert result.found and result.order == ["shell", "cube"], result.message
