@@ -66,6 +66,23 @@ def _polygon_frame(points: np.ndarray):
     return normal, u, v
 
 
+def polygon_in_plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """A polygon's fan triangulation ``(n - 2, 3)`` (the fallback) and its ``(n, 2)``
+    coordinates in its own plane, centred (``None`` for a polygon with no plane or no
+    extent)."""
+    n = len(points)
+    fan = np.stack([np.zeros(n - 2, dtype=np.int64), np.arange(1, n - 1), np.arange(2, n)], 1)
+    frame = _polygon_frame(points)
+    if frame is None:
+        return fan, None
+    _, u, v = frame
+    centred = points - points.mean(axis=0)
+    xy = np.ascontiguousarray(np.stack([centred @ u, centred @ v], axis=1))
+    if float(np.ptp(xy, axis=0).max()) == 0:
+        return fan, None
+    return fan, xy
+
+
 def ear_clip(points: np.ndarray):
     """Ear-clip one polygon given as ``(n, 3)`` points in order, in its plane.
 
@@ -82,15 +99,8 @@ def ear_clip(points: np.ndarray):
     a fan, or whatever triangles earcut found, wound like the polygon).
     """
     n = len(points)
-    fan = np.stack([np.zeros(n - 2, dtype=np.int64), np.arange(1, n - 1), np.arange(2, n)], 1)
-    frame = _polygon_frame(points)
-    if frame is None:
-        return fan, False
-    _, u, v = frame
-    centred = points - points.mean(axis=0)
-    xy = np.ascontiguousarray(np.stack([centred @ u, centred @ v], axis=1))
-    extent = float(np.ptp(xy, axis=0).max())
-    if extent == 0:
+    fan, xy = polygon_in_plane(points)
+    if xy is None:
         return fan, False
     ring_ends = np.array([n], dtype=np.uint32)
     triangles = np.asarray(mapbox_earcut.triangulate_float64(xy, ring_ends),
@@ -100,6 +110,7 @@ def ear_clip(points: np.ndarray):
     areas = _twice_areas(xy, triangles)
     backwards = areas < 0
     triangles[backwards] = triangles[backwards][:, ::-1]
+    extent = float(np.ptp(xy, axis=0).max())
     eps = 1e-12 * extent * extent  # orientation tolerance (twice a triangle area)
     tiles = abs(float(np.abs(areas).sum()) - _twice_area(xy)) <= n * eps
     return triangles, bool(tiles and not backwards.any())

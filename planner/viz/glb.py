@@ -19,12 +19,13 @@ note, as the page's legend does.
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import trimesh
 from trimesh.path.entities import Line
+
+from planner.output import atomic_write
 
 from .scene import ROBOT_MOVING, Layer, Scene
 
@@ -123,19 +124,5 @@ def write_glb(scene: Scene, path: str | os.PathLike[str], *,
     file in the same folder renamed over it); returns the path."""
     target = Path(path)
     data = to_trimesh(scene, include_hidden=include_hidden).export(file_type="glb")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+    atomic_write(target, lambda tmp: Path(tmp).write_bytes(data))
     return target

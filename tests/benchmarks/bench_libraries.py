@@ -40,7 +40,7 @@ from planner.meshes.topology import (
     merge_vertices,
     orient_consistently,
 )
-from planner.meshes.triangulation import _polygon_frame, triangulate_polygons
+from planner.meshes.triangulation import _polygon_frame, polygon_in_plane, triangulate_polygons
 from planner.tolerances import scale_of, tol
 
 HERE = Path(__file__).resolve().parent
@@ -263,16 +263,10 @@ def hand_ear_clip(points: np.ndarray):
     forced cut was needed).
     """
     n = len(points)
-    fan = np.stack([np.zeros(n - 2, dtype=np.int64), np.arange(1, n - 1), np.arange(2, n)], 1)
-    frame = _polygon_frame(points)
-    if frame is None:
+    fan, xy = polygon_in_plane(points)
+    if xy is None:
         return fan, False
-    _, u, v = frame
-    centred = points - points.mean(axis=0)
-    xy = np.stack([centred @ u, centred @ v], axis=1)
     extent = float(np.ptp(xy, axis=0).max())
-    if extent == 0:
-        return fan, False
     eps = 1e-12 * extent * extent  # orientation tolerance (twice a triangle area)
 
     def orient(a, b, c):
