@@ -44,7 +44,9 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], tol: f64, lattice: (Vec3, f64)
     }
     split_t_junctions(s, tol);
     fill_face_gaps(s, tol, lattice);
-    cancel_opposite_twins(&mut s.faces);
+    if cancel_opposite_twins(&mut s.faces) > 0 {
+        drop_unused_vertices(s);
+    }
 }
 
 /// Remove every pair of a triangle and its reverse (the same corners, facing the other
@@ -108,7 +110,12 @@ pub fn drop_slivers(s: &mut Surface, size: f64, volume: f64) -> usize {
         return 0;
     }
     s.faces.retain(|f| !slivers.contains(&uf.find(f[0] as usize)));
-    // and their vertices
+    drop_unused_vertices(s);
+    slivers.len()
+}
+
+/// Remove the vertices no triangle uses (renumbering the triangles').
+fn drop_unused_vertices(s: &mut Surface) {
     let mut remap = vec![u32::MAX; s.vertices.len()];
     for f in &s.faces {
         for &v in f {
@@ -126,7 +133,6 @@ pub fn drop_slivers(s: &mut Surface, size: f64, volume: f64) -> usize {
     for f in &mut s.faces {
         *f = f.map(|v| remap[v as usize]);
     }
-    slivers.len()
 }
 
 /// Vertices whose triangles do not form one fan (a disk) about them: where two sheets of
