@@ -23,9 +23,9 @@ pub struct UnionParams {
     /// Keep cells the source resolves by at most three planes as exact polygons at their
     /// size ([`Octree::build_resolving_planes`]); the sampled band is left only where the
     /// boundary is not that simple. Where the polygons and the band do not join into a
-    /// closed manifold surface, the grid is rebuilt sampling around those edges (up to
-    /// `MAX_JOIN_RETRIES` times, then everywhere); where an exact edge or corner meets the
-    /// sampled band, at once everywhere.
+    /// closed manifold surface, or an exact edge or corner meets the sampled band (which
+    /// would chamfer it), the grid is rebuilt sampling around those places while that
+    /// leaves fewer of them (up to `MAX_JOIN_RETRIES` times), then everywhere.
     pub planes: bool,
 }
 
@@ -118,7 +118,7 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
     let (mut t_oct, mut t_surf) = (0.0, 0.0);
     let mut planes = params.planes;
     let mut sampled: Vec<Aabb> = Vec::new();
-    let (mut open_seen, mut retries) = (0, 0);
+    let (mut open_seen, mut retries, mut last_bad) = (0, 0, usize::MAX);
     let mut round = 0;
     while round <= params.max_refinements {
         let t0 = Instant::now();
@@ -138,13 +138,16 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         // next to them, sample around those places (a few times), then everywhere
         let joined_badly = surface.open_edges > 0 || surface.crease_conflicts > 0 || (surface.complex_cells > 0 && surface.planar_cells > 0);
         if planes && joined_badly {
-            open_seen += surface.open_edges + surface.crease_conflicts + surface.complex_cells;
+            let bad = surface.open_edges + surface.crease_conflicts + surface.complex_cells;
+            open_seen += bad;
             retries += 1;
             // an exact edge or corner next to the sampled band is not joined (the band
-            // chamfers it): sample everywhere at once
-            if retries > MAX_JOIN_RETRIES || surface.open_edges > MAX_OPEN_REPORTED || surface.crease_conflicts > 0 {
+            // chamfers it): sample around it while that leaves fewer such places, else
+            // everywhere
+            if retries > MAX_JOIN_RETRIES || surface.open_edges > MAX_OPEN_REPORTED || bad >= last_bad {
                 planes = false;
             }
+            last_bad = bad;
             sampled.extend(surface.open_at.iter().map(|b| b.inflated(4.0 * h)));
             continue;
         }
