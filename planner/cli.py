@@ -42,6 +42,29 @@ class _Parser(argparse.ArgumentParser):
                     options += [o for a in sub._actions for o in a.option_strings]
         return sorted(set(options))
 
+    def parse_known_args(self, args=None, namespace=None):
+        """argparse's, keeping the arguments for the did-you-mean: a misspelled option can
+        end the parse in another error first (``plan x.yaml --outt o``: "the following
+        arguments are required: --out")."""
+        self._given = list(sys.argv[1:] if args is None else args)
+        return super().parse_known_args(args, namespace)
+
+    def _close_option(self, tokens: list[str]) -> str:
+        """A did-you-mean for the first of ``tokens`` that looks like an option this parser
+        does not know (``--outt``: ``--out``), or ``""``."""
+        import difflib
+
+        options = self._option_strings()
+        for token in tokens:
+            name = token.split("=")[0]
+            if not name.startswith("-") or _is_number(name) or name in options or any(
+                    o.startswith(name) for o in options if name.startswith("--")):
+                continue  # a value, a known option or an abbreviation argparse accepts
+            close = difflib.get_close_matches(name, options, n=1)
+            if close:
+                return f"; did you mean {close[0]!r} (for {token!r})?"
+        return ""
+
     def _suggestion(self, message: str) -> str:
         import difflib
         import re
@@ -53,17 +76,22 @@ class _Parser(argparse.ArgumentParser):
             return f"; did you mean {close[0]!r}?" if close else ""
         unknown = re.search(r"unrecognized arguments: (.*)", message)
         if unknown:
-            options = self._option_strings()
-            for token in unknown.group(1).split():
-                close = difflib.get_close_matches(token.split("=")[0], options, n=1)
-                if token.startswith("-") and close:
-                    return f"; did you mean {close[0]!r} (for {token!r})?"
-        return ""
+            return self._close_option(unknown.group(1).split())
+        return self._close_option(getattr(self, "_given", []))
 
     def error(self, message: str) -> NoReturn:
         sys.stderr.write(f"minkplan: error: {message}{self._suggestion(message)} "
                          f"(see {self.prog} --help)\n")
         raise SystemExit(2)
+
+
+def _is_number(text: str) -> bool:
+    """``text`` is a number (``-1`` is a value, not an option)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 _MEMORY_HELP = ("memory budget in GiB (default: half of this machine's memory); work that "
@@ -282,10 +310,11 @@ def _cmd_minkowski(args) -> int:
         "stats": result.stats,
     }
     if args.stats:
+        from planner.output import jsonable, write_json
+
         stats_path = Path(args.stats)
-        try:
-            atomic_write(stats_path,
-                         lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))
+        try:  # strict JSON: an unbounded error bound is null, as the schema says
+            write_json(stats_path, jsonable(summary))
         except OSError as exc:
             return _fail(f"--stats {stats_path}: cannot write it ({exc.strerror or exc})")
     sys.stdout.write(
@@ -305,9 +334,8 @@ def _cmd_plan(args) -> int:
     if problem:
         return _fail(f"--out {out}: {problem}")
     if not (args.planner == "minkplan" or args.planner.startswith("ompl:")):
-        return _fail(
-            f"--planner {args.planner!r}: use minkplan or ompl:NAME (e.g. ompl:RRTConnect)"
-        )
+        return _fail(f"--planner {args.planner!r}: use minkplan or ompl:NAME (e.g. "
+                     f"ompl:RRTConnect){_close_planner(args.planner)}")
     scenario_path = Path(args.scenario)
     if not scenario_path.is_file():
         return _fail(f"scenario: file {str(scenario_path)!r} not found")
@@ -364,6 +392,9 @@ def _cmd_plan(args) -> int:
         f"{outcome.timings.get('total', 0.0):.2f} s; wrote {out}/path.json, report.json"
         f"{', certificate.json' if certificate is not None else ''}\n"
     )
+    ompl = outcome.validation.get("ompl", {})
+    if ompl.get("available") is False:  # said where it is read, not only in path.json
+        sys.stderr.write(f"minkplan: note: {ompl['reason']}\n")
     if args.export_path is not None and outcome.found:
         from planner.io.omplapp import write_omplapp_path
 
@@ -378,6 +409,18 @@ def _cmd_plan(args) -> int:
             scene = viz.scene_for_plan(scenario, outcome, c_obstacle=True)
             _write_views(scene, out / "scene.html" if args.html else None, args.glb)
     return outcome.exit_code
+
+
+def _close_planner(name: str) -> str:
+    """A did-you-mean for a misspelled planner (``minkpln``, ``omp:PRM``), or ``""``; the
+    OMPL names are asked of OMPL only here, on the way to an error."""
+    import difflib
+
+    from planner.validation import available_planners
+
+    every = ["minkplan", *(f"ompl:{n}" for n in available_planners())]
+    close = difflib.get_close_matches(name, every, n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 def _unwritable_file(target: str | None, suffix: str | None = None) -> str | None:

@@ -72,12 +72,14 @@ def _batch_settings(args):
 
 
 def planner_names(text: str) -> list[str]:
-    from planner.validation import available_planners
+    from planner.validation import available_planners, ompl_missing
 
     names = [n.strip() for n in text.split(",") if n.strip()]
     known = {n.lower(): n for n in available_planners()}
     canonical: list[str] = []
     for name in names:
+        if name.startswith("ompl:") and not known and ompl_missing() is not None:
+            raise ValueError(f"--planners: {name!r}: {ompl_missing()}")
         if name != "minkplan" and not (name.startswith("ompl:")
                                        and name[5:].lower() in known):
             import difflib

@@ -30,7 +30,8 @@ def _add_depth_parser(sub, common) -> None:
     d.add_argument("b", help="the mesh it penetrates")
     d.add_argument("--tolerance", type=float, default=None,
                    help="widest interval wanted (default 1e-3 of the pair's size)")
-    d.add_argument("--json", action="store_true", help="print the result as JSON")
+    d.add_argument("--json", action="store_true",
+                   help="print the result as JSON (docs/schemas/depth.schema.json)")
     d.add_argument("--no-progress", action="store_true", help="no progress line")
 
 
@@ -88,8 +89,12 @@ def cmd_depth(args) -> int:
                                   planner.load_mesh(args.b, name=args.b),
                                   tolerance=args.tolerance,
                                   progress=False if args.no_progress else None)
-    if args.json:
-        sys.stdout.write(json.dumps({"a": args.a, "b": args.b, **r.describe()}) + "\n")
+    if args.json:  # strict JSON (an unbounded upper end is null), named by its schema
+        from planner.output import jsonable, schema_id
+
+        document = jsonable({"schema": schema_id("depth"), "a": args.a, "b": args.b,
+                             **r.describe()})
+        sys.stdout.write(json.dumps(document, allow_nan=False) + "\n")
         return 0
     along = ", ".join(f"{x:.6g}" for x in r.direction)
     checked = "FCL agrees" if r.validated else "FCL DISAGREES"

@@ -276,6 +276,14 @@ def test_no_path_exports_nothing_and_a_bad_export_path_is_refused(tmp_path, caps
     (["plan", "x.yaml", "--out", "o", "--tme-limit", "3"], "did you mean '--time-limit'"),
     (["batch", "x.yaml", "--out", "o", "--planners", "ompl:RRTConect"],
      "did you mean 'ompl:RRTConnect'?"),
+    # a misspelled option that leaves a required one missing: argparse says the latter
+    (["plan", "x.yaml", "--outt", "o"], "did you mean '--out' (for '--outt')?"),
+    (["plan", str(SCENARIOS / "peg_in_hole.yaml"), "--out", "o", "--planner",
+      "ompl:RRTConect"], "did you mean 'RRTConnect'?"),
+    (["plan", str(SCENARIOS / "peg_in_hole.yaml"), "--out", "o", "--planner", "minkpln"],
+     "did you mean 'minkplan'?"),
+    (["plan", str(SCENARIOS / "peg_in_hole.yaml"), "--out", "o", "--planner",
+      "omp:PRM"], "did you mean 'ompl:PRM'?"),
 ])
 def test_a_misspelling_gets_a_did_you_mean(tmp_path, capsys, monkeypatch, args, hint):
     monkeypatch.chdir(tmp_path)

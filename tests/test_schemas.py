@@ -1,7 +1,8 @@
 """Every JSON file minkplan writes names its schema (``"schema": "minkplan/NAME/1"``) and
 validates against ``docs/schemas/NAME.schema.json``: the files of real runs of ``plan``
-(a path, a proved no-path), ``assemble`` (a sequence, an interlock), ``minkowski --stats``
-and a batch's records (an answer and a failure)."""
+(a path, a proved no-path), ``assemble`` (a sequence, an interlock), ``minkowski --stats``,
+``depth --json`` and a batch's records (an answer and a failure); the timing keys are the
+same in every run."""
 
 from __future__ import annotations
 
@@ -96,6 +97,34 @@ def test_minkowski_stats_validate(tmp_path):
     _valid("minkowski_stats", _read(stats))
 
 
+def test_depth_json_validates(capsys):
+    block = ROOT / "scenarios" / "_schema_examples" / "block.stl"
+    peg = ROOT / "scenarios" / "_schema_examples" / "peg.stl"
+    assert main(["depth", str(block), str(peg), "--json", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert len(out.splitlines()) == 1
+    _valid("depth", json.loads(out))
+
+
+@pytest.mark.parametrize("scenario, planner", [
+    ("peg_in_hole.yaml", "minkplan"),          # found, exact source: no decomposition
+    ("bug_trap.yaml", "minkplan"),             # found, decomposed
+    ("sealed_chamber.yaml", "minkplan"),       # a certificate, no shortcut or validation
+    ("start_in_collision.yaml", "minkplan"),   # no search at all
+    ("peg_in_hole.yaml", "ompl:RRTConnect"),   # no octree
+])
+def test_the_timing_keys_are_the_same_in_every_run(tmp_path, scenario, planner):
+    from planner.planning.report import STAGES
+
+    main(["plan", str(ROOT / "scenarios" / scenario), "--out", str(tmp_path), "--planner",
+          planner, "--no-progress"])
+    path, report = _read(tmp_path / "path.json"), _read(tmp_path / "report.json")
+    assert list(path["timings"]) == list(report["seconds"]) == list(STAGES)
+    assert path["timings"]["total"] > 0
+    _valid("path", path)
+    _valid("report", report)
+
+
 def test_batch_records_validate():
     problems = find_problems([ROOT / "scenarios" / "bug_trap.yaml"])
     task = make_tasks(problems, ["minkplan"], 1)[0]
@@ -116,7 +145,7 @@ def test_a_file_that_breaks_its_schema_is_caught(tmp_path):
 def test_every_schema_names_its_file():
     names = {p.name.removesuffix(".schema.json") for p in SCHEMAS.glob("*.schema.json")}
     assert names == {"path", "report", "certificate", "sequence", "assembly_report",
-                     "assembly_error", "minkowski_stats", "batch_record"}
+                     "assembly_error", "minkowski_stats", "batch_record", "depth"}
     for name in names:
         schema = json.loads((SCHEMAS / f"{name}.schema.json").read_text())
         assert schema["properties"]["schema"]["const"] == f"minkplan/{name}/1"

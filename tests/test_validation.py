@@ -302,6 +302,32 @@ def test_without_ompl_validation_is_fcls_and_ompl_planners_say_why(monkeypatch):
     outcome = plan(scenario, progress=False)
     assert outcome.found and outcome.validation["valid"] and outcome.validation["fcl"]["valid"]
     assert outcome.validation["ompl"]["available"] is False
-    assert "wheels for Linux and macOS only" in outcome.validation["ompl"]["reason"]
+    assert "wheels for CPython 3.10-3.13 on Linux" in outcome.validation["ompl"]["reason"]
     with pytest.raises(InvalidParameterError, match="OMPL is not installed"):
         plan(scenario, planner="ompl:RRTConnect", progress=False)
+
+
+def test_without_ompl_the_cli_says_so_in_one_line(monkeypatch, tmp_path, capsys):
+    """``plan`` notes it on stderr (one line), FCL still validates; an OMPL planner, in
+    ``plan`` or ``batch``, is refused in one line saying why."""
+    import json
+    import sys
+    from pathlib import Path
+
+    from planner.cli import main
+
+    scenario = str(Path(__file__).resolve().parents[1] / "scenarios" / "peg_in_hole.yaml")
+    monkeypatch.setitem(sys.modules, "ompl", None)
+    assert main(["plan", scenario, "--out", str(tmp_path / "a"), "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("minkplan: note: OMPL is not installed") and len(
+        err.splitlines()) == 1, err
+    validation = json.loads((tmp_path / "a" / "path.json").read_text())["validation"]
+    assert validation["fcl"]["valid"] and validation["ompl"]["available"] is False
+    for args in (["plan", scenario, "--out", str(tmp_path / "b"), "--planner",
+                  "ompl:RRTConnect"],
+                 ["batch", scenario, "--out", str(tmp_path / "c"), "--planners",
+                  "minkplan,ompl:PRM"]):
+        assert main([*args, "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert "OMPL is not installed" in err and len(err.splitlines()) == 1, err

@@ -20,6 +20,8 @@ import numpy as np
 from planner.output import jsonable, schema_id
 from planner.roles import FOUND, PlanStatus
 
+from .report import stage_seconds
+
 __all__ = ["PlanOutcome"]
 
 @dataclass
@@ -33,7 +35,8 @@ class PlanOutcome:
         length: path length (``nan`` without a path).
         clearance: minimum robot-obstacle distance along the path measured by FCL on the
             original meshes (``nan`` without a path).
-        timings: seconds per stage (``total`` included).
+        timings: seconds per stage, every key of
+            :data:`~planner.planning.report.STAGES` (0.0 for a stage that did not run).
         validation: ``{"fcl": {...}, "ompl": {...}}`` (empty dicts when not validated).
         message: one line saying what happened.
         reason: machine-readable cause: ``"path"``, ``"certificate"``,
@@ -66,6 +69,9 @@ class PlanOutcome:
     report: dict[str, Any] = field(default_factory=dict)
     cspace: Any = field(default=None, repr=False, compare=False)
     source: Any = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        self.timings = stage_seconds(self.timings)
 
     @property
     def found(self) -> bool:

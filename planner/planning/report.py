@@ -9,10 +9,25 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["LABELS", "Clock", "cell_report", "smallest_mixed_cell"]
+__all__ = ["LABELS", "STAGES", "Clock", "cell_report", "smallest_mixed_cell", "stage_seconds"]
 
 LABELS = ("empty", "full", "mixed")
 """Octree labels in the core's order (``level_counts`` columns)."""
+
+
+STAGES = ("decompose", "octree", "refine", "cspace", "graph", "search", "certificate",
+          "shortcut", "validate", "total")
+"""The keys of ``timings`` (``path.json``) and ``seconds`` (``report.json``), the same in
+every run and for every planner: ``cspace`` is ``octree`` + ``refine``, ``total`` the
+whole run, and a stage that did not run (no decomposition, no certificate, an OMPL
+baseline's octree) is 0.0."""
+
+
+def stage_seconds(seconds: dict[str, float]) -> dict[str, float]:
+    """``seconds`` with every key of :data:`STAGES`, in that order (0.0 for a stage that
+    did not run); a key outside it is kept after them."""
+    stable = {key: float(seconds.get(key, 0.0)) for key in STAGES}
+    return stable | {k: v for k, v in seconds.items() if k not in stable}
 
 
 class Clock:

@@ -44,12 +44,14 @@ from planner.errors import InvalidParameterError
 
 def ompl_missing() -> str | None:
     """Why OMPL cannot be used here (its Python package does not import: it has wheels
-    for Linux and recent macOS only), or ``None`` when it can."""
+    for CPython 3.10-3.13 on Linux x86_64 / aarch64 and macOS 15 or later only, and
+    minkplan asks for it only there), or ``None`` when it can. One line."""
     try:
         import ompl  # noqa: F401
     except ImportError as exc:
-        return (f"OMPL is not installed ({exc}); it has wheels for Linux and macOS only: "
-                f"the OMPL path check and planners are unavailable, FCL validation runs")
+        return (f"OMPL is not installed ({exc}; it has wheels for CPython 3.10-3.13 on Linux "
+                f"and macOS 15+ only): the OMPL path check and planners are unavailable, "
+                f"FCL validation runs")
     return None
 
 __all__ = [
