@@ -37,6 +37,7 @@ import numpy as np
 import trimesh
 
 from planner.errors import ResourceLimitError
+from planner.planning.local_proof import wall_off
 from planner.problem import Part
 from planner.sources import ExactSource, Source
 from planner.validation import FclChecker
@@ -68,7 +69,7 @@ whole part's C-space is cheap)."""
 SLAB_REL = 0.25
 """Thickness of the part's slabs, as a fraction of its extent along the slab's axis."""
 
-_EMPTY, _FULL, _MIXED = 0, 1, 2
+_MIXED = 2
 
 
 def prove_enclosed(source: Source, part: Part, obstacles: list[Part], *, delta: float,
@@ -183,32 +184,20 @@ def _enclosed_in_box(source: Source, part: Part, obstacles: list[Part], start: n
     except ResourceLimitError as error:
         log.info("enclosure box %.3g: %s", half, error)
         return None
-    rounds = 0
-    while True:
-        enclosure = cs.enclosure(start.tolist())
-        if enclosure is None:  # the start's cell is FULL: not free after all
-            return None
-        prims = np.asarray(enclosure["wall_prims"], dtype=np.int64)
-        outside = int((prims >= cs.n_obstacle_prims).sum())
-        if enclosure["verified"] and outside == 0 and len(prims):
-            owners = [obstacles[int(k)].name for k in source.owners(obstacles, part)]
-            return _proof(cs, enclosure, prims, owners, rounds)
-        leaves = cs.leaves()
-        members = np.asarray(enclosure["component_leaves"], dtype=np.int64)
+
+    def mixed_inside_box(cs, leaves, members):
         inside = _inside_box(cs, leaves, members, bounds)
-        mixed = [int(i) for i in members[inside & (leaves["label"][members] == _MIXED)]]
-        if not mixed or rounds >= MAX_ROUNDS or time.perf_counter() > deadline:
-            log.info("enclosure box %.3g: the start's component is not walled off in it (%d wall "
-                     "cells outside it) after %d rounds", half, outside, rounds)
-            return None
-        try:
-            stats = cs.refine(mixed, ring=False, levels=1)
-        except ResourceLimitError as error:
-            log.info("enclosure box %.3g: %s", half, error)
-            return None
-        if stats["refined"] == 0:
-            return None
-        rounds += 1
+        return [int(i) for i in members[inside & (leaves["label"][members] == _MIXED)]]
+
+    enclosure, rounds = wall_off(cs, start, bounds_faces=[False] * 6, deadline=deadline,
+                                 select=mixed_inside_box, max_rounds=MAX_ROUNDS)
+    if enclosure is None:
+        log.info("enclosure box %.3g: the start's component is not walled off in it after "
+                 "%d rounds", half, rounds)
+        return None
+    prims = np.asarray(enclosure["wall_prims"], dtype=np.int64)
+    owners = [obstacles[int(k)].name for k in source.owners(obstacles, part)]
+    return _proof(cs, enclosure, prims, owners, rounds)
 
 
 def _inside_box(cs, leaves: dict[str, np.ndarray], members: np.ndarray,

@@ -9,6 +9,9 @@
    bounds' largest side whose lattice reaches a floor of ``floor_rel`` times the bounds'
    diagonal (or ``planner.resolution``). EMPTY leaves are exactly free, FULL leaves
    exactly blocked, MIXED leaves undecided.
+   For large triangle soups a local proof comes first (:mod:`.local_proof`): an end
+   walled off in a box around it is a proved no-path, and no C-space over the bounds is
+   built.
 2. ``solve``: start and goal (:mod:`.endpoints`: in collision is an answer, a tolerated
    contact is stepped out of); the refinement rounds (:mod:`.search`), searched again
    without the margin when they prove no path with it; then a found path is shortcut by
@@ -41,6 +44,7 @@ from planner.validation import FclChecker
 
 from .certificates import certificate_document
 from .endpoints import Ends, attach_ends
+from .local_proof import LocalProof, prove_end_enclosed, surface_pairs
 from .outcome import PlanOutcome
 from .report import Clock, cell_report, smallest_mixed_cell
 from .search import SearchResult, SearchRun, search, search_without_margin
@@ -73,6 +77,10 @@ class OctreeParams:
         max_rounds: refinement rounds at most.
         shortcut_passes: greedy shortcutting passes.
         escape_rel: longest escape from a tolerated contact, in contact tolerances.
+        local_first_pairs: with at least this many triangle pairs involving a surface
+            (:func:`.local_proof.surface_pairs`), a local no-path proof at the start, then
+            at the goal, is tried before the C-space over the whole bounds is built
+            (:mod:`.local_proof`).
     """
 
     coarse_divisions: int = 64
@@ -86,6 +94,7 @@ class OctreeParams:
     max_rounds: int = 400
     shortcut_passes: int = 3
     escape_rel: float = 2.0
+    local_first_pairs: int = 5_000_000
 
 
 def default_contact_tolerance(scenario: Scenario, params: OctreeParams | None = None) -> float:
@@ -160,10 +169,31 @@ class OctreePlanner:
         self.floor_asked = float(resolution) if resolution else params.floor_rel * diagonal
         self.coarse = max(float(np.max(hi - lo)) / params.coarse_divisions, self.floor_asked)
         self.diagonal = diagonal
-        self.bar.show("minkplan: building the C-space")
-        self.cspace = self._build(self.margin)
         self.owner = self._src.owners(sc.obstacles, sc.robot)
+        self.local = self._local_proof()
+        if self.local is not None:
+            self.cspace = self.local.cspace
+        else:
+            self.bar.show("minkplan: building the C-space")
+            self.cspace = self._build(self.margin)
         self._report_head()
+
+    def _local_proof(self) -> LocalProof | None:
+        """A proof that the start (or goal) is walled off near it, tried for large
+        triangle soups on the exact source without a margin (see :mod:`.local_proof`)."""
+        sc = self.scenario
+        if (self._src.kind != "exact" or self.margin > 0
+                or surface_pairs(sc) < self.params.local_first_pairs):
+            return None
+        deadline = time.perf_counter() + sc.settings.time_limit
+        for which in ("start", "goal"):
+            self.bar.show(f"minkplan: a local proof at the {which}")
+            with self.clock.stage("octree"):
+                proof = prove_end_enclosed(sc, self._src, self.checker, which,
+                                           deadline=deadline)
+            if proof is not None:
+                return proof
+        return None
 
     @property
     def _src(self) -> Source:
@@ -224,6 +254,8 @@ class OctreePlanner:
             self.bar.close()
 
     def _solve(self) -> PlanOutcome:
+        if self.local is not None:
+            return self._local_no_path(self.local)
         sc = self.scenario
         deadline = time.perf_counter() + sc.settings.time_limit
         start = np.asarray(sc.start, dtype=np.float64)
@@ -273,6 +305,26 @@ class OctreePlanner:
                    f"{certificate['wall_cells']} FULL cells ({kind})")
         return self._finish(NO_PATH, "certificate", message, certificate=certificate,
                             space=space)
+
+    def _local_no_path(self, proof: LocalProof) -> PlanOutcome:
+        """The no-path of a local proof: its certificate, over the box around the end."""
+        raw = dict(proof.raw)
+        if proof.which == "goal":
+            raw.update(walls_around_start=False, start_component_size=0,
+                       goal_component_size=raw["start_component_size"])
+        points = {"start": np.asarray(self.scenario.start, dtype=np.float64),
+                  "goal": np.asarray(self.scenario.goal, dtype=np.float64)}
+        source = self._src
+        certificate = certificate_document(
+            proof.cspace, raw, points, exact=source.exact, source_kind=source.kind,
+            relative_to=source.relative_to(self._parts), obstacle_of=self.obstacle_of)
+        certificate["local"] = proof.summary
+        self.report["local_proof"] = proof.summary
+        kind = "exact" if certificate["exact"] else "relative to the decomposition"
+        message = (f"no path: the {proof.which} is walled off by "
+                   f"{certificate['wall_cells']} FULL cells ({kind}) in a box around it")
+        return self._finish(NO_PATH, "certificate", message, certificate=certificate,
+                            space=proof.cspace)
 
     def _found(self, result: SearchResult, space, ends: Ends) -> PlanOutcome:
         """Shortcut, put the escapes back, validate; the first candidate that passes."""

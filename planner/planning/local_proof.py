@@ -1,0 +1,197 @@
+"""No-path proofs near one end: the free component of the start (or goal) walled off by
+verified FULL cells inside a box around it, for problems whose C-space over the whole
+bounds is out of reach.
+
+Large triangle soups (OMPL.app's spirelli held at one orientation: 3.8k × 11.4k triangles
+of surfaces) take minutes for the octree over the bounds, and its channel refinement does
+not converge; but a robot in a pocket is walled off by the C-obstacle cells near it.
+:func:`prove_end_enclosed`:
+
+1. a coarse FCL flood fill from the end (grid step the bounds' diagonal over
+   :data:`FLOOD_DIVISIONS`, at most :data:`FLOOD_MAX_NODES` free nodes) — a heuristic that
+   only chooses the box: it must close without reaching the other end;
+2. the box is the flood's extent grown by :data:`MARGIN_STEPS` grid steps (clipped to the
+   bounds), and the C-space is built over it alone;
+3. :func:`wall_off`: the end's component of EMPTY and MIXED leaves is refined, level by
+   level, where its MIXED leaves lie inside the C-obstacle (their centres), until every
+   FULL leaf around it is verified by the core and none is a wall of the box that is not a
+   face of the bounds. Then no path leaves the component, whatever lies outside the box:
+   no path (exact on the exact source). Otherwise nothing is claimed and the planner
+   searches the whole bounds as before.
+
+The assembly planner's enclosures (:mod:`planner.assembly.enclosure`) use :func:`wall_off`
+too.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planner.errors import ResourceLimitError
+from planner.problem import Scenario
+from planner.sources import Source
+from planner.validation import FclChecker
+
+__all__ = ["FLOOD_DIVISIONS", "FLOOD_MAX_NODES", "MARGIN_STEPS", "LocalProof",
+           "prove_end_enclosed", "surface_pairs", "wall_off"]
+
+log = logging.getLogger(__name__)
+
+FLOOD_DIVISIONS = 128
+"""The flood's grid step is the bounds' diagonal over this."""
+
+FLOOD_MAX_NODES = 20_000
+"""A flood that finds more free nodes than this is taken as not closed."""
+
+MARGIN_STEPS = 4
+"""The box is the flood's extent grown by this many grid steps on every side (the walls
+around a pocket need room inside the box)."""
+
+COARSE_DIVISIONS = 16
+"""The box's first cells are its largest side over this."""
+
+FLOOR_DIVISIONS = 1024
+"""The finest cells are the box's largest side over this."""
+
+MAX_ROUNDS = 8
+"""Refinement rounds at most (each splits the selected MIXED leaves once)."""
+
+_FULL, _MIXED = 1, 2
+_STEPS = ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1))
+
+
+@dataclass
+class LocalProof:
+    """A proved enclosure of one end: its C-space (over ``box``), the core's certificate
+    (``raw``, as :meth:`CSpace.enclosure` gives it) and a summary for ``report.json``."""
+
+    which: str
+    cspace: Any
+    raw: dict[str, Any]
+    box: np.ndarray
+    summary: dict[str, Any]
+
+
+def surface_pairs(scenario: Scenario) -> int:
+    """Triangle pairs of the robot against obstacles where one of the two is a surface
+    (every pair is a boundary candidate: the expensive kind)."""
+    robot = scenario.robot
+    return sum(len(o.mesh.faces) * len(robot.mesh.faces) for o in scenario.obstacles
+               if not (o.solid and robot.solid))
+
+
+def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
+                       which: str, *, deadline: float) -> LocalProof | None:
+    """A proof that the ``which`` end (``"start"`` or ``"goal"``) is walled off near it,
+    or ``None`` (see the module documentation)."""
+    t0 = time.perf_counter()
+    lo, hi = (np.asarray(b, dtype=np.float64) for b in scenario.bounds)
+    ends = {"start": np.asarray(scenario.start, float), "goal": np.asarray(scenario.goal, float)}
+    point, other = ends[which], ends["goal" if which == "start" else "start"]
+    step = float(np.linalg.norm(hi - lo)) / FLOOD_DIVISIONS
+    extent = _flood(checker, point, other, lo, hi, step)
+    if extent is None:
+        return None
+    box = np.stack([np.maximum(point + (extent[0] - MARGIN_STEPS) * step, lo),
+                    np.minimum(point + (extent[1] + MARGIN_STEPS) * step, hi)])
+    if np.all((box[0] <= other) & (other <= box[1])):
+        return None  # the other end is in the box: not a pocket of one end
+    bounds_faces = [bool(box[0][s // 2] <= lo[s // 2]) if s % 2 == 0 else
+                    bool(box[1][s // 2] >= hi[s // 2]) for s in range(6)]
+    side = float(np.max(box[1] - box[0]))
+    try:
+        cs = source.cspace(scenario.obstacles, scenario.robot, box, side / FLOOR_DIVISIONS,
+                           side / COARSE_DIVISIONS)
+    except ResourceLimitError as error:
+        log.info("local proof at the %s: %s", which, error)
+        return None
+    raw, rounds = wall_off(cs, point, bounds_faces=bounds_faces, deadline=deadline,
+                           select=inside_obstacles)
+    seconds = time.perf_counter() - t0
+    log.info("local proof at the %s (box %s): %s after %d rounds in %.2f s", which,
+             np.round(box, 4).tolist(), "proved" if raw else "not proved", rounds, seconds)
+    if raw is None:
+        return None
+    summary = {"end": which, "box": box.tolist(), "flood_step": step,
+               "bounds_faces": bounds_faces, "rounds": rounds, "seconds": seconds}
+    return LocalProof(which, cs, raw, box, summary)
+
+
+def _flood(checker: FclChecker, point: np.ndarray, other: np.ndarray, lo: np.ndarray,
+           hi: np.ndarray, step: float) -> np.ndarray | None:
+    """The grid extent ``[min, max]`` (in steps from ``point``) of the free nodes a flood
+    fill from ``point`` reaches, or ``None`` when it does not close within
+    :data:`FLOOD_MAX_NODES`, reaches the node next to ``other``, or ``point`` is not free."""
+    target = tuple(int(v) for v in np.round((other - point) / step))
+    seen = {(0, 0, 0)}
+    queue = collections.deque([(0, 0, 0)])
+    low, high = np.zeros(3), np.zeros(3)
+    free = 0
+    while queue:
+        node = queue.popleft()
+        p = point + step * np.asarray(node, dtype=np.float64)
+        if np.any(p < lo) or np.any(p > hi) or checker.collides(p):
+            if node == (0, 0, 0):
+                return None
+            continue
+        free += 1
+        near_other = max(abs(a - b) for a, b in zip(node, target, strict=True)) <= 1
+        if free > FLOOD_MAX_NODES or near_other:
+            return None
+        low, high = np.minimum(low, node), np.maximum(high, node)
+        for d in _STEPS:
+            n = (node[0] + d[0], node[1] + d[1], node[2] + d[2])
+            if n not in seen:
+                seen.add(n)
+                queue.append(n)
+    return np.stack([low, high])
+
+
+def inside_obstacles(cs, leaves: dict[str, np.ndarray], members: np.ndarray) -> list[int]:
+    """The component's MIXED leaves whose centres lie in the C-obstacle (where the walls
+    leak: refining the free side's boundary leaves would only multiply them)."""
+    mixed = members[leaves["label"][members] == _MIXED]
+    if not len(mixed):
+        return []
+    size = cs.floor * 2.0 ** leaves["level"][mixed].astype(np.float64)
+    centres = np.asarray(cs.origin) + leaves["ijk"][mixed] * cs.floor + size[:, None] / 2
+    return [int(i) for i in mixed[np.asarray(cs.contains(centres), dtype=bool)]]
+
+
+def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float,
+             select: Callable[[Any, dict[str, np.ndarray], np.ndarray], list[int]],
+             max_rounds: int = MAX_ROUNDS) -> tuple[dict[str, Any] | None, int]:
+    """Refine the component of ``point`` (the leaves ``select`` picks, once per round)
+    until it is walled off by verified FULL leaves, none a wall of the C-space's box
+    except on a side in ``bounds_faces`` (``2 · axis + upper``: a face of the problem's
+    own bounds). ``(certificate, rounds)``; the certificate is ``None`` when that did not
+    happen within ``max_rounds``, the deadline or the memory limit."""
+    rounds = 0
+    while True:
+        raw = cs.enclosure(point.tolist())
+        if raw is None:  # the point's leaf is FULL: not free after all
+            return None, rounds
+        prims = np.asarray(raw["wall_prims"], dtype=np.int64)
+        sides = prims[prims >= cs.n_obstacle_prims] - cs.n_obstacle_prims
+        artificial = sum(not bounds_faces[int(s)] for s in sides)
+        if raw["verified"] and artificial == 0 and len(prims):
+            return raw, rounds
+        members = np.asarray(raw["component_leaves"], dtype=np.int64)
+        chosen = select(cs, cs.leaves(), members)
+        if not chosen or rounds >= max_rounds or time.perf_counter() > deadline:
+            return None, rounds
+        try:
+            stats = cs.refine(chosen, ring=False, levels=1)
+        except ResourceLimitError as error:
+            log.info("walling off: %s", error)
+            return None, rounds
+        if stats["refined"] == 0:
+            return None, rounds
+        rounds += 1

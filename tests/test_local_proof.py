@@ -1,0 +1,107 @@
+"""Local no-path proofs: an end walled off by verified FULL cells in a box around it,
+tried first for large triangle soups (OMPL.app's spirelli held at one orientation).
+
+The proofs are checked independently: every wall cell is in collision for FCL at its
+centre and corners, and the walled-off component lies where the robot can be (closed form
+for a sealed box); a pocket with an exit is never proved closed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from conftest import SHARED_ASSETS
+
+import planner
+from planner.planning import OctreeParams
+from planner.problem import Body, PlannerSettings, Robot, Scenario
+from planner.validation import FclChecker
+
+LOCAL_ALWAYS = OctreeParams(local_first_pairs=0)
+
+
+def box_room(open_top: bool, start, goal) -> Scenario:
+    """A unit cube robot in a 6 × 6 × 6 box given as a surface (its top face left out when
+    ``open_top``), bounds ±8."""
+    shell = trimesh.creation.box(extents=[6, 6, 6])
+    if open_top:
+        keep = shell.face_normals[:, 2] < 0.5
+        shell = trimesh.Trimesh(shell.vertices, shell.faces[keep], process=False)
+    robot = Robot("cube", trimesh.creation.box(extents=[1, 1, 1]), "box")
+    return Scenario(name="room", units="m", robot=robot,
+                    obstacles=[Body("shell", shell, "box", solid=False, kind_reason="test")],
+                    start=start, goal=goal, orientation=np.eye(3),
+                    bounds=(np.array([-8.0, -8, -8]), np.array([8.0, 8, 8])),
+                    settings=PlannerSettings(time_limit=30))
+
+
+def corners_and_centre(box: np.ndarray) -> np.ndarray:
+    lo, hi = box
+    corners = [[(lo, hi)[i >> a & 1][a] for a in range(3)] for i in range(8)]
+    return np.vstack([corners, (lo + hi) / 2])
+
+
+def assert_walls_collide(outcome, scenario: Scenario, n: int) -> None:
+    """Every (sampled) wall cell of the certificate is in collision for FCL throughout."""
+    checker = FclChecker.for_parts(scenario.robot, scenario.obstacles)
+    walls = outcome.certificate["walls"]
+    rng = np.random.default_rng(0)
+    for k in rng.choice(len(walls), size=min(n, len(walls)), replace=False):
+        wall = walls[int(k)]
+        box = np.asarray(wall["box"])
+        if wall["obstacle"] == "bounds":
+            continue  # beyond a face of the problem's own bounds
+        for p in corners_and_centre(box):
+            assert checker.collides(p), f"wall cell {wall['leaf']} is free for FCL at {p}"
+
+
+def test_a_robot_sealed_in_a_surface_box_is_walled_off_locally():
+    scenario = box_room(False, [0, 0, 0], [0, 0, 7])
+    outcome = planner.plan(scenario, params=LOCAL_ALWAYS)
+    assert outcome.status == "no_path", outcome.message
+    certificate = outcome.certificate
+    assert certificate["local"]["end"] == "start" and "in a box around it" in outcome.message
+    assert certificate["verified"] and certificate["exact"]
+    assert certificate["wall_cells_without_primitive"] == 0
+    assert certificate["wall_cells_by_obstacle"] == {"shell": certificate["wall_cells"]}
+    # closed form: the cube's centre stays within 2.5 of the origin inside, and the
+    # C-obstacle of the shell (a surface) is |x|_inf in [2.5, 3.5]: no component cell
+    # reaches past it
+    boxes = np.asarray(certificate["component"]["boxes"])
+    assert np.abs(boxes).max() <= 3.5 + 1e-9
+    assert_walls_collide(outcome, scenario, 300)
+    # the box is local: it does not hold the goal
+    box = np.asarray(certificate["local"]["box"])
+    assert not np.all((box[0] <= [0, 0, 7]) & ([0, 0, 7] <= box[1]))
+
+
+def test_a_room_with_an_open_top_is_not_walled_off_and_the_path_is_found():
+    scenario = box_room(True, [0, 0, 0], [0, 0, 7])
+    outcome = planner.plan(scenario, params=LOCAL_ALWAYS)
+    assert outcome.status == "found", outcome.message
+    assert "local_proof" not in outcome.report
+    assert outcome.validation["fcl"]["valid"] and outcome.validation["ompl"]["valid"]
+
+
+def test_small_problems_are_not_tried_locally_by_default():
+    outcome = planner.plan(box_room(False, [0, 0, 0], [0, 0, 7]))
+    assert outcome.status == "no_path"
+    assert "local_proof" not in outcome.report  # 12 x 12 triangle pairs: the global octree
+
+
+@pytest.mark.assets
+def test_spirelli_held_at_the_start_orientation_is_walled_off_near_the_start():
+    cfg = SHARED_ASSETS / "omplapp" / "spirelli.cfg"
+    scenario = planner.load_problem(cfg, hold_orientation="start")
+    outcome = planner.plan(scenario)
+    assert outcome.status == "no_path", outcome.message
+    certificate = outcome.certificate
+    assert certificate["verified"] and certificate["exact"] and certificate["local"]
+    assert certificate["wall_cells_without_primitive"] == 0
+    assert_walls_collide(outcome, scenario, 200)
+    # no component cell holds the goal, and the start's cell is in the component
+    boxes = np.asarray(certificate["component"]["boxes"])
+    start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
+    assert not np.any(np.all((boxes[:, 0] <= goal) & (goal <= boxes[:, 1]), axis=1))
+    assert np.any(np.all((boxes[:, 0] <= start) & (start <= boxes[:, 1]), axis=1))
