@@ -8,12 +8,15 @@ for a sealed box); a pocket with an exit is never proved closed.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import trimesh
 from conftest import SHARED_ASSETS
 
 import planner
+from planner.errors import ResourceLimitError
 from planner.planning import OctreeParams
 from planner.problem import Body, PlannerSettings, Robot, Scenario
 from planner.validation import FclChecker
@@ -105,3 +108,15 @@ def test_spirelli_held_at_the_start_orientation_is_walled_off_near_the_start():
     start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
     assert not np.any(np.all((boxes[:, 0] <= goal) & (goal <= boxes[:, 1]), axis=1))
     assert np.any(np.all((boxes[:, 0] <= start) & (start <= boxes[:, 1]), axis=1))
+
+
+def test_a_local_proof_out_of_memory_is_refused_in_one_line_naming_it():
+    room = box_room(False, [0, 0, 0], [0, 0, 7])
+    shell = room.obstacles[0].mesh.subdivide().subdivide().subdivide()  # 768 triangles
+    scenario = dataclasses.replace(room, obstacles=[dataclasses.replace(room.obstacles[0],
+                                                                        mesh=shell)])
+    with planner.memory_limit(0.002), pytest.raises(ResourceLimitError) as refused:
+        planner.plan(scenario, params=LOCAL_ALWAYS)
+    message = str(refused.value)
+    assert "the local proof at the start" in message and "--memory-limit" in message
+    assert "\n" not in message

@@ -189,8 +189,12 @@ def _enclosed_in_box(source: Source, part: Part, obstacles: list[Part], start: n
         inside = _inside_box(cs, leaves, members, bounds)
         return [int(i) for i in members[inside & (leaves["label"][members] == _MIXED)]]
 
-    enclosure, rounds = wall_off(cs, start, bounds_faces=[False] * 6, deadline=deadline,
-                                 select=mixed_inside_box, max_rounds=MAX_ROUNDS)
+    try:
+        enclosure, rounds = wall_off(cs, start, bounds_faces=[False] * 6, deadline=deadline,
+                                     select=mixed_inside_box, max_rounds=MAX_ROUNDS)
+    except ResourceLimitError as error:
+        log.info("enclosure box %.3g: %s", half, error)
+        return None
     if enclosure is None:
         log.info("enclosure box %.3g: the start's component is not walled off in it after "
                  "%d rounds", half, rounds)

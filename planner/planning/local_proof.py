@@ -17,7 +17,11 @@ not converge; but a robot in a pocket is walled off by the C-obstacle cells near
    FULL leaf around it is verified by the core and none is a wall of the box that is not a
    face of the bounds. Then no path leaves the component, whatever lies outside the box:
    no path (exact on the exact source). Otherwise nothing is claimed and the planner
-   searches the whole bounds as before.
+   searches the whole bounds as before — unless the proof ran out of memory
+   (:class:`~planner.errors.ResourceLimitError`, raised). Then the pocket's walls need
+   finer cells than the limit allows; a path out of the pocket would pass a gap narrower
+   than the flood's step, which the C-space over the whole bounds would have to resolve
+   with cells as fine, so it is not tried.
 
 The assembly planner's enclosures (:mod:`planner.assembly.enclosure`) use :func:`wall_off`
 too.
@@ -34,7 +38,6 @@ from typing import Any
 
 import numpy as np
 
-from planner.errors import ResourceLimitError
 from planner.problem import Scenario
 from planner.sources import Source
 from planner.validation import FclChecker
@@ -90,7 +93,12 @@ def surface_pairs(scenario: Scenario) -> int:
 def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
                        which: str, *, deadline: float) -> LocalProof | None:
     """A proof that the ``which`` end (``"start"`` or ``"goal"``) is walled off near it,
-    or ``None`` (see the module documentation)."""
+    or ``None`` (see the module documentation).
+
+    Raises:
+        ResourceLimitError: the box's C-space or its refinement would pass the memory
+            limit.
+    """
     t0 = time.perf_counter()
     lo, hi = (np.asarray(b, dtype=np.float64) for b in scenario.bounds)
     ends = {"start": np.asarray(scenario.start, float), "goal": np.asarray(scenario.goal, float)}
@@ -106,12 +114,8 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
     bounds_faces = [bool(box[0][s // 2] <= lo[s // 2]) if s % 2 == 0 else
                     bool(box[1][s // 2] >= hi[s // 2]) for s in range(6)]
     side = float(np.max(box[1] - box[0]))
-    try:
-        cs = source.cspace(scenario.obstacles, scenario.robot, box, side / FLOOR_DIVISIONS,
-                           side / COARSE_DIVISIONS)
-    except ResourceLimitError as error:
-        log.info("local proof at the %s: %s", which, error)
-        return None
+    cs = source.cspace(scenario.obstacles, scenario.robot, box, side / FLOOR_DIVISIONS,
+                       side / COARSE_DIVISIONS)
     raw, rounds = wall_off(cs, point, bounds_faces=bounds_faces, deadline=deadline,
                            select=inside_obstacles)
     seconds = time.perf_counter() - t0
@@ -172,7 +176,11 @@ def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float
     until it is walled off by verified FULL leaves, none a wall of the C-space's box
     except on a side in ``bounds_faces`` (``2 · axis + upper``: a face of the problem's
     own bounds). ``(certificate, rounds)``; the certificate is ``None`` when that did not
-    happen within ``max_rounds``, the deadline or the memory limit."""
+    happen within ``max_rounds`` or the deadline.
+
+    Raises:
+        ResourceLimitError: a refinement would pass the memory limit.
+    """
     rounds = 0
     while True:
         raw = cs.enclosure(point.tolist())
@@ -187,11 +195,7 @@ def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float
         chosen = select(cs, cs.leaves(), members)
         if not chosen or rounds >= max_rounds or time.perf_counter() > deadline:
             return None, rounds
-        try:
-            stats = cs.refine(chosen, ring=False, levels=1)
-        except ResourceLimitError as error:
-            log.info("walling off: %s", error)
-            return None, rounds
+        stats = cs.refine(chosen, ring=False, levels=1)
         if stats["refined"] == 0:
             return None, rounds
         rounds += 1

@@ -180,7 +180,9 @@ class OctreePlanner:
 
     def _local_proof(self) -> LocalProof | None:
         """A proof that the start (or goal) is walled off near it, tried for large
-        triangle soups on the exact source without a margin (see :mod:`.local_proof`)."""
+        triangle soups on the exact source without a margin (see :mod:`.local_proof`).
+        A proof that runs out of memory is the answer (a :class:`ResourceLimitError`,
+        see :mod:`.local_proof` for why the whole bounds are not tried then)."""
         sc = self.scenario
         if (self._src.kind != "exact" or self.margin > 0
                 or surface_pairs(sc) < self.params.local_first_pairs):
@@ -188,9 +190,17 @@ class OctreePlanner:
         deadline = time.perf_counter() + sc.settings.time_limit
         for which in ("start", "goal"):
             self.bar.show(f"minkplan: a local proof at the {which}")
-            with self.clock.stage("octree"):
-                proof = prove_end_enclosed(sc, self._src, self.checker, which,
-                                           deadline=deadline)
+            try:
+                with self.clock.stage("octree"):
+                    proof = prove_end_enclosed(sc, self._src, self.checker, which,
+                                               deadline=deadline)
+            except ResourceLimitError as exc:
+                where = str(sc.path) if sc.path is not None else sc.name
+                names = [f"{o.name} ⊕ −{sc.robot.name}" for o in sc.obstacles]
+                raise budget.explain(exc, f"{where}: the local proof at the {which} "
+                                     f"({self._src.kind} source)", names,
+                                     cell_bytes=budget.LEAF_BYTES,
+                                     knob="planner.resolution") from exc
             if proof is not None:
                 return proof
         return None
