@@ -37,7 +37,7 @@ import numpy as np
 import trimesh
 
 from planner.errors import ResourceLimitError
-from planner.planning.local_proof import wall_off
+from planner.planning.local_proof import leaf_boxes, wall_off
 from planner.problem import Part
 from planner.sources import ExactSource, Source
 from planner.validation import FclChecker
@@ -208,8 +208,7 @@ def _inside_box(cs, leaves: dict[str, np.ndarray], members: np.ndarray,
                 bounds: np.ndarray) -> np.ndarray:
     """Which of the leaves ``members`` lie inside the box (the others straddle it: MIXED
     for the walls outside it, which no refinement removes)."""
-    lo = np.asarray(cs.origin) + leaves["ijk"][members] * cs.floor
-    hi = lo + (cs.floor * 2.0 ** leaves["level"][members].astype(np.float64))[:, None]
+    lo, hi = leaf_boxes(cs, leaves, members)
     return np.all(lo >= bounds[0], axis=1) & np.all(hi <= bounds[1], axis=1)
 
 

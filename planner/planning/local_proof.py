@@ -42,7 +42,7 @@ from planner.problem import Scenario
 from planner.sources import Source
 from planner.validation import FclChecker
 
-__all__ = ["FLOOD_DIVISIONS", "FLOOD_MAX_NODES", "MARGIN_STEPS", "LocalProof",
+__all__ = ["FLOOD_DIVISIONS", "FLOOD_MAX_NODES", "MARGIN_STEPS", "LocalProof", "leaf_boxes",
            "prove_end_enclosed", "surface_pairs", "wall_off"]
 
 log = logging.getLogger(__name__)
@@ -66,19 +66,19 @@ FLOOR_DIVISIONS = 1024
 MAX_ROUNDS = 8
 """Refinement rounds at most (each splits the selected MIXED leaves once)."""
 
-_FULL, _MIXED = 1, 2
+_MIXED = 2
 _STEPS = ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1))
 
 
 @dataclass
 class LocalProof:
-    """A proved enclosure of one end: its C-space (over ``box``), the core's certificate
-    (``raw``, as :meth:`CSpace.enclosure` gives it) and a summary for ``report.json``."""
+    """A proved enclosure of one end: its C-space (over the box ``summary["box"]``), the
+    core's certificate (``raw``, as :meth:`CSpace.enclosure` gives it) and a summary for
+    ``report.json``."""
 
     which: str
     cspace: Any
     raw: dict[str, Any]
-    box: np.ndarray
     summary: dict[str, Any]
 
 
@@ -125,7 +125,7 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
         return None
     summary = {"end": which, "box": box.tolist(), "flood_step": step,
                "bounds_faces": bounds_faces, "rounds": rounds, "seconds": seconds}
-    return LocalProof(which, cs, raw, box, summary)
+    return LocalProof(which, cs, raw, summary)
 
 
 def _flood(checker: FclChecker, point: np.ndarray, other: np.ndarray, lo: np.ndarray,
@@ -164,9 +164,15 @@ def inside_obstacles(cs, leaves: dict[str, np.ndarray], members: np.ndarray) -> 
     mixed = members[leaves["label"][members] == _MIXED]
     if not len(mixed):
         return []
-    size = cs.floor * 2.0 ** leaves["level"][mixed].astype(np.float64)
-    centres = np.asarray(cs.origin) + leaves["ijk"][mixed] * cs.floor + size[:, None] / 2
-    return [int(i) for i in mixed[np.asarray(cs.contains(centres), dtype=bool)]]
+    lo, hi = leaf_boxes(cs, leaves, mixed)
+    return [int(i) for i in mixed[np.asarray(cs.contains((lo + hi) / 2), dtype=bool)]]
+
+
+def leaf_boxes(cs, leaves: dict[str, np.ndarray], ids: np.ndarray) -> tuple[np.ndarray,
+                                                                             np.ndarray]:
+    """The boxes ``(lo, hi)`` of the leaves ``ids`` (rows of ``cs.leaves()``)."""
+    lo = np.asarray(cs.origin) + leaves["ijk"][ids] * cs.floor
+    return lo, lo + (cs.floor * 2.0 ** leaves["level"][ids].astype(np.float64))[:, None]
 
 
 def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float,

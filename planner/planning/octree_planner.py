@@ -195,12 +195,7 @@ class OctreePlanner:
                     proof = prove_end_enclosed(sc, self._src, self.checker, which,
                                                deadline=deadline)
             except ResourceLimitError as exc:
-                where = str(sc.path) if sc.path is not None else sc.name
-                names = [f"{o.name} ⊕ −{sc.robot.name}" for o in sc.obstacles]
-                raise budget.explain(exc, f"{where}: the local proof at the {which} "
-                                     f"({self._src.kind} source)", names,
-                                     cell_bytes=budget.LEAF_BYTES,
-                                     knob="planner.resolution") from exc
+                raise self._refusal(exc, f"the local proof at the {which}") from exc
             if proof is not None:
                 return proof
         return None
@@ -222,11 +217,15 @@ class OctreePlanner:
                                         self.coarse, margin=margin,
                                         max_leaves=self.params.max_leaves)
         except ResourceLimitError as exc:
-            where = str(sc.path) if sc.path is not None else sc.name
-            names = [f"{o.name} ⊕ −{sc.robot.name}" for o in sc.obstacles]
-            raise budget.explain(exc, f"{where}: the C-space ({self._src.kind} source)",
-                                 names, cell_bytes=budget.LEAF_BYTES,
-                                 knob="planner.resolution") from exc
+            raise self._refusal(exc, "the C-space") from exc
+
+    def _refusal(self, exc: ResourceLimitError, what: str) -> ResourceLimitError:
+        """The core's refusal of ``what`` as the user reads it (:func:`budget.explain`)."""
+        sc = self.scenario
+        where = str(sc.path) if sc.path is not None else sc.name
+        names = [f"{o.name} ⊕ −{sc.robot.name}" for o in sc.obstacles]
+        return budget.explain(exc, f"{where}: {what} ({self._src.kind} source)", names,
+                              cell_bytes=budget.LEAF_BYTES, knob="planner.resolution")
 
     def _report_head(self) -> None:
         cs, sc = self.cspace, self.scenario
@@ -330,9 +329,8 @@ class OctreePlanner:
             relative_to=source.relative_to(self._parts), obstacle_of=self.obstacle_of)
         certificate["local"] = proof.summary
         self.report["local_proof"] = proof.summary
-        kind = "exact" if certificate["exact"] else "relative to the decomposition"
         message = (f"no path: the {proof.which} is walled off by "
-                   f"{certificate['wall_cells']} FULL cells ({kind}) in a box around it")
+                   f"{certificate['wall_cells']} FULL cells (exact) in a box around it")
         return self._finish(NO_PATH, "certificate", message, certificate=certificate,
                             space=proof.cspace)
 
