@@ -122,6 +122,7 @@ class ExactSum:
         a_solid: bool = True,
         b_solid: bool = True,
         max_facets: int = 8000000,
+        pieces: bool = False,
     ) -> ExactSum: ...
     @property
     def bounds(self) -> npt.NDArray[np.float64]: ...

@@ -365,6 +365,8 @@ fn closed_mesh(vertices: &PyReadonlyArray2<'_, f64>, faces: &PyReadonlyArray2<'_
 #[pyclass(frozen, module = "planner._minkowski_core")]
 pub struct ExactSum {
     inner: Arc<ExactSource>,
+    /// Built with `pieces`: point and segment queries only.
+    pieces: bool,
 }
 
 #[pymethods]
@@ -376,13 +378,20 @@ impl ExactSum {
     #[new]
     // max_facets: boundary candidates held at most (planner.limits derives it from the
     // memory limit at FACET_BYTES each); beyond it the construction stops with a
-    // ResourceLimitError, not out of memory
-    #[pyo3(signature = (a, b, a_solid=true, b_solid=true, max_facets=8_000_000))]
-    fn new(py: Python<'_>, a: MeshArg<'_>, b: MeshArg<'_>, a_solid: bool, b_solid: bool, max_facets: usize) -> PyResult<Self> {
+    // ResourceLimitError, not out of memory. pieces: no reduced convolution at all, every
+    // triangle-pair piece a boundary candidate found per query by the BVH pair traversal
+    // (ExactSource::with_piece_fallback): built at once and in no memory beyond the meshes,
+    // for point and segment queries (its surface would refine the pieces' whole shell)
+    #[pyo3(signature = (a, b, a_solid=true, b_solid=true, max_facets=8_000_000, pieces=false))]
+    fn new(py: Python<'_>, a: MeshArg<'_>, b: MeshArg<'_>, a_solid: bool, b_solid: bool, max_facets: usize, pieces: bool) -> PyResult<Self> {
         let ma = a.mesh("a", a_solid)?;
         let mb = b.mesh("b", b_solid)?;
-        let inner = py.detach(move || ExactSource::try_new(vec![ma], mb, 0.0, None, max_facets))?;
-        Ok(ExactSum { inner: Arc::new(inner) })
+        let inner = if pieces {
+            py.detach(move || ExactSource::with_piece_fallback(vec![ma], mb, 0.0, None, 0))
+        } else {
+            py.detach(move || ExactSource::try_new(vec![ma], mb, 0.0, None, max_facets))?
+        };
+        Ok(ExactSum { inner: Arc::new(inner), pieces })
     }
 
     /// Box around the sum, (2, 3).
@@ -460,6 +469,9 @@ impl ExactSum {
     /// The closed surface of the sum at resolution `eps` (as `union_surface`).
     #[pyo3(signature = (eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
     fn surface<'py>(&self, py: Python<'py>, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
+        if self.pieces {
+            return Err(InvalidParameterError::new_err("surface: a sum built with pieces=True answers point and segment queries only (its surface needs the reduced convolution)"));
+        }
         let src = self.inner.clone();
         let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };
         let r = py.detach(move || approximate_solid(src.as_ref(), &src.aabb, &params))?;

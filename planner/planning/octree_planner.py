@@ -9,7 +9,9 @@
    bounds' largest side whose lattice reaches a floor of ``floor_rel`` times the bounds'
    diagonal (or ``planner.resolution``). EMPTY leaves are exactly free, FULL leaves
    exactly blocked, MIXED leaves undecided.
-   For large triangle soups a local proof comes first (:mod:`.local_proof`): an end
+   For large problems the straight motion from start to goal is tested exactly first
+   (:mod:`.direct`): free, it is the answer once validated, and no C-space is built.
+   For large triangle soups a local proof comes next (:mod:`.local_proof`): an end
    walled off in a box around it is a proved no-path, and no C-space over the bounds is
    built.
 2. ``solve``: start and goal (:mod:`.endpoints`: in collision is an answer, a tolerated
@@ -43,6 +45,7 @@ from planner.sources import Source, choose_for
 from planner.validation import FclChecker
 
 from .certificates import certificate_document
+from .direct import direct_motion, triangle_pairs
 from .endpoints import Ends, attach_ends
 from .local_proof import LocalProof, prove_end_enclosed, surface_pairs
 from .outcome import PlanOutcome
@@ -81,6 +84,10 @@ class OctreeParams:
             (:func:`.local_proof.surface_pairs`), a local no-path proof at the start, then
             at the goal, is tried before the C-space over the whole bounds is built
             (:mod:`.local_proof`).
+        direct_first_pairs: with at least this many triangle pairs in all
+            (:func:`.direct.triangle_pairs`), the straight motion from start to goal is
+            tested exactly first (:mod:`.direct`); when it is free and validates, no
+            C-space is built.
     """
 
     coarse_divisions: int = 64
@@ -95,6 +102,7 @@ class OctreeParams:
     shortcut_passes: int = 3
     escape_rel: float = 2.0
     local_first_pairs: int = 5_000_000
+    direct_first_pairs: int = 5_000_000
 
 
 def default_contact_tolerance(scenario: Scenario, params: OctreeParams | None = None) -> float:
@@ -138,6 +146,9 @@ class OctreePlanner:
         self.report: dict[str, Any] = {}
         self.rounds: list[dict] = []
         self.cspace: Any = None
+        self.direct: np.ndarray | None = None
+        self.local: LocalProof | None = None
+        self._ready = False
 
     # ---------------------------------------------------------------- setup
 
@@ -170,6 +181,13 @@ class OctreePlanner:
         self.coarse = max(float(np.max(hi - lo)) / params.coarse_divisions, self.floor_asked)
         self.diagonal = diagonal
         self.owner = self._src.owners(sc.obstacles, sc.robot)
+        self._ready = True
+        self.direct = self._direct()
+        if self.direct is None:
+            self._build_space()
+
+    def _build_space(self) -> None:
+        """The local proof, else the C-space over the whole bounds; the report's head."""
         self.local = self._local_proof()
         if self.local is not None:
             self.cspace = self.local.cspace
@@ -177,6 +195,20 @@ class OctreePlanner:
             self.bar.show("minkplan: building the C-space")
             self.cspace = self._build(self.margin)
         self._report_head()
+
+    def _direct(self) -> np.ndarray | None:
+        """The straight motion of a large problem when it is exactly free (:mod:`.direct`)."""
+        sc = self.scenario
+        if triangle_pairs(sc) < self.params.direct_first_pairs:
+            return None
+        self.bar.show("minkplan: testing the straight motion")
+        t0 = time.perf_counter()  # not a stage of its own: timings keep their keys
+        motion = direct_motion(sc, self._src, self.checker,
+                               reach=self.params.escape_rel * max(self.delta, self.margin),
+                               margin=sc.settings.clearance)
+        self.report["direct"] = {"free": motion is not None,
+                                 "seconds": time.perf_counter() - t0}
+        return motion
 
     def _local_proof(self) -> LocalProof | None:
         """A proof that the start (or goal) is walled off near it, tried for large
@@ -255,7 +287,7 @@ class OctreePlanner:
 
     def solve(self) -> PlanOutcome:
         """Plan from the scenario's start to its goal within ``planner.time_limit``."""
-        if self.cspace is None:
+        if not self._ready:
             self.setup()
         try:
             return self._solve()
@@ -263,6 +295,12 @@ class OctreePlanner:
             self.bar.close()
 
     def _solve(self) -> PlanOutcome:
+        if self.direct is not None:
+            found = self._direct_found(self.direct)
+            if found is not None:
+                return found
+            self.direct = None
+            self._build_space()
         if self.local is not None:
             return self._local_no_path(self.local)
         sc = self.scenario
@@ -334,6 +372,28 @@ class OctreePlanner:
         return self._finish(NO_PATH, "certificate", message, certificate=certificate,
                             space=proof.cspace)
 
+    def _direct_found(self, motion: np.ndarray) -> PlanOutcome | None:
+        """The straight motion, validated by FCL and OMPL; ``None`` when it fails (the
+        C-space is built then, as without it)."""
+        described = self._src.describe(self.scenario.obstacles, self.scenario.robot)
+        described.pop("decomposition")
+        self.report.update({"scenario": self.scenario.describe(), "source": described,
+                            "contact_tolerance": self.delta})
+        message = "the straight motion is free (exact segment test, no C-space built)"
+        if not self.validate:
+            return self._finish(FOUND, "direct", message, waypoints=motion)
+        self.bar.show("minkplan: validating the path (FCL, OMPL)")
+        with self.clock.stage("validate"):
+            validation = validate_path(motion, self.checker, self.bounds)
+        self.report["direct"]["validation"] = {"valid": validation["valid"]}
+        if not validation["valid"]:
+            log.info("%s: the straight motion failed validation; building the C-space",
+                     self.scenario.name)
+            return None
+        return self._finish(FOUND, "direct", message, waypoints=motion,
+                            validation=validation,
+                            clearance=validation["fcl"]["min_clearance"])
+
     def _found(self, result: SearchResult, space, ends: Ends) -> PlanOutcome:
         """Shortcut, put the escapes back, validate; the first candidate that passes."""
         candidates = self._candidates(result, space, ends)
@@ -387,10 +447,11 @@ class OctreePlanner:
         """The outcome, with the octree's cells, graph and refinement in the report."""
         self.bar.close()
         space = self.cspace if space is None else space
-        self.report["cells"] = cell_report(space.level_counts(), space.floor)
-        with self.clock.stage("graph"):
-            nodes, edges = space.roadmap_size()
-        self.report["graph"] = {"nodes": nodes, "edges": edges}
+        if space is not None:
+            self.report["cells"] = cell_report(space.level_counts(), space.floor)
+            with self.clock.stage("graph"):
+                nodes, edges = space.roadmap_size()
+            self.report["graph"] = {"nodes": nodes, "edges": edges}
         self.report["refinement"] = {"rounds": len(self.rounds), "history": self.rounds}
         wp = np.zeros((0, 3)) if waypoints is None else np.asarray(waypoints, dtype=np.float64)
         length = float(np.linalg.norm(np.diff(wp, axis=0), axis=1).sum()) if len(wp) else math.nan

@@ -312,7 +312,7 @@ impl ExactSource {
         if !p.is_finite() {
             return Err(CoreError::NonFinite { what: "depth query point".into() });
         }
-        if self.walls.is_some() || self.margin != 0.0 || !self.surface_pairs.is_empty() {
+        if self.walls.is_some() || self.margin != 0.0 || !self.piece_pairs.is_empty() {
             return Err(CoreError::InvalidGeometry {
                 what: "penetration depth".into(),
                 detail: "defined for the sum of two solids (no walls, no margin, no surface); pass closed solids".into(),

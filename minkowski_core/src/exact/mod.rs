@@ -112,9 +112,10 @@ pub struct ExactSource {
     pub obstacles: Vec<TriMesh>,
     /// The mesh `B` (for C-obstacles `O ⊕ (−R)`: the robot reflected through its origin).
     pub b: TriMesh,
-    /// The obstacles whose pair with `B` has a surface (no reduced convolution: every piece
-    /// is a boundary candidate).
-    pub surface_pairs: Vec<usize>,
+    /// The obstacles taken piece by piece (every triangle-pair piece a boundary candidate, no
+    /// reduced convolution): pairs with a surface, and solid pairs over the facet budget
+    /// ([`ExactSource::with_piece_fallback`]).
+    pub piece_pairs: Vec<usize>,
     /// Growth of every sum by the cube `[-margin, margin]^3`.
     pub margin: f64,
     /// When set, everything outside this box is solid too (closed slabs beyond each face).
@@ -177,27 +178,47 @@ impl ExactSource {
     /// [`CoreError::FacetLimit`] when the facets would exceed the budget; the search
     /// stops soon after, so little of that memory is taken.
     pub fn try_new(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize) -> CoreResult<ExactSource> {
+        Self::build(obstacles, b, margin, walls, max_facets, false)
+    }
+
+    /// [`ExactSource::try_new`], but a solid pair whose reduced convolution would exceed
+    /// what is left of `max_facets` is taken piece by piece, as a surface pair is (every
+    /// triangle-pair piece a boundary candidate, found per cell by the BVH pair traversal;
+    /// containment still counts, both meshes being solids): the same solid, exactly, in
+    /// memory bounded by the octree's records instead of `n·m` facets. Its pieces fill a
+    /// shell around the boundary, so cells inside the C-obstacle near it are MIXED until
+    /// one piece or a nested vertex shows them FULL: right for a planner, which refines
+    /// only where its search asks, not for a surface, which would refine the whole shell.
+    pub fn with_piece_fallback(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize) -> ExactSource {
+        Self::build(obstacles, b, margin, walls, max_facets, true).expect("pairs over the budget are taken piece by piece")
+    }
+
+    fn build(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize, fallback: bool) -> CoreResult<ExactSource> {
         let aabb = obstacles.iter().fold(Aabb::empty(), |acc, a| acc.union(&Aabb::new(a.aabb.min + b.aabb.min, a.aabb.max + b.aabb.max).inflated(margin)));
         let tri_ext = |m: &TriMesh| m.tris.iter().map(|t| Aabb::from_points(&t.p).extent().max_element()).fold(0.0f64, f64::max);
         let max_a = obstacles.iter().map(tri_ext).fold(0.0f64, f64::max);
         let max_piece = (max_a + tri_ext(&b) + 2.0 * margin) * 1.000_001;
-        let surface_pairs: Vec<usize> = (0..obstacles.len()).filter(|&k| !(obstacles[k].solid && b.solid)).collect();
+        let mut piece_pairs: Vec<usize> = (0..obstacles.len()).filter(|&k| !(obstacles[k].solid && b.solid)).collect();
         let budget = max_facets.min(PAIR as usize - 1);
         let mut facets: Vec<Facet> = Vec::new();
-        for (k, a) in obstacles.iter().enumerate().filter(|(k, _)| !surface_pairs.contains(k)) {
+        for (k, a) in obstacles.iter().enumerate() {
+            if piece_pairs.contains(&k) {
+                continue;
+            }
             let left = budget - facets.len();
-            let found = convolution_within(a, &b, k as u32, left).map_err(|n| CoreError::FacetLimit {
-                what: format!("obstacle {k}"),
-                found: facets.len() + n,
-                budget,
-                bytes_per_facet: FACET_BYTES,
-            })?;
-            facets.extend(found);
+            match convolution_within(a, &b, k as u32, left) {
+                Ok(found) => facets.extend(found),
+                Err(_) if fallback => piece_pairs.push(k),
+                Err(n) => {
+                    return Err(CoreError::FacetLimit { what: format!("obstacle {k}"), found: facets.len() + n, budget, bytes_per_facet: FACET_BYTES });
+                }
+            }
         }
+        piece_pairs.sort_unstable();
         let boxes: Vec<Aabb> = facets.iter().map(|f| f.aabb(margin)).collect();
         let fbvh = Bvh::build(&boxes);
         let flat = if margin == 0.0 { facets.iter().map(Facet::flat_planes).collect() } else { Vec::new() };
-        Ok(ExactSource { full_witness: walls.is_some(), obstacles, b, surface_pairs, margin, walls, aabb, max_piece, facets, fbvh, flat })
+        Ok(ExactSource { full_witness: walls.is_some(), obstacles, b, piece_pairs, margin, walls, aabb, max_piece, facets, fbvh, flat })
     }
 
     /// Whether `p` lies in facet `i` grown by `m` (its precomputed half-spaces when `m` is 0).
@@ -461,7 +482,7 @@ impl ExactSource {
             }
             best = best.min(f.separation(p, self.margin).max(0.0));
         }
-        for &k in &self.surface_pairs {
+        for &k in &self.piece_pairs {
             // every piece of a surface pair is a boundary candidate
             let bound = std::cell::Cell::new(best);
             let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
@@ -494,7 +515,7 @@ impl ExactSource {
         self.fbvh.for_each_overlapping(cell, |i| {
             touched = touched || self.facets[i].overlaps_box(cell, self.margin);
         });
-        touched = touched || self.surface_pairs.iter().any(|&k| self.any_piece(k, self.margin, true, |bx| bx.overlaps(cell), |piece, _, _| piece.overlaps_box(cell)));
+        touched = touched || self.piece_pairs.iter().any(|&k| self.any_piece(k, self.margin, true, |bx| bx.overlaps(cell), |piece, _, _| piece.overlaps_box(cell)));
         if touched || self.walls.is_some_and(|w| !(w.min.cmplt(cell.min).all() && cell.max.cmplt(w.max).all())) {
             return None;
         }
@@ -581,7 +602,7 @@ impl ExactSource {
         let mut cand: Vec<u32> = Vec::new();
         self.fbvh.for_each_overlapping(&seg, |i| cand.push(i as u32));
         cand.sort_unstable();
-        for &k in &self.surface_pairs {
+        for &k in &self.piece_pairs {
             cand.extend([PAIR, k as u32, 0, 0]);
         }
         if self.walls.is_some() {
@@ -606,7 +627,7 @@ impl ExactSource {
         self.fbvh.for_each_overlapping(&q, |i| {
             hit = hit || self.facet_clip(i, a, b, m).is_some();
         });
-        hit = hit || self.surface_pairs.iter().any(|&k| self.pieces_meet_segment(k, [0, 0], m, a, b));
+        hit = hit || self.piece_pairs.iter().any(|&k| self.pieces_meet_segment(k, [0, 0], m, a, b));
         // no grown boundary candidate meets the segment: all of it is inside or all outside
         !hit && !self.exact_point(a)
     }
@@ -616,7 +637,7 @@ impl CellSource for ExactSource {
     /// Every facet, one `[PAIR, k, 0, 0]` (the root nodes) per surface pair, the walls.
     fn root_records(&self) -> Vec<u32> {
         let mut r: Vec<u32> = (0..self.facets.len() as u32).collect();
-        for &k in &self.surface_pairs {
+        for &k in &self.piece_pairs {
             r.extend([PAIR, k as u32, 0, 0]);
         }
         if self.walls.is_some() {

@@ -36,7 +36,7 @@ fn surface_pairs_have_no_facets_and_membership_matches_brute_force() {
     for (a, b) in cases() {
         let src = ExactSource::new(vec![a.clone()], b.clone(), 0.0, None);
         assert!(src.facets.is_empty());
-        assert_eq!(src.surface_pairs, vec![0]);
+        assert_eq!(src.piece_pairs, vec![0]);
         let mut rng = Lcg(5);
         let region = src.aabb.inflated(0.3);
         for _ in 0..3000 {
@@ -100,4 +100,30 @@ fn segments_over_surface_pairs() {
     assert!(!src.segment_is_free(Vec3::new(1.5, 1.5, 4.0), Vec3::new(1.5, 1.5, 1.0), 0.7), "the margin meets the floor");
     assert!(src.signed_distance(Vec3::new(1.5, 1.5, 1.0)) > 0.0);
     assert!(src.signed_distance(Vec3::new(1.5, 1.5, 1.0)) <= 0.6 + 1e-9, "a lower bound of 0.6");
+}
+
+#[test]
+fn solid_pairs_over_the_facet_budget_are_taken_piece_by_piece_exactly() {
+    // a torus and a box, both solids: the same membership and segments with all of the
+    // reduced convolution as with none of it (budget 0), nesting included
+    let a = torus_mesh(1.5, 0.5, 12, 8);
+    let b = box_mesh([-0.3; 3], [0.3; 3]).negated();
+    let full = ExactSource::new(vec![a.clone()], b.clone(), 0.0, None);
+    assert!(matches!(ExactSource::try_new(vec![a.clone()], b.clone(), 0.0, None, 0), Err(CoreError::FacetLimit { .. })));
+    let pieces = ExactSource::with_piece_fallback(vec![a.clone()], b.clone(), 0.0, None, 0);
+    assert!(!full.facets.is_empty() && full.piece_pairs.is_empty());
+    assert!(pieces.facets.is_empty() && pieces.piece_pairs == vec![0]);
+    let (mut rng, region) = (Lcg(11), full.aabb.inflated(0.3));
+    let mut inside = 0;
+    for _ in 0..3000 {
+        let p = rng.point(&region);
+        assert_eq!(pieces.contains_point(p), truth(&a, &b, p), "{p:?}");
+        inside += usize::from(full.contains_point(p));
+        let q = rng.point(&region);
+        assert_eq!(pieces.segment_is_free(p, q, 0.0), full.segment_is_free(p, q, 0.0), "{p:?} → {q:?}");
+    }
+    assert!(inside > 100, "{inside} points inside");
+    // in the tube, and in its hole
+    assert!(pieces.contains_point(Vec3::new(1.5, 0.0, 0.0)));
+    assert!(!pieces.contains_point(Vec3::ZERO), "the hole");
 }
