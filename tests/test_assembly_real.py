@@ -67,6 +67,7 @@ def test_the_nut_on_the_bolt_proved_interlocked_under_translation(tmp_path, caps
     parts = {p.name: p for p in assembly.parts}
     start = np.asarray(proof["start"])
     assert 0 < np.linalg.norm(start) <= NUT_INTERFERENCE
+    assert "no penetration on the way" in proof["claim"] and "not covered" in proof["claim"]
     assert not FclChecker.for_parts(parts["nut"], [parts["bolt"]]).collides(start)
     # the walled-off component is small: the nut moves within the box of the proof
     assert proof["half_size"] < 0.01 * assembly.diagonal
@@ -82,6 +83,33 @@ def test_the_nut_on_the_bolt_proved_interlocked_under_translation(tmp_path, caps
     assert "interlocked parts bolt, nut (proved)" in out and "interference 0.0016" in out
     report = json.loads((tmp_path / "report.json").read_text())
     assert report["interlocked_attempts"]["nut"]["reason"] == "enclosure"
+
+
+@needs_assets
+def test_industreal_gears_come_off_the_base_each_step_validated():
+    """IndustReal's gear base with three gears (5k and 21k-51k triangles a part): each
+    gear lifts off its shaft, every step validated by FCL at the contact tolerance; and
+    the planner, asked for one gear's removal alone, finds it as a direct motion (its
+    whole-bounds C-space would pass the facet budget)."""
+    from planner.assembly import removal_scenario  # noqa: PLC0415
+    from planner.planning import plan  # noqa: PLC0415
+
+    assembly = load_assembly(ASSETS / "industreal_gears" / "industreal_gears.yaml")
+    result = plan_assembly(assembly)
+    assert result.found, result.message
+    assert sorted(s.part for s in result.removal) == ["gear_large", "gear_medium",
+                                                       "gear_small"]
+    for step in result.removal:
+        assert step.validation["valid"], step
+        checker = FclChecker.for_parts(
+            {p.name: p for p in assembly.parts}[step.part],
+            [p for p in assembly.parts if p.name in step.obstacles],
+            contact_tolerance=assembly.tolerance)
+        assert checker.check_path(np.asarray(step.removal)).valid
+    scenario = removal_scenario(assembly, "gear_medium", ["gear_base"], "+z")
+    outcome = plan(scenario, progress=False)
+    assert outcome.status == "found" and outcome.reason == "direct", outcome.message
+    assert outcome.validation["valid"]
 
 
 def _shut_box(tmp_path: Path, slot: float) -> Path:

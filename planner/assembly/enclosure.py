@@ -77,7 +77,8 @@ def prove_enclosed(source: Source, part: Part, obstacles: list[Part], *, delta: 
                    min_half: float = 0.0) -> dict[str, Any] | None:
     """A proof that ``part`` (at translation ``0``) cannot leave ``obstacles``, or
     ``None``: ``{"start", "half_size", "component_cells", "wall_cells",
-    "wall_cells_by_obstacle", "floor", "rounds", "exact", "seconds"}``.
+    "wall_cells_by_obstacle", "floor", "rounds", "exact", "seconds", "claim"}`` (``claim``:
+    what is proved, in words: motions that meet no obstacle, from a free start).
 
     Args:
         source: the C-obstacle source (the proof speaks of its C-obstacles: exact for the
@@ -109,9 +110,21 @@ def prove_enclosed(source: Source, part: Part, obstacles: list[Part], *, delta: 
                      "proved" if proof else "not proved", time.perf_counter() - t_subset)
             if proof is not None:
                 proof.update(start=start.tolist(), half_size=half, subset=subset,
-                             exact=on.exact, seconds=time.perf_counter() - t0)
+                             exact=on.exact, seconds=time.perf_counter() - t0,
+                             claim=_claim(start, delta))
                 return proof
     return None
+
+
+def _claim(start: np.ndarray, delta: float) -> str:
+    """What the proof proves, in words (for the answer's JSON)."""
+    moved = float(np.linalg.norm(start))
+    origin = ("the assembled pose" if moved == 0.0 else
+              f"a free pose {moved:.3g} from the assembled one (within the tolerance "
+              f"{delta:.3g})")
+    return (f"no translation from {origin} leaves the proof's box without its part "
+            "meeting an obstacle (exact C-obstacles: no penetration on the way); motions "
+            "that penetrate by up to the tolerance while moving are not covered")
 
 
 def _exact(source: Source) -> Source:
