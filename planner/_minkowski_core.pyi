@@ -171,9 +171,12 @@ class CSpace:
         solid: Sequence[bool] | None = None,
         robot_solid: bool = True,
         max_facets: int = 8000000,
+        reuse: Sequence[ExactSum | None] | None = None,
     ) -> CSpace:
         """C-space of the exact source: C-obstacles of solids or surfaces, no
         decomposition."""
+    @property
+    def reused(self) -> list[bool]: ...
     @property
     def is_exact(self) -> bool: ...
     def __len__(self) -> int: ...

@@ -290,9 +290,20 @@ class Source:
 
 
 class ExactSource(Source):
-    """The meshes as given, no decomposition (see the module documentation)."""
+    """The meshes as given, no decomposition (see the module documentation).
+
+    The pair sums it builds (:meth:`pair`, e.g. for an assembly's pair cache) are kept, and
+    a C-space over the same parts takes each obstacle's reduced convolution from its pair
+    sum instead of computing it again (``pairs_reused`` counts them).
+    """
 
     kind = "exact"
+
+    def __init__(self, settings: SourceSettings, why: str, *,
+                 parts: CheckedParts | None = None) -> None:
+        super().__init__(settings, why, parts=parts)
+        self._mirrored: dict[tuple[int, int], tuple[Part, Part, Any]] = {}
+        self.pairs_reused = 0
 
     @property
     def exact(self) -> bool:
@@ -310,12 +321,16 @@ class ExactSource(Source):
         from ._minkowski_core import CSpace  # noqa: PLC0415
 
         native = self.parts.native
-        return CSpace.exact([native(o) for o in obstacles], native(robot),
-                            np.asarray(bounds, dtype=np.float64), floor, coarse,
-                            margin=margin,
-                            max_leaves=budget.leaves() if max_leaves is None else max_leaves,
-                            solid=[o.solid for o in obstacles], robot_solid=robot.solid,
-                            max_facets=budget.facets())
+        reuse = [self._mirrored.get((id(o), id(robot)), (None, None, None))[2]
+                 for o in obstacles]
+        cs = CSpace.exact([native(o) for o in obstacles], native(robot),
+                          np.asarray(bounds, dtype=np.float64), floor, coarse,
+                          margin=margin,
+                          max_leaves=budget.leaves() if max_leaves is None else max_leaves,
+                          solid=[o.solid for o in obstacles], robot_solid=robot.solid,
+                          max_facets=budget.facets(), reuse=reuse)
+        self.pairs_reused += sum(cs.reused)
+        return cs
 
     def owners(self, obstacles, robot):
         return np.arange(len(obstacles), dtype=np.int64)
@@ -330,6 +345,8 @@ class ExactSource(Source):
 
         native = core.ExactSum(self.parts.native(a), mesh_b, a.solid, b.solid,
                                max_facets=budget.facets())
+        if mirror_b:  # kept for the C-spaces of the same parts (the parts kept alive too)
+            self._mirrored[(id(a), id(b))] = (a, b, native)
         stats = {"triangles_a": int(native.triangles[0]), "triangles_b": int(native.triangles[1]),
                  "facets": int(native.facets)}
         return PairCObstacle(native, exact=True, excess=0.0, stats=stats)

@@ -44,7 +44,35 @@ def test_six_piece_burr_comes_apart_key_first():
     assert (first.part, first.method, first.direction) == ("x1", "straight", "+x")
     assert (second.part, second.method) == ("z1", "planned") and len(second.removal) > 2
     assert result.source["used"] == "exact" and result.reuse["decompositions"] == 0
+    # z1's planned removal took the reduced convolutions of its four pairs from the cache
+    assert len(second.obstacles) == 4 and result.reuse["cspace_pairs_reused"] == 4
     _revalidate(result)
+
+
+def test_a_cspace_takes_a_pair_sum_only_of_the_same_meshes():
+    """Reusing a pair's reduced convolution gives the C-space computed afresh, leaf for
+    leaf; a sum of other meshes is not taken."""
+    from planner.sources import ExactSource, SourceSettings  # noqa: PLC0415
+
+    assembly = load_assembly(DEMOS / "six_piece_burr.yaml")
+    parts = {p.name: p for p in assembly.parts}
+    robot, obstacles = parts["z1"], [parts["x0"], parts["y0"]]
+    lo = np.min([o.mesh.bounds[0] for o in obstacles], axis=0) - robot.mesh.bounds[1]
+    hi = np.max([o.mesh.bounds[1] for o in obstacles], axis=0) - robot.mesh.bounds[0]
+    bounds = np.stack([lo, hi])
+    side = float(np.max(hi - lo))
+    settings = SourceSettings(exact=True)
+    fresh = ExactSource(settings, "test").cspace(obstacles, robot, bounds, side / 512,
+                                                 side / 32)
+    source = ExactSource(settings, "test")
+    source.pair(parts["x0"], robot)  # the pair in the C-space
+    source.pair(parts["y0"], parts["x1"])  # another robot: not the C-space's pair
+    reusing = source.cspace(obstacles, robot, bounds, side / 512, side / 32)
+    assert reusing.reused == [True, False] and source.pairs_reused == 1
+    a, b = fresh.leaves(), reusing.leaves()
+    assert set(a) == set(b)
+    for key in a:
+        assert np.array_equal(np.asarray(a[key]), np.asarray(b[key])), key
 
 
 def test_six_piece_burr_is_interlocked_while_the_key_is_in():

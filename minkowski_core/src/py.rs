@@ -543,6 +543,8 @@ fn vec3_any(p: &[f64], what: &str) -> PyResult<Vec3> {
 pub struct PyCSpace {
     inner: crate::roadmap::CSpace,
     max_leaves: usize,
+    /// Per obstacle, whether its reduced convolution was taken from a given pair sum.
+    reused: Vec<bool>,
 }
 
 impl PyCSpace {
@@ -585,16 +587,18 @@ impl PyCSpace {
             let polys: &[ConvexPolytope] = set.as_ref().map_or(&[], |s| &s.polys);
             crate::roadmap::CSpace::build(polys, region, h_floor, h_coarse, margin, max_leaves)
         })?;
-        Ok(PyCSpace { inner, max_leaves })
+        Ok(PyCSpace { inner, max_leaves, reused: Vec::new() })
     }
 
     /// The C-space of the exact source: C-obstacles `O_k ⊕ (−R)` of the meshes `obstacles`
     /// (list of (vertices (n, 3), faces (m, 3))) for the mesh `robot`, grown by `margin`,
     /// without decomposition. Meshes are solids (checked) unless `solid` (one flag per
     /// obstacle) or `robot_solid` says they are surfaces. Obstacle `k` is primitive `k`;
-    /// the six walls follow.
+    /// the six walls follow. `reuse`: per obstacle, an `ExactSum` of it and the reflected
+    /// robot built before (or None), whose reduced convolution is taken instead of computed
+    /// when it is of the same meshes (`reused` says which were).
     #[staticmethod]
-    #[pyo3(signature = (obstacles, robot, bounds, h_floor, h_coarse, margin=0.0, max_leaves=20_000_000, solid=None, robot_solid=true, max_facets=8_000_000))]
+    #[pyo3(signature = (obstacles, robot, bounds, h_floor, h_coarse, margin=0.0, max_leaves=20_000_000, solid=None, robot_solid=true, max_facets=8_000_000, reuse=None))]
     #[allow(clippy::too_many_arguments)]
     fn exact(
         py: Python<'_>,
@@ -608,6 +612,7 @@ impl PyCSpace {
         solid: Option<Vec<bool>>,
         robot_solid: bool,
         max_facets: usize,
+        reuse: Option<Vec<Option<Bound<'_, ExactSum>>>>,
     ) -> PyResult<Self> {
         let b = points_of(&bounds, "bounds")?;
         if b.len() != 2 {
@@ -623,8 +628,16 @@ impl PyCSpace {
             meshes.push(o.mesh(&format!("obstacle {k}"), solid[k])?);
         }
         let r = robot.mesh("robot", robot_solid)?;
-        let inner = py.detach(move || crate::roadmap::CSpace::build_exact(meshes, &r, region, h_floor, h_coarse, margin, max_leaves, max_facets))?;
-        Ok(PyCSpace { inner, max_leaves })
+        let given: Vec<Option<Arc<ExactSource>>> = reuse.unwrap_or_default().iter().map(|g| g.as_ref().map(|g| g.get().inner.clone())).collect();
+        let (inner, reused) = py.detach(move || crate::roadmap::CSpace::build_exact_reusing(meshes, &r, region, h_floor, h_coarse, margin, max_leaves, max_facets, &given))?;
+        Ok(PyCSpace { inner, max_leaves, reused })
+    }
+
+    /// Per obstacle, whether its reduced convolution was taken from a pair sum given to
+    /// `exact` (`reuse`) instead of computed; empty for other C-spaces.
+    #[getter]
+    fn reused(&self) -> Vec<bool> {
+        self.reused.clone()
     }
 
     /// Whether the C-obstacles come from the exact source (no decomposition).

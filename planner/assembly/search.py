@@ -465,7 +465,10 @@ class _Search:
         """What was computed and what was reused (see :class:`PairCache`)."""
         several = sum(len(steps) > 1 for steps in self.pairs.uses.values())
         return {**self.pairs.stats, "pairs": len(self.pairs.computed),
-                "pairs_reused_across_steps": several, "steps": self.pairs.step, **self.stats}
+                "pairs_reused_across_steps": several, "steps": self.pairs.step,
+                # reduced convolutions the planned removals' C-spaces took from the pairs
+                "cspace_pairs_reused": int(getattr(self.source, "pairs_reused", 0)),
+                **self.stats}
 
 
 def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=None,

@@ -61,6 +61,7 @@ use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
 use crate::octree::{merge_sorted, CellSource, Label};
 use crate::surface::planar::Cut;
+use std::sync::Arc;
 
 /// Records at or above this are walls (`WALL + side`, side = 2 · axis + upper); below
 /// [`PAIR`], facet indices.
@@ -178,7 +179,34 @@ impl ExactSource {
     /// [`CoreError::FacetLimit`] when the facets would exceed the budget; the search
     /// stops soon after, so little of that memory is taken.
     pub fn try_new(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize) -> CoreResult<ExactSource> {
-        Self::build(obstacles, b, margin, walls, max_facets, false)
+        Self::build(obstacles, b, margin, walls, max_facets, false, &[])
+    }
+
+    /// [`ExactSource::try_new`], taking obstacle `k`'s reduced convolution from `given[k]`
+    /// when that is a pair sum of the same two meshes (one obstacle, no margin, built
+    /// before: an assembly's pair cache), instead of computing it again; a `None`, or a
+    /// sum of other meshes, is computed. Whether each was taken.
+    ///
+    /// # Errors
+    /// As [`ExactSource::try_new`] (the facets taken count against the budget too).
+    pub fn try_new_reusing(
+        obstacles: Vec<TriMesh>,
+        b: TriMesh,
+        margin: f64,
+        walls: Option<Aabb>,
+        max_facets: usize,
+        given: &[Option<Arc<ExactSource>>],
+    ) -> CoreResult<(ExactSource, Vec<bool>)> {
+        let taken: Vec<bool> = (0..obstacles.len()).map(|k| given.get(k).and_then(Option::as_ref).is_some_and(|g| g.is_pair_of(&obstacles[k], &b))).collect();
+        let src = Self::build(obstacles, b, margin, walls, max_facets, false, given)?;
+        Ok((src, taken))
+    }
+
+    /// Whether this is the sum of exactly `a` and `b` with its reduced convolution (one
+    /// obstacle, no margin, no walls): the same triangles in the same order.
+    fn is_pair_of(&self, a: &TriMesh, b: &TriMesh) -> bool {
+        let same = |x: &TriMesh, y: &TriMesh| x.solid == y.solid && x.tris.len() == y.tris.len() && x.tris.iter().zip(&y.tris).all(|(t, u)| t.p == u.p);
+        self.obstacles.len() == 1 && self.piece_pairs.is_empty() && self.margin == 0.0 && self.walls.is_none() && same(&self.obstacles[0], a) && same(&self.b, b)
     }
 
     /// [`ExactSource::try_new`], but a solid pair whose reduced convolution would exceed
@@ -190,10 +218,18 @@ impl ExactSource {
     /// one piece or a nested vertex shows them FULL: right for a planner, which refines
     /// only where its search asks, not for a surface, which would refine the whole shell.
     pub fn with_piece_fallback(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize) -> ExactSource {
-        Self::build(obstacles, b, margin, walls, max_facets, true).expect("pairs over the budget are taken piece by piece")
+        Self::build(obstacles, b, margin, walls, max_facets, true, &[]).expect("pairs over the budget are taken piece by piece")
     }
 
-    fn build(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize, fallback: bool) -> CoreResult<ExactSource> {
+    fn build(
+        obstacles: Vec<TriMesh>,
+        b: TriMesh,
+        margin: f64,
+        walls: Option<Aabb>,
+        max_facets: usize,
+        fallback: bool,
+        given: &[Option<Arc<ExactSource>>],
+    ) -> CoreResult<ExactSource> {
         let aabb = obstacles.iter().fold(Aabb::empty(), |acc, a| acc.union(&Aabb::new(a.aabb.min + b.aabb.min, a.aabb.max + b.aabb.max).inflated(margin)));
         let tri_ext = |m: &TriMesh| m.tris.iter().map(|t| Aabb::from_points(&t.p).extent().max_element()).fold(0.0f64, f64::max);
         let max_a = obstacles.iter().map(tri_ext).fold(0.0f64, f64::max);
@@ -206,7 +242,13 @@ impl ExactSource {
                 continue;
             }
             let left = budget - facets.len();
-            match convolution_within(a, &b, k as u32, left) {
+            let reused = given.get(k).and_then(Option::as_ref).filter(|g| g.is_pair_of(a, &b));
+            let found = match reused {
+                Some(g) if g.facets.len() <= left => Ok(g.facets.iter().map(|f| Facet { k: k as u32, ..*f }).collect()),
+                Some(g) => Err(g.facets.len()),
+                None => convolution_within(a, &b, k as u32, left),
+            };
+            match found {
                 Ok(found) => facets.extend(found),
                 Err(_) if fallback => piece_pairs.push(k),
                 Err(n) => {

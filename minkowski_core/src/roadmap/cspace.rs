@@ -17,6 +17,7 @@ use crate::minkowski::PolytopeSet;
 use crate::octree::{CellSource, Label, LevelCounts, Octree, MAX_DEPTH};
 use crate::polytope::{clip_planes, ConvexPolytope};
 use std::collections::BTreeSet;
+use std::sync::Arc;
 
 /// How a point joins the roadmap: through `leaf`, entering it at `via` (a free straight
 /// segment from the point to `via`, then `via` to the leaf's centre inside the leaf).
@@ -251,12 +252,33 @@ impl CSpace {
     /// pieces' shell: measured on IndustReal's gears, 210 s and then over the record budget).
     #[allow(clippy::too_many_arguments)] // the problem's parts, the octree's sizes and its two budgets
     pub fn build_exact(meshes: Vec<TriMesh>, robot: &TriMesh, bounds: Aabb, h_floor: f64, h_coarse: f64, margin: f64, max_leaves: usize, max_facets: usize) -> CoreResult<CSpace> {
+        Self::build_exact_reusing(meshes, robot, bounds, h_floor, h_coarse, margin, max_leaves, max_facets, &[]).map(|(cs, _)| cs)
+    }
+
+    /// [`CSpace::build_exact`], taking obstacle `k`'s reduced convolution from the pair sum
+    /// `given[k]` of the same meshes (`O_k ⊕ −R`, built before) where there is one
+    /// ([`ExactSource::try_new_reusing`]); whether each was taken.
+    ///
+    /// # Errors
+    /// As [`CSpace::build_exact`].
+    #[allow(clippy::too_many_arguments)] // as build_exact, and the sums to reuse
+    pub fn build_exact_reusing(
+        meshes: Vec<TriMesh>,
+        robot: &TriMesh,
+        bounds: Aabb,
+        h_floor: f64,
+        h_coarse: f64,
+        margin: f64,
+        max_leaves: usize,
+        max_facets: usize,
+        given: &[Option<Arc<ExactSource>>],
+    ) -> CoreResult<(CSpace, Vec<bool>)> {
         check(&bounds, h_floor, h_coarse, margin)?;
         let k = (h_coarse / h_floor).log2().floor().clamp(0.0, MAX_DEPTH as f64) as u32;
         let h0 = h_floor * (1u64 << k) as f64;
         let n_obstacle = meshes.len();
-        let src = ExactSource::try_new(meshes, robot.negated(), margin, Some(bounds), max_facets)?;
-        Self::finish(Obstacles::Exact(Box::new(src)), n_obstacle, bounds, margin, h0, k, max_leaves)
+        let (src, taken) = ExactSource::try_new_reusing(meshes, robot.negated(), margin, Some(bounds), max_facets, given)?;
+        Ok((Self::finish(Obstacles::Exact(Box::new(src)), n_obstacle, bounds, margin, h0, k, max_leaves)?, taken))
     }
 
     fn finish(obstacles: Obstacles, n_obstacle: usize, bounds: Aabb, margin: f64, h0: f64, k: u32, max_leaves: usize) -> CoreResult<CSpace> {
