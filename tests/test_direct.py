@@ -18,7 +18,8 @@ from conftest import SHARED_ASSETS
 
 import planner
 from planner import _minkowski_core as core
-from planner.errors import InvalidParameterError
+from planner import viz
+from planner.errors import InvalidParameterError, ResourceLimitError
 from planner.planning import OctreeParams
 from planner.planning.direct import PieceObstacles, direct_motion
 from planner.problem import Body, PlannerSettings, Robot, Scenario
@@ -115,14 +116,15 @@ def test_an_end_resting_in_contact_is_stepped_out_first():
     checker = FclChecker.for_parts(scenario.robot, scenario.obstacles, contact_tolerance=1e-6)
     obstacles = PieceObstacles(scenario, source)
     assert obstacles.contains(np.array([[-3, 3, 0.5]]))[0]  # touching is in the closed set
-    motion = direct_motion(scenario, source, checker, reach=2e-6, margin=0.0)
+    motion = direct_motion(scenario, source, checker, reach=2e-6, margin=0.0).motion
     assert motion is not None and len(motion) == 3
     assert np.allclose(motion[0], [-3, 3, 0.5]) and np.allclose(motion[-1], [3, 3, 1.2])
     assert not obstacles.contains(motion[1:2])[0]
     assert checker.check_path(motion).valid
     # in collision (sunk into the floor) is no direct motion
     sunk = dataclasses.replace(scenario, start=np.array([-3.0, 3, 0.4]))
-    assert direct_motion(sunk, source, checker, reach=2e-6, margin=0.0) is None
+    sunk_direct = direct_motion(sunk, source, checker, reach=2e-6, margin=0.0)
+    assert sunk_direct.motion is None and sunk_direct.in_collision == "start"
 
 
 @pytest.mark.skipif(not (SHARED_ASSETS / "assemblies").is_dir(),
@@ -142,3 +144,30 @@ def test_each_industreal_gear_comes_off_its_shaft_directly():
         reach = OctreeParams().escape_rel * outcome.validation["fcl"]["contact_tolerance"]
         assert outcome.waypoints[-1][2] > 0.04
         assert np.abs(outcome.waypoints[:, :2]).max() <= reach
+
+
+def test_an_end_in_collision_is_the_answer_without_a_cspace():
+    scenario = wall_scene(True, [-3, 3, 1.2], [0, 0, 1.5])  # the goal inside the wall
+    outcome = planner.plan(scenario, params=DIRECT_ALWAYS)
+    assert outcome.status == "no_path" and outcome.reason == "goal_in_collision"
+    assert outcome.collision["obstacle"] == "wall" and outcome.cspace is None
+    checker = FclChecker.for_parts(scenario.robot, scenario.obstacles)
+    assert checker.collides(np.array([0.0, 0, 1.5]))
+
+
+def test_a_refusal_after_a_blocked_straight_motion_says_so():
+    scenario = wall_scene(True, [-3, 0, 1.2], [3, 0, 1.2])
+    with planner.memory_limit(0.001), pytest.raises(ResourceLimitError) as refused:
+        planner.plan(scenario, params=DIRECT_ALWAYS)
+    message = str(refused.value)
+    assert "after the straight motion was found blocked" in message and "\n" not in message
+
+
+def test_a_scene_leaves_out_a_c_obstacle_over_the_memory_limit(caplog):
+    scenario = wall_scene(True, [-3, 3, 1.2], [3, 3, 1.2])
+    outcome = planner.plan(scenario, params=DIRECT_ALWAYS)
+    with planner.memory_limit(0.001):
+        scene = viz.scene_for_plan(scenario, outcome, c_obstacle=True)
+    assert "leaves out the C-obstacle of wall" in caplog.text
+    assert "path/line" in repr(scene) and "cspace/c_obstacle" not in repr(scene)
+    assert "<html>" in viz.to_html(scene)

@@ -11,8 +11,8 @@ and proves what it says:
 
 * an end inside a C-obstacle but valid for FCL (a tolerated contact: a part resting in its
   seat) is stepped out by the same short escape the planner uses
-  (:func:`.endpoints.escape`); an end FCL calls in collision gets no direct motion (the
-  planner reports it);
+  (:func:`.endpoints.escape`); an end FCL calls in collision is the answer already
+  (no path: the planner reports it without a C-space, as it would with one);
 * the segment between the (escaped) ends must miss every C-obstacle grown by the
   clearance, exactly.
 
@@ -23,6 +23,8 @@ segment is blocked: a no-path still needs the planner's certificate.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from planner.problem import Scenario
@@ -31,7 +33,7 @@ from planner.validation import FclChecker
 
 from .endpoints import escape
 
-__all__ = ["PieceObstacles", "direct_motion", "triangle_pairs"]
+__all__ = ["Direct", "PieceObstacles", "direct_motion", "triangle_pairs"]
 
 
 def triangle_pairs(scenario: Scenario) -> int:
@@ -77,11 +79,25 @@ class PieceObstacles:
         return all(pair.segment_is_free(a_list, b_list, margin) for pair in self.sums)
 
 
+@dataclass(frozen=True)
+class Direct:
+    """What the direct test found.
+
+    Attributes:
+        motion: ``(k, 3)`` waypoints of the straight motion (the ends, with the escapes
+            out of tolerated contacts between them) when it is free, else ``None``.
+        in_collision: ``"start"`` or ``"goal"`` when that end collides for FCL beyond the
+            contact tolerance (inside a C-obstacle too), else ``None``.
+    """
+
+    motion: np.ndarray | None = None
+    in_collision: str | None = None
+
+
 def direct_motion(scenario: Scenario, source: Source, checker: FclChecker, *,
-                  reach: float, margin: float) -> np.ndarray | None:
-    """The straight motion from start to goal, ``(k, 3)`` waypoints (the ends, with the
-    escapes out of tolerated contacts between them), when its middle segment misses every
-    C-obstacle grown by ``margin`` exactly; else ``None`` (see the module documentation).
+                  reach: float, margin: float) -> Direct:
+    """The straight motion from start to goal when its middle segment misses every
+    C-obstacle grown by ``margin`` exactly (see the module documentation).
 
     Args:
         scenario: the problem.
@@ -92,17 +108,20 @@ def direct_motion(scenario: Scenario, source: Source, checker: FclChecker, *,
     """
     obstacles = PieceObstacles(scenario, source)
     ends = []
-    for p in (np.asarray(scenario.start, float), np.asarray(scenario.goal, float)):
+    for which in ("start", "goal"):
+        p = np.asarray(getattr(scenario, which), dtype=np.float64)
         out: np.ndarray | None = p
         if obstacles.contains(p[None, :])[0]:
-            out = escape(obstacles, checker, p, reach) if checker.is_valid(p) else None
+            if not checker.is_valid(p):
+                return Direct(in_collision=which)
+            out = escape(obstacles, checker, p, reach)
         if out is None:
-            return None
+            return Direct()
         ends.append((p, out))
     (start, start_out), (goal, goal_out) = ends
     if not obstacles.segment_is_free(start_out, goal_out, margin):
-        return None
+        return Direct()
     waypoints = [start, start_out, goal_out, goal]
     kept = [waypoints[0]] + [w for prev, w in zip(waypoints, waypoints[1:])
                              if not np.array_equal(prev, w)]
-    return np.array(kept, dtype=np.float64)
+    return Direct(motion=np.array(kept, dtype=np.float64))

@@ -10,7 +10,8 @@
    diagonal (or ``planner.resolution``). EMPTY leaves are exactly free, FULL leaves
    exactly blocked, MIXED leaves undecided.
    For large problems the straight motion from start to goal is tested exactly first
-   (:mod:`.direct`): free, it is the answer once validated, and no C-space is built.
+   (:mod:`.direct`): free, it is the answer once validated, and no C-space is built;
+   an end in collision (FCL) is the answer too.
    For large triangle soups a local proof comes next (:mod:`.local_proof`): an end
    walled off in a box around it is a proved no-path, and no C-space over the bounds is
    built.
@@ -45,7 +46,7 @@ from planner.sources import Source, choose_for
 from planner.validation import FclChecker
 
 from .certificates import certificate_document
-from .direct import direct_motion, triangle_pairs
+from .direct import Direct, direct_motion, triangle_pairs
 from .endpoints import Ends, attach_ends
 from .local_proof import LocalProof, prove_end_enclosed, surface_pairs
 from .outcome import PlanOutcome
@@ -146,7 +147,7 @@ class OctreePlanner:
         self.report: dict[str, Any] = {}
         self.rounds: list[dict] = []
         self.cspace: Any = None
-        self.direct: np.ndarray | None = None
+        self.direct: Direct | None = None
         self.local: LocalProof | None = None
         self._ready = False
 
@@ -183,7 +184,9 @@ class OctreePlanner:
         self.owner = self._src.owners(sc.obstacles, sc.robot)
         self._ready = True
         self.direct = self._direct()
-        if self.direct is None:
+        if self.direct is None or (self.direct.motion is None
+                                   and self.direct.in_collision is None):
+            self.direct = None  # nothing found: the C-space decides
             self._build_space()
 
     def _build_space(self) -> None:
@@ -196,19 +199,19 @@ class OctreePlanner:
             self.cspace = self._build(self.margin)
         self._report_head()
 
-    def _direct(self) -> np.ndarray | None:
-        """The straight motion of a large problem when it is exactly free (:mod:`.direct`)."""
+    def _direct(self) -> Direct | None:
+        """The direct test of a large problem (:mod:`.direct`), else ``None``."""
         sc = self.scenario
         if triangle_pairs(sc) < self.params.direct_first_pairs:
             return None
         self.bar.show("minkplan: testing the straight motion")
         t0 = time.perf_counter()  # not a stage of its own: timings keep their keys
-        motion = direct_motion(sc, self._src, self.checker,
+        direct = direct_motion(sc, self._src, self.checker,
                                reach=self.params.escape_rel * max(self.delta, self.margin),
                                margin=sc.settings.clearance)
-        self.report["direct"] = {"free": motion is not None,
+        self.report["direct"] = {"free": direct.motion is not None,
                                  "seconds": time.perf_counter() - t0}
-        return motion
+        return direct
 
     def _local_proof(self) -> LocalProof | None:
         """A proof that the start (or goal) is walled off near it, tried for large
@@ -254,9 +257,11 @@ class OctreePlanner:
     def _refusal(self, exc: ResourceLimitError, what: str) -> ResourceLimitError:
         """The core's refusal of ``what`` as the user reads it (:func:`budget.explain`)."""
         sc = self.scenario
+        blocked = self.report.get("direct", {}).get("free") is False
+        after = ", built after the straight motion was found blocked" if blocked else ""
         where = str(sc.path) if sc.path is not None else sc.name
         names = [f"{o.name} ⊕ −{sc.robot.name}" for o in sc.obstacles]
-        return budget.explain(exc, f"{where}: {what} ({self._src.kind} source)", names,
+        return budget.explain(exc, f"{where}: {what} ({self._src.kind} source){after}", names,
                               cell_bytes=budget.LEAF_BYTES, knob="planner.resolution")
 
     def _report_head(self) -> None:
@@ -296,10 +301,13 @@ class OctreePlanner:
 
     def _solve(self) -> PlanOutcome:
         if self.direct is not None:
-            found = self._direct_found(self.direct)
+            direct, self.direct = self.direct, None
+            if direct.in_collision is not None:
+                return self._direct_in_collision(direct.in_collision)
+            assert direct.motion is not None
+            found = self._direct_found(direct.motion)
             if found is not None:
                 return found
-            self.direct = None
             self._build_space()
         if self.local is not None:
             return self._local_no_path(self.local)
@@ -372,13 +380,32 @@ class OctreePlanner:
         return self._finish(NO_PATH, "certificate", message, certificate=certificate,
                             space=proof.cspace)
 
-    def _direct_found(self, motion: np.ndarray) -> PlanOutcome | None:
-        """The straight motion, validated by FCL and OMPL; ``None`` when it fails (the
-        C-space is built then, as without it)."""
+    def _direct_head(self) -> None:
+        """The report's head when no C-space was built."""
         described = self._src.describe(self.scenario.obstacles, self.scenario.robot)
         described.pop("decomposition")
         self.report.update({"scenario": self.scenario.describe(), "source": described,
                             "contact_tolerance": self.delta})
+
+    def _direct_in_collision(self, which: str) -> PlanOutcome:
+        """An end in collision found by the direct test: the answer, from FCL alone (the
+        C-space's depth, a lower bound, is not computed)."""
+        self._direct_head()
+        p = np.asarray(getattr(self.scenario, which), dtype=np.float64)
+        collision: dict[str, Any] = {"which": which, "position": p.tolist()}
+        hit = self.checker.colliding_obstacle(p)
+        if hit is not None:
+            collision.update(obstacle=hit[0], depth_upper_bound=hit[1])
+        depth = collision.get("depth_upper_bound", math.nan)
+        return self._finish(NO_PATH, f"{which}_in_collision",
+                            f"the {which} is in collision with "
+                            f"{collision.get('obstacle', 'an obstacle')} (depth about "
+                            f"{depth:.4g})", collision=collision)
+
+    def _direct_found(self, motion: np.ndarray) -> PlanOutcome | None:
+        """The straight motion, validated by FCL and OMPL; ``None`` when it fails (the
+        C-space is built then, as without it)."""
+        self._direct_head()
         message = "the straight motion is free (exact segment test, no C-space built)"
         if not self.validate:
             return self._finish(FOUND, "direct", message, waypoints=motion)

@@ -16,6 +16,7 @@ layers.
 from __future__ import annotations
 
 import json
+import logging
 import os
 from collections.abc import Mapping
 from pathlib import Path
@@ -24,7 +25,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from planner.errors import InvalidParameterError
+from planner.errors import InvalidParameterError, ResourceLimitError
 
 from .scene import (
     COLORS,
@@ -45,6 +46,8 @@ __all__ = [
     "scene_for_minkowski",
     "scene_for_plan",
 ]
+
+log = logging.getLogger(__name__)
 
 
 def scene_for_minkowski(result, a=None, b=None, *, c_obstacle: bool = False,
@@ -194,7 +197,8 @@ def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
     ``source`` (a plan's ``outcome.source``: the C-obstacles it planned on), or on the
     source the scenario's settings choose; at ``eps`` (default :func:`display_eps`), not
     refined further where features are thinner (a picture), within
-    :func:`display_max_cells`.
+    :func:`display_max_cells`. An obstacle whose C-obstacle is over the memory limit is
+    left out, with a warning (a picture is not worth refusing the page for).
     """
     from planner.minkowski import c_obstacle
     from planner.sources import choose_for
@@ -203,11 +207,15 @@ def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
         source = choose_for([scenario.robot, *scenario.obstacles], scenario.settings,
                             cache_dir=cache_dir, progress=progress)
     eps = display_eps(scenario) if eps is None else eps
-    # a picture's complex cells are no warning
-    return {body.name: c_obstacle(body, scenario.robot, eps=eps, progress=progress,
-                                  source=source, max_refinements=0,
-                                  max_cells=display_max_cells(), warn_complex=False).mesh
-            for body in scenario.obstacles}
+    surfaces = {}
+    for body in scenario.obstacles:
+        try:  # a picture's complex cells are no warning
+            surfaces[body.name] = c_obstacle(
+                body, scenario.robot, eps=eps, progress=progress, source=source,
+                max_refinements=0, max_cells=display_max_cells(), warn_complex=False).mesh
+        except ResourceLimitError as error:
+            log.warning("the scene leaves out the C-obstacle of %s: %s", body.name, error)
+    return surfaces
 
 
 # ---- the plan --------------------------------------------------------------------------
@@ -322,6 +330,9 @@ def scene_for_plan(scenario, plan=None, cspace=None, *, c_obstacle=None, certifi
         c_obstacle = compute_c_obstacles(scenario, source=parts["source"])
         note = (f"drawn at a display resolution of {display_eps(scenario):.3g} "
                 f"{scenario.units} (a picture: the planner's are exact)")
+        left_out = [o.name for o in scenario.obstacles if o.name not in c_obstacle]
+        if left_out:
+            note += f"; not drawn, over the memory limit: {', '.join(left_out)}"
     if c_obstacle is not None and c_obstacle is not False:
         scene.add_c_obstacle(c_obstacle, note=note)
 
