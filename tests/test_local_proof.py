@@ -18,6 +18,7 @@ from conftest import SHARED_ASSETS
 import planner
 from planner.errors import ResourceLimitError
 from planner.planning import OctreeParams
+from planner.planning.slabs import subsets
 from planner.problem import Body, PlannerSettings, Robot, Scenario
 from planner.validation import FclChecker
 
@@ -120,3 +121,77 @@ def test_a_local_proof_out_of_memory_is_refused_in_one_line_naming_it():
     message = str(refused.value)
     assert "the local proof at the start" in message and "--memory-limit" in message
     assert "\n" not in message
+
+
+def slotted_room(slot: float, start, goal) -> Scenario:
+    """:func:`box_room` sealed, but with a slot ``|x| < slot / 2`` across its top (0: none),
+    and a unit cube robot of 768 triangles (edges 0.125: its x slab's triangles span
+    |x| <= 0.25)."""
+    room = box_room(slot > 0, start, goal)
+    shell = room.obstacles[0].mesh
+    if slot > 0:
+        plates = [trimesh.creation.box(extents=[3 - slot / 2, 6, 1e-9]) for _ in range(2)]
+        for sign, plate in zip((-1, 1), plates):
+            plate.apply_translation([sign * (3 + slot / 2) / 2, 0, 3])
+            top = plate.face_normals[:, 2] > 0.5
+            shell = trimesh.util.concatenate(
+                [shell, trimesh.Trimesh(plate.vertices, plate.faces[top], process=False)])
+    cube = trimesh.creation.box(extents=[1, 1, 1])
+    for _ in range(3):
+        cube = cube.subdivide()
+    return dataclasses.replace(
+        room, robot=dataclasses.replace(room.robot, mesh=cube),
+        obstacles=[dataclasses.replace(room.obstacles[0], mesh=shell)])
+
+
+@pytest.fixture
+def slabs_for_small_robots(monkeypatch):
+    """Slabs tried for robots of 500 triangles or more (the default is for larger)."""
+    from planner.planning import slabs  # noqa: PLC0415
+
+    monkeypatch.setattr(slabs, "SLAB_MIN_TRIANGLES", 500)
+
+
+@pytest.mark.usefixtures("slabs_for_small_robots")
+def test_a_slab_of_the_robot_walls_it_off_and_one_that_slips_out_is_not_taken():
+    sealed = slotted_room(0.0, [0, 0, 0], [0, 0, 7])
+    outcome = planner.plan(sealed, params=LOCAL_ALWAYS)
+    assert outcome.status == "no_path", outcome.message
+    robot = outcome.certificate["local"]["robot"]
+    assert robot["subset"] == "x slab" and robot["triangles"] < 768
+    assert_walls_collide(outcome, sealed, 200)  # FCL, on the whole robot
+    # a 0.75 slot across x: the x slab (0.5 wide in x) slips through it, no proof;
+    # the y slab (1 wide in x, as the cube) does not, and walls the cube off
+    slotted = slotted_room(0.75, [0, 0, 0], [0, 0, 7])
+    slotted = dataclasses.replace(slotted, settings=dataclasses.replace(slotted.settings,
+                                                                        time_limit=120))
+    outcome = planner.plan(slotted, params=LOCAL_ALWAYS)
+    assert outcome.status == "no_path", outcome.message
+    assert outcome.certificate["local"]["robot"]["subset"] == "y slab"
+    assert_walls_collide(outcome, slotted, 200)
+    # the slot is real: the x slab alone gets out through it (FCL)
+    x_slab = next(robot for label, robot in subsets(slotted.robot) if label == "x slab")
+    checker = FclChecker.for_parts(x_slab, slotted.obstacles)
+    assert checker.check_path(np.array([[0.0, 0, 0], [0, 0, 7]])).valid
+    assert not FclChecker.for_parts(slotted.robot, slotted.obstacles).check_path(
+        np.array([[0.0, 0, 0], [0, 0, 7]])).valid
+
+
+@pytest.mark.usefixtures("slabs_for_small_robots")
+def test_a_slab_collides_only_where_the_whole_part_does():
+    scenario = slotted_room(0.75, [0, 0, 0], [0, 0, 7])
+    whole = FclChecker.for_parts(scenario.robot, scenario.obstacles)
+    rng = np.random.default_rng(1)
+    points = rng.uniform(-3.6, 3.6, size=(3000, 3))
+    whole_hits = np.array([whole.collides(p) for p in points])
+    labels = []
+    for label, slab in subsets(scenario.robot):
+        labels.append(label)
+        if label == "whole part":
+            continue
+        assert not slab.solid and len(slab.mesh.faces) < len(scenario.robot.mesh.faces)
+        checker = FclChecker.for_parts(slab, scenario.obstacles)
+        hits = np.array([checker.collides(p) for p in points])
+        assert hits.any() and not np.any(hits & ~whole_hits), label
+        assert np.any(whole_hits & ~hits), label  # strictly less: the slab is thinner
+    assert labels == ["x slab", "y slab", "z slab", "whole part"]

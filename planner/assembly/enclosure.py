@@ -12,13 +12,10 @@ outside the box (:meth:`CSpace.enclosure`). Then no path leaves the component, w
 lies beyond the box: the part cannot leave. When the component reaches the box, a larger
 box is tried; after the largest, nothing is claimed (the planner decides).
 
-Slabs of the part first: the C-obstacles of a subset of the moving part's triangles,
-taken as a surface (it collides where its triangles meet an obstacle or lie inside a
-solid one), lie inside those of the whole part, so a component walled off for the subset
-is walled off for the part too. The part's triangles in a slab (:data:`SLAB_REL` of its
-extent, across its middle, along its shortest extent first; for parts of many
-triangles) make far fewer triangle pairs (a nut's thread turn against the bolt, not all
-of them); the whole part is tried last.
+Slabs of the part first (:mod:`planner.planning.slabs`): a component walled off for a
+slab of the part's triangles is walled off for the part, and a slab makes far fewer
+triangle pairs (a nut's thread turn against the bolt, not all of them); the whole part is
+tried last.
 
 A start in tolerated contact (an assembled pose inside the contact or interference
 tolerance) is first stepped out: the shortest straight step found to a free pose no
@@ -28,16 +25,15 @@ one, so the step is valid at it). The proof then speaks of that free pose's comp
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import time
 from typing import Any
 
 import numpy as np
-import trimesh
 
 from planner.errors import ResourceLimitError
 from planner.planning.local_proof import leaf_boxes, wall_off
+from planner.planning.slabs import subsets
 from planner.problem import Part
 from planner.sources import ExactSource, Source
 from planner.validation import FclChecker
@@ -61,13 +57,6 @@ tolerance."""
 
 MAX_ROUNDS = 2
 """Refinement rounds per box (each splits the component's MIXED cells once)."""
-
-SLAB_MIN_TRIANGLES = 2000
-"""Slabs are tried only for parts with at least this many triangles (for fewer, the
-whole part's C-space is cheap)."""
-
-SLAB_REL = 0.25
-"""Thickness of the part's slabs, as a fraction of its extent along the slab's axis."""
 
 _MIXED = 2
 
@@ -99,7 +88,7 @@ def prove_enclosed(source: Source, part: Part, obstacles: list[Part], *, delta: 
         half = rel * diagonal
         if half <= min_half:
             continue
-        for subset, robot in _subsets(part, obstacles):
+        for subset, robot in subsets(part):
             if time.perf_counter() > deadline:
                 return None
             t_subset = time.perf_counter()
@@ -133,35 +122,6 @@ def _exact(source: Source) -> Source:
     if source.kind == ExactSource.kind:
         return source
     return ExactSource(source.settings, "enclosure of a slab (a surface)")
-
-
-def _subsets(part: Part, obstacles: list[Part]):
-    """``(label, robot)``: the part's slabs across its middle, along its shortest extent
-    first, as surfaces (for a part of :data:`SLAB_MIN_TRIANGLES` or more); then the whole
-    part."""
-    lo, hi = part.mesh.bounds
-    centre, extent = (lo + hi) / 2, hi - lo
-    many = len(part.mesh.faces) >= SLAB_MIN_TRIANGLES
-    slabs: list[int] = [int(a) for a in np.argsort(extent, kind="stable")] if many else []
-    for axis in slabs:
-        slab_lo, slab_hi = lo.copy(), hi.copy()
-        slab_lo[axis] = centre[axis] - SLAB_REL * extent[axis] / 2
-        slab_hi[axis] = centre[axis] + SLAB_REL * extent[axis] / 2
-        robot = _cropped(part, slab_lo, slab_hi)
-        if len(robot.mesh.faces):
-            yield (f"{'xyz'[axis]} slab", robot)
-    yield ("whole part", part)
-
-
-def _cropped(part: Part, lo: np.ndarray, hi: np.ndarray) -> Part:
-    """The part's triangles whose boxes meet the box ``[lo, hi]``, as a surface."""
-    triangles = part.mesh.triangles
-    keep = np.all(triangles.max(axis=1) >= lo, axis=1) & np.all(triangles.min(axis=1) <= hi,
-                                                                  axis=1)
-    mesh = trimesh.Trimesh(part.mesh.vertices, part.mesh.faces[keep], process=False)
-    mesh.remove_unreferenced_vertices()
-    return dataclasses.replace(part, mesh=mesh, solid=False, checked=False,
-                               kind_reason="a subset of the part's triangles (enclosure)")
 
 
 def _free_start(checker: FclChecker, delta: float) -> np.ndarray | None:

@@ -11,7 +11,9 @@ not converge; but a robot in a pocket is walled off by the C-obstacle cells near
    :data:`FLOOD_DIVISIONS`, at most :data:`FLOOD_MAX_NODES` free nodes) — a heuristic that
    only chooses the box: it must close without reaching the other end;
 2. the box is the flood's extent grown by :data:`MARGIN_STEPS` grid steps (clipped to the
-   bounds), and the C-space is built over it alone;
+   bounds), and the C-space is built over it alone — for slabs of the robot first
+   (:mod:`.slabs`: walled off for a slab is walled off for the robot, at a fraction of the
+   triangle pairs), then for the whole robot;
 3. :func:`wall_off`: the end's component of EMPTY and MIXED leaves is refined, level by
    level, where its MIXED leaves lie inside the C-obstacle (their centres), until every
    FULL leaf around it is verified by the core and none is a wall of the box that is not a
@@ -38,12 +40,15 @@ from typing import Any
 
 import numpy as np
 
+from planner.errors import ResourceLimitError
 from planner.problem import Scenario
 from planner.sources import Source
 from planner.validation import FclChecker
 
-__all__ = ["FLOOD_DIVISIONS", "FLOOD_MAX_NODES", "MARGIN_STEPS", "LocalProof", "leaf_boxes",
-           "prove_end_enclosed", "surface_pairs", "wall_off"]
+from .slabs import subsets
+
+__all__ = ["FLOOD_DIVISIONS", "FLOOD_MAX_NODES", "MARGIN_STEPS",
+           "LocalProof", "leaf_boxes", "prove_end_enclosed", "surface_pairs", "wall_off"]
 
 log = logging.getLogger(__name__)
 
@@ -114,18 +119,31 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
     bounds_faces = [bool(box[0][s // 2] <= lo[s // 2]) if s % 2 == 0 else
                     bool(box[1][s // 2] >= hi[s // 2]) for s in range(6)]
     side = float(np.max(box[1] - box[0]))
-    cs = source.cspace(scenario.obstacles, scenario.robot, box, side / FLOOR_DIVISIONS,
-                       side / COARSE_DIVISIONS)
-    raw, rounds = wall_off(cs, point, bounds_faces=bounds_faces, deadline=deadline,
-                           select=inside_obstacles)
-    seconds = time.perf_counter() - t0
-    log.info("local proof at the %s (box %s): %s after %d rounds in %.2f s", which,
-             np.round(box, 4).tolist(), "proved" if raw else "not proved", rounds, seconds)
-    if raw is None:
-        return None
-    summary = {"end": which, "box": box.tolist(), "flood_step": step,
-               "bounds_faces": bounds_faces, "rounds": rounds, "seconds": seconds}
-    return LocalProof(which, cs, raw, summary)
+    for label, robot in subsets(scenario.robot):
+        t_subset = time.perf_counter()
+        whole = robot is scenario.robot
+        try:
+            cs = source.cspace(scenario.obstacles, robot, box, side / FLOOR_DIVISIONS,
+                               side / COARSE_DIVISIONS)
+            raw, rounds = wall_off(cs, point, bounds_faces=bounds_faces, deadline=deadline,
+                                   select=inside_obstacles)
+        except ResourceLimitError:
+            if whole:
+                raise
+            log.info("local proof at the %s, %s: over the memory limit", which, label)
+            continue
+        log.info("local proof at the %s (box %s), %s (%d triangles): %s after %d rounds in "
+                 "%.2f s", which, np.round(box, 4).tolist(), label, len(robot.mesh.faces),
+                 "proved" if raw else "not proved", rounds, time.perf_counter() - t_subset)
+        if raw is not None:
+            summary = {"end": which, "box": box.tolist(), "flood_step": step,
+                       "bounds_faces": bounds_faces, "rounds": rounds,
+                       "robot": {"subset": label, "triangles": len(robot.mesh.faces)},
+                       "seconds": time.perf_counter() - t0}
+            return LocalProof(which, cs, raw, summary)
+        if time.perf_counter() > deadline:
+            break
+    return None
 
 
 def _flood(checker: FclChecker, point: np.ndarray, other: np.ndarray, lo: np.ndarray,
@@ -197,6 +215,8 @@ def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float
         artificial = sum(not bounds_faces[int(s)] for s in sides)
         if raw["verified"] and artificial == 0 and len(prims):
             return raw, rounds
+        log.debug("wall_off round %d: %d walls on the box's own sides, verified %s", rounds,
+                  artificial, raw["verified"])
         members = np.asarray(raw["component_leaves"], dtype=np.int64)
         chosen = select(cs, cs.leaves(), members)
         if not chosen or rounds >= max_rounds or time.perf_counter() > deadline:
