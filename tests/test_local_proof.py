@@ -195,3 +195,14 @@ def test_a_slab_collides_only_where_the_whole_part_does():
         assert hits.any() and not np.any(hits & ~whole_hits), label
         assert np.any(whole_hits & ~hits), label  # strictly less: the slab is thinner
     assert labels == ["x slab", "y slab", "z slab", "whole part"]
+
+
+@pytest.mark.usefixtures("slabs_for_small_robots")
+def test_a_time_limit_spent_on_local_proofs_is_the_answer_not_a_larger_cspace():
+    slotted = slotted_room(0.75, [0, 0, 0], [0, 0, 7])  # the x slab tried first slips out
+    slotted = dataclasses.replace(slotted, settings=dataclasses.replace(slotted.settings,
+                                                                        time_limit=2.0))
+    outcome = planner.plan(slotted, params=LOCAL_ALWAYS)
+    assert outcome.status == "not_found" and outcome.reason == "time_limit", outcome.message
+    assert "local proofs" in outcome.message and outcome.cspace is None
+    assert outcome.timings["total"] < 60  # the slab's last round may overrun, not a search

@@ -19,7 +19,8 @@ not converge; but a robot in a pocket is walled off by the C-obstacle cells near
    FULL leaf around it is verified by the core and none is a wall of the box that is not a
    face of the bounds. Then no path leaves the component, whatever lies outside the box:
    no path (exact on the exact source). Otherwise nothing is claimed and the planner
-   searches the whole bounds as before — unless the proof ran out of memory
+   searches the whole bounds as before — unless the time limit went on the proofs (then
+   the answer is ``not_found``, ``time_limit``) or the proof ran out of memory
    (:class:`~planner.errors.ResourceLimitError`, raised). Then the pocket's walls need
    finer cells than the limit allows; a path out of the pocket would pass a gap narrower
    than the flood's step, which the C-space over the whole bounds would have to resolve

@@ -150,6 +150,7 @@ class OctreePlanner:
         self.direct: Direct | None = None
         self.local: LocalProof | None = None
         self._ready = False
+        self.out_of_time = False
 
     # ---------------------------------------------------------------- setup
 
@@ -194,6 +195,9 @@ class OctreePlanner:
         self.local = self._local_proof()
         if self.local is not None:
             self.cspace = self.local.cspace
+        elif self.out_of_time:
+            self._direct_head()  # the time limit went on the local proofs: no C-space
+            return
         else:
             self.bar.show("minkplan: building the C-space")
             self.cspace = self._build(self.margin)
@@ -233,6 +237,7 @@ class OctreePlanner:
                 raise self._refusal(exc, f"the local proof at the {which}") from exc
             if proof is not None:
                 return proof
+        self.out_of_time = time.perf_counter() > deadline
         return None
 
     @property
@@ -311,6 +316,10 @@ class OctreePlanner:
             self._build_space()
         if self.local is not None:
             return self._local_no_path(self.local)
+        if self.out_of_time:
+            return self._finish(NOT_FOUND, "time_limit",
+                                "time limit reached in the local proofs (no C-space over "
+                                "the whole bounds was built)")
         sc = self.scenario
         deadline = time.perf_counter() + sc.settings.time_limit
         start = np.asarray(sc.start, dtype=np.float64)
@@ -381,7 +390,7 @@ class OctreePlanner:
                             space=proof.cspace)
 
     def _direct_head(self) -> None:
-        """The report's head when no C-space was built."""
+        """The report's head when no C-space was built (direct answers, time out)."""
         described = self._src.describe(self.scenario.obstacles, self.scenario.robot)
         described.pop("decomposition")
         self.report.update({"scenario": self.scenario.describe(), "source": described,
