@@ -122,6 +122,8 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
     side = float(np.max(box[1] - box[0]))
     for label, robot in subsets(scenario.robot):
         t_subset = time.perf_counter()
+        if t_subset > deadline:
+            break
         whole = robot is scenario.robot
         try:
             cs = source.cspace(scenario.obstacles, robot, box, side / FLOOR_DIVISIONS,
@@ -142,8 +144,6 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
                        "robot": {"subset": label, "triangles": len(robot.mesh.faces)},
                        "seconds": time.perf_counter() - t0}
             return LocalProof(which, cs, raw, summary)
-        if time.perf_counter() > deadline:
-            break
     return None
 
 

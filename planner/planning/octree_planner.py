@@ -228,6 +228,8 @@ class OctreePlanner:
             return None
         deadline = time.perf_counter() + sc.settings.time_limit
         for which in ("start", "goal"):
+            if time.perf_counter() > deadline:
+                break
             self.bar.show(f"minkplan: a local proof at the {which}")
             try:
                 with self.clock.stage("octree"):
