@@ -185,9 +185,7 @@ class OctreePlanner:
         self.owner = self._src.owners(sc.obstacles, sc.robot)
         self._ready = True
         self.direct = self._direct()
-        if self.direct is None or (self.direct.motion is None
-                                   and self.direct.in_collision is None):
-            self.direct = None  # nothing found: the C-space decides
+        if self.direct is None:  # nothing found: the C-space decides
             self._build_space()
 
     def _build_space(self) -> None:
@@ -204,7 +202,8 @@ class OctreePlanner:
         self._report_head()
 
     def _direct(self) -> Direct | None:
-        """The direct test of a large problem (:mod:`.direct`), else ``None``."""
+        """What the direct test of a large problem found (:mod:`.direct`): ``None`` when
+        it was not tried or found neither a free motion nor an end in collision."""
         sc = self.scenario
         if triangle_pairs(sc) < self.params.direct_first_pairs:
             return None
@@ -215,7 +214,7 @@ class OctreePlanner:
                                margin=sc.settings.clearance)
         self.report["direct"] = {"free": direct.motion is not None,
                                  "seconds": time.perf_counter() - t0}
-        return direct
+        return direct if direct.motion is not None or direct.in_collision else None
 
     def _local_proof(self) -> LocalProof | None:
         """A proof that the start (or goal) is walled off near it, tried for large

@@ -179,7 +179,7 @@ impl ExactSource {
     /// [`CoreError::FacetLimit`] when the facets would exceed the budget; the search
     /// stops soon after, so little of that memory is taken.
     pub fn try_new(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize) -> CoreResult<ExactSource> {
-        Self::build(obstacles, b, margin, walls, max_facets, false, &[])
+        Self::build(obstacles, b, margin, walls, max_facets, false, &[]).map(|(src, _)| src)
     }
 
     /// [`ExactSource::try_new`], taking obstacle `k`'s reduced convolution from `given[k]`
@@ -197,9 +197,7 @@ impl ExactSource {
         max_facets: usize,
         given: &[Option<Arc<ExactSource>>],
     ) -> CoreResult<(ExactSource, Vec<bool>)> {
-        let taken: Vec<bool> = (0..obstacles.len()).map(|k| given.get(k).and_then(Option::as_ref).is_some_and(|g| g.is_pair_of(&obstacles[k], &b))).collect();
-        let src = Self::build(obstacles, b, margin, walls, max_facets, false, given)?;
-        Ok((src, taken))
+        Self::build(obstacles, b, margin, walls, max_facets, false, given)
     }
 
     /// Whether this is the sum of exactly `a` and `b` with its reduced convolution (one
@@ -218,7 +216,7 @@ impl ExactSource {
     /// one piece or a nested vertex shows them FULL: right for a planner, which refines
     /// only where its search asks, not for a surface, which would refine the whole shell.
     pub fn with_piece_fallback(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize) -> ExactSource {
-        Self::build(obstacles, b, margin, walls, max_facets, true, &[]).expect("pairs over the budget are taken piece by piece")
+        Self::build(obstacles, b, margin, walls, max_facets, true, &[]).expect("pairs over the budget are taken piece by piece").0
     }
 
     fn build(
@@ -229,7 +227,7 @@ impl ExactSource {
         max_facets: usize,
         fallback: bool,
         given: &[Option<Arc<ExactSource>>],
-    ) -> CoreResult<ExactSource> {
+    ) -> CoreResult<(ExactSource, Vec<bool>)> {
         let aabb = obstacles.iter().fold(Aabb::empty(), |acc, a| acc.union(&Aabb::new(a.aabb.min + b.aabb.min, a.aabb.max + b.aabb.max).inflated(margin)));
         let tri_ext = |m: &TriMesh| m.tris.iter().map(|t| Aabb::from_points(&t.p).extent().max_element()).fold(0.0f64, f64::max);
         let max_a = obstacles.iter().map(tri_ext).fold(0.0f64, f64::max);
@@ -237,12 +235,14 @@ impl ExactSource {
         let mut piece_pairs: Vec<usize> = (0..obstacles.len()).filter(|&k| !(obstacles[k].solid && b.solid)).collect();
         let budget = max_facets.min(PAIR as usize - 1);
         let mut facets: Vec<Facet> = Vec::new();
+        let mut taken = vec![false; obstacles.len()];
         for (k, a) in obstacles.iter().enumerate() {
             if piece_pairs.contains(&k) {
                 continue;
             }
             let left = budget - facets.len();
             let reused = given.get(k).and_then(Option::as_ref).filter(|g| g.is_pair_of(a, &b));
+            taken[k] = reused.is_some();
             let found = match reused {
                 Some(g) if g.facets.len() <= left => Ok(g.facets.iter().map(|f| Facet { k: k as u32, ..*f }).collect()),
                 Some(g) => Err(g.facets.len()),
@@ -260,7 +260,7 @@ impl ExactSource {
         let boxes: Vec<Aabb> = facets.iter().map(|f| f.aabb(margin)).collect();
         let fbvh = Bvh::build(&boxes);
         let flat = if margin == 0.0 { facets.iter().map(Facet::flat_planes).collect() } else { Vec::new() };
-        Ok(ExactSource { full_witness: walls.is_some(), obstacles, b, piece_pairs, margin, walls, aabb, max_piece, facets, fbvh, flat })
+        Ok((ExactSource { full_witness: walls.is_some(), obstacles, b, piece_pairs, margin, walls, aabb, max_piece, facets, fbvh, flat }, taken))
     }
 
     /// Whether `p` lies in facet `i` grown by `m` (its precomputed half-spaces when `m` is 0).
