@@ -44,6 +44,13 @@ def test_the_nut_pose_overlaps_the_thread_and_is_refused_without_a_tolerance():
     message = str(info.value)
     assert "\n" not in message and "factory_nut_bolt_m12.yaml" in message
     assert "part 'bolt' collides with 'nut'" in message
+    # the nut is a surface (no penetration depth): the smallest tolerance FCL's check
+    # accepts is searched for and suggested, and that tolerance loads the assembly
+    assert "no penetration depth (a surface has no inside)" in message
+    suggested = info.value.details["overlap"]["suggested_interference"]
+    assert f"give interference: {suggested:g} " in message
+    assert 0.0015 <= suggested <= 0.0017
+    assert load_assembly(NUT_BOLT, interference=suggested).overlaps
 
 
 @needs_assets

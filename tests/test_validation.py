@@ -167,6 +167,23 @@ def test_contact_tolerance_accepts_shallow_rejects_deep():
         FclChecker(ROBOT, [block], contact_tolerance=-1.0)
 
 
+def test_tolerance_accepting_finds_the_shortest_freeing_translation_of_a_surface():
+    """A unit cube crossing a sheet (a surface: no penetration depth) 0.02 past its
+    bottom: the tolerance returned is about 0.02 and accepted, a smaller one is not."""
+    plate = trimesh.Trimesh([[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]],
+                            [[0, 1, 2], [0, 2, 3]])  # a square sheet at z = 0
+    checker = FclChecker(ROBOT, [plate], solid=[False])
+    at = (0.0, 0.0, 0.48)  # the cube's bottom 0.02 below the plate's rim
+    needed = checker.tolerance_accepting(at, upto=1.0)
+    assert needed is not None and 0.02 <= needed <= 0.02 + 1e-3
+    assert checker.accepts_with(at, needed)
+    assert FclChecker(ROBOT, [plate], contact_tolerance=needed, solid=[False]).is_valid(at)
+    assert not checker.accepts_with(at, 0.9 * 0.02)
+    assert checker.tolerance_accepting((0.0, 0.0, 3.0), upto=1.0) == 0.0
+    deep = FclChecker(ROBOT, [box([4, 4, 4])])
+    assert deep.tolerance_accepting((0.0, 0.0, 0.0), upto=1.0) is None  # 2.5 to leave
+
+
 # ---------------------------------------------------------------- motions
 
 

@@ -136,6 +136,10 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
                     overlaps=overlaps)
 
 
+# the largest tolerance, as a fraction of the scene, searched for a suggested interference
+_SUGGEST_UPTO = 0.1
+
+
 def _check_assembled_pose(parts: list[Part], delta: float, interference: float = 0.0) -> None:
     """The assembled pose must be valid: no part overlaps another beyond the contact
     tolerance plus the interference tolerance. An overlap is reported with its
@@ -152,14 +156,18 @@ def _check_assembled_pose(parts: list[Part], delta: float, interference: float =
         other = next((p for p in others if hit and p.name == hit[0]), None)
         name = other.name if other is not None else "another part"
         depth = _overlap_depth(part, other) if other is not None else None
+        suggested = _interference_accepting(checker, delta, depth)
         said = "" if depth is None else (
             f"; penetration depth in [{depth['lower']:.6g}, {depth['upper']:.6g}] along "
             f"({', '.join(f'{x:.4g}' for x in depth['direction'])})")
+        if depth is None and other is not None and not (part.solid and other.solid):
+            said = "; no penetration depth (a surface has no inside)"
         beyond = (f"contact tolerance {delta:g}" if interference == 0 else
                   f"contact tolerance {delta:g} + interference {interference:g}")
-        hint = "" if depth is None else (
-            f"; to accept it as an interference fit, give interference: "
-            f"{_round_up(depth['upper'])} or more (assemble --interference)")
+        hint = "" if suggested is None else (
+            f"; to accept it as an interference fit, give interference: {suggested}"
+            + (" or more (assemble --interference)" if depth is not None else
+               " (assemble --interference; FCL's check accepts the pose with it)"))
         error = field_error(f"parts[{i}]", f"part '{part.name}' collides with '{name}' in "
                                            f"the assembled pose (overlap beyond {beyond}, "
                                            f"or clamped between faces on opposite "
@@ -167,8 +175,29 @@ def _check_assembled_pose(parts: list[Part], delta: float, interference: float =
         error.details = {"overlap": {"part": part.name, "other": name,
                                      "contact_tolerance": delta,
                                      "interference": interference,
-                                     "penetration_depth": depth}}
+                                     "penetration_depth": depth,
+                                     "suggested_interference":
+                                         None if suggested is None else float(suggested)}}
         raise error
+
+
+def _interference_accepting(checker: FclChecker, delta: float, depth: dict | None) -> str | None:
+    """The interference tolerance to suggest for a rejected assembled pose, as written
+    in the message: the penetration depth's upper bound rounded up when it is known
+    (solids), else the smallest tolerance found under which FCL's check accepts the pose
+    (:meth:`FclChecker.tolerance_accepting`, a surface). Only a value the check accepts
+    (contact tolerance plus it) is suggested; ``None`` when none was found."""
+    origin = np.zeros(3)
+    if depth is not None:
+        candidates = [depth["upper"]]
+    else:
+        needed = checker.tolerance_accepting(origin, upto=_SUGGEST_UPTO * checker.scale)
+        candidates = [] if needed is None else [needed - delta]
+    for extra in candidates:
+        for text in (_round_up(extra), repr(float(extra))):
+            if checker.accepts_with(origin, delta + float(text)):
+                return text
+    return None
 
 
 def _round_up(x: float) -> str:

@@ -286,17 +286,14 @@ class FclChecker:
             return 0.0
         return self._witness(p)
 
-    def _witness(self, t: np.ndarray) -> float | None:
-        delta = self.contact_tolerance
+    def _witness(self, t: np.ndarray, delta: float | None = None,
+                 directions: list[np.ndarray] | None = None) -> float | None:
+        """The witness bound of ``pd(t)`` under tolerance ``delta`` (default the
+        checker's), or ``None`` when no witness of length ``<= delta`` was found."""
+        delta = self.contact_tolerance if delta is None else delta
         if delta <= 0.0:
             return None
-        unique: list[np.ndarray] = []
-        for part in self.obstacles:
-            if _aabb_gap(self.robot.lo + t, self.robot.hi + t, part.lo, part.hi) > 0.0:
-                continue
-            for d in self._escape_directions(part, t):
-                if not any(float(np.dot(d, u)) > 1.0 - 1e-9 for u in unique):
-                    unique.append(d)
+        unique = self._witness_directions(t) if directions is None else directions
         for fraction in sorted(self.tolerances.witness_fractions):
             length = fraction * delta
             for direction in unique:
@@ -304,6 +301,63 @@ class FclChecker:
                 if d_u is not None:  # the first (shortest) witness found
                     return max(0.0, length - d_u)
         return None
+
+    def _witness_directions(self, t: np.ndarray) -> list[np.ndarray]:
+        """The distinct escape directions at ``t`` from every obstacle near the robot."""
+        unique: list[np.ndarray] = []
+        for part in self.obstacles:
+            if _aabb_gap(self.robot.lo + t, self.robot.hi + t, part.lo, part.hi) > 0.0:
+                continue
+            for d in self._escape_directions(part, t):
+                if not any(float(np.dot(d, u)) > 1.0 - 1e-9 for u in unique):
+                    unique.append(d)
+        return unique
+
+    def tolerance_accepting(self, t: ArrayLike, *, upto: float, steps: int = 100,
+                            bisections: int = 12) -> float | None:
+        """The smallest contact tolerance found (``<= upto``) under which this checker
+        would accept ``t``: the shortest free translation along the escape directions,
+        scanned in ``steps`` equal steps up to ``upto`` (a free window may be narrow: a
+        nut on its thread is free only near whole turns) and bisected at the first free
+        step. A witness of that length is then tried, so a checker with the tolerance
+        returned accepts ``t``. ``None`` when no scanned translation frees it. A search,
+        not the penetration depth: it is the tolerance to suggest for a rejected pose,
+        meaningful for surfaces too, which have no penetration depth."""
+        p = _as_translation(t)
+        if self._free_distance(p) is not None:
+            return 0.0
+        best: float | None = None
+        for direction in self._witness_directions(p):
+            free = self._first_free(p, direction, upto if best is None else best, steps,
+                                    bisections)
+            if free is not None and (best is None or free < best):
+                best = free
+        return best
+
+    def _first_free(self, t: np.ndarray, direction: np.ndarray, upto: float, steps: int,
+                    bisections: int) -> float | None:
+        """The shortest free length along ``direction`` from ``t`` (scanned, then
+        bisected), ``None`` when none up to ``upto``."""
+        step = upto / steps
+        lo = 0.0
+        for k in range(1, steps + 1):
+            hi = k * step
+            if self._free_distance(t + hi * direction) is not None:
+                for _ in range(bisections):
+                    mid = 0.5 * (lo + hi)
+                    if self._free_distance(t + mid * direction) is None:
+                        lo = mid
+                    else:
+                        hi = mid
+                return hi
+            lo = hi
+        return None
+
+    def accepts_with(self, t: ArrayLike, tolerance: float) -> bool:
+        """Whether a checker with contact tolerance ``tolerance`` would accept ``t``
+        (:meth:`is_valid` there; not counted here)."""
+        p = _as_translation(t)
+        return self._free_distance(p) is not None or self._witness(p, tolerance) is not None
 
     def is_valid(self, t: ArrayLike) -> bool:
         """``True`` iff ``R + t`` is valid under the contact tolerance (exact for
