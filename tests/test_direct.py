@@ -121,6 +121,10 @@ def test_an_end_resting_in_contact_is_stepped_out_first():
     assert np.allclose(motion[0], [-3, 3, 0.5]) and np.allclose(motion[-1], [3, 3, 1.2])
     assert not obstacles.contains(motion[1:2])[0]
     assert checker.check_path(motion).valid
+    # already at the goal, in the same contact: no motion (as the planner answers it)
+    here = dataclasses.replace(scenario, goal=np.array([-3.0, 3, 0.5]))
+    stay = direct_motion(here, source, checker, reach=2e-6, margin=0.0).motion
+    assert stay is not None and np.array_equal(stay, [[-3, 3, 0.5], [-3, 3, 0.5]])
     # in collision (sunk into the floor) is no direct motion
     sunk = dataclasses.replace(scenario, start=np.array([-3.0, 3, 0.4]))
     sunk_direct = direct_motion(sunk, source, checker, reach=2e-6, margin=0.0)

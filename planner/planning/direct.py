@@ -107,14 +107,17 @@ def direct_motion(scenario: Scenario, source: Source, checker: FclChecker, *,
         margin: the clearance asked for.
     """
     obstacles = PieceObstacles(scenario, source)
+    same = np.array_equal(np.asarray(scenario.start), np.asarray(scenario.goal))
     ends = []
-    for which in ("start", "goal"):
+    for which in ("start",) if same else ("start", "goal"):
         p = np.asarray(getattr(scenario, which), dtype=np.float64)
         out: np.ndarray | None = p
         if obstacles.contains(p[None, :])[0]:
             if not checker.is_valid(p):
                 return Direct(in_collision=which)
-            out = escape(obstacles, checker, p, reach)
+            out = p if same else escape(obstacles, checker, p, reach)
+        if same:  # valid and already there: no motion, no escape
+            return Direct(motion=np.array([p, p], dtype=np.float64))
         if out is None:
             return Direct()
         ends.append((p, out))
