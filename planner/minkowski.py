@@ -8,9 +8,12 @@ bodies, CoACD's otherwise, cached on disk) and extract a closed surface of it on
 adaptive octree (Varadhan & Manocha 2006).
 
 The error bound is the two-sided Hausdorff distance between the result's surface and the
-true boundary: the grid's part ``sqrt(3) h (1 + 2e-4)`` is proved when no complex cell is
-left (``stats["complex_cells"] == 0``); the decomposition's part is CoACD's measured excess
-of hulls over the solid (0 for convex bodies), an estimate by sampling.
+true boundary: the grid's part ``sqrt(3) h (1 + 2e-4)``, widened where the lattice may have
+missed boundary (unresolved cells, and silent ones the source cannot prove clear; counted in
+``stats["unresolved_cells"]``, ``stats["silent_cells"]``, ``stats["complex_cells"]``) to
+those cells' reach: half a cell's diagonal plus the distance from its centre to the surface.
+The decomposition's part is CoACD's measured excess of hulls over the solid (0 for convex
+bodies), an estimate by sampling.
 """
 
 from __future__ import annotations
@@ -50,8 +53,9 @@ class MinkowskiResult:
         mesh: watertight, outward-oriented ``trimesh.Trimesh``.
         error_bound: absolute two-sided Hausdorff bound between ``mesh`` and the true
             boundary of the sum of the input solids: the grid's proved bound plus the
-            decompositions' measured excess; ``inf`` when complex cells remain (then no
-            bound is proved: refine with a smaller eps).
+            decompositions' measured excess. Cells where the lattice may have missed
+            boundary (a feature thinner than the cell) widen it to their reach: a smaller
+            eps then tightens it.
         eps: the grid resolution asked for (the grid's share of the bound).
         bound_kind: ``"two-sided"`` when both decompositions are exact: ``error_bound`` is
             then a proved two-sided Hausdorff bound between ``mesh`` and the true boundary.
@@ -59,8 +63,8 @@ class MinkowskiResult:
             contains the true sum (up to the grid part) and sticks out of it by at most
             ``error_bound``, but a passage of the true sum narrower than the excess (a
             bore, a slot) can be filled, where the true boundary lies farther inside.
-        bound_guaranteed: True when the bound is proved as a two-sided bound: no complex
-            cell remains and both decompositions are exact.
+        bound_guaranteed: True when the bound is proved as a two-sided bound: both
+            decompositions are exact (the grid's part is proved, complex cells or not).
         exact: True when both operands were decomposed exactly (convex bodies).
         stats: pieces, primitives, cells per label and level, triangles, seconds per
             stage, decomposition details.
@@ -222,7 +226,7 @@ def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bo
     return MinkowskiResult(
         mesh=mesh, error_bound=error_bound, eps=eps_value,
         bound_kind="two-sided" if pair.exact else "outer",
-        bound_guaranteed=surface_stats["complex_cells"] == 0 and pair.exact,
+        bound_guaranteed=pair.exact,
         exact=pair.exact, stats=stats, primitives=pair.native, pair=pair)
 
 
@@ -255,7 +259,8 @@ def mesh_arrays(mesh: trimesh.Trimesh, name: str) -> tuple[np.ndarray, np.ndarra
 def _surface_mesh(surf: dict, names: tuple[str, str],
                   warn_complex: bool) -> tuple[trimesh.Trimesh, dict, dict]:
     """The core's surface as a mesh, with the stats and stage seconds both sources report;
-    an empty surface is an error, complex cells left a warning (with ``warn_complex``)."""
+    an empty surface is an error, a bound widened past twice the grid's by cells the lattice
+    may have missed boundary in a warning (with ``warn_complex``)."""
     mesh = trimesh.Trimesh(vertices=surf["vertices"], faces=surf["faces"], process=False)
     # closed, manifold and outward by construction (integer-determinant orientation over
     # a crack-free tetrahedral split); the tests check it, so it is not re-checked here
@@ -264,11 +269,14 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
             f"{names[0]} ⊕ {names[1]}: the extracted surface is empty; please report this input"
         )
     complex_cells = int(surf["complex_cells"])
-    if complex_cells and warn_complex:
+    grid_bound = _GRID_BOUND_PER_H * float(surf["h"])
+    if warn_complex and float(surf["error_bound"]) > 2.0 * grid_bound * (1 + 1e-9):
         log.warning(
-            "%s ⊕ %s: %d complex cells remain after %d refinements: the bound is not guaranteed "
-            "there (features thinner than %.3g); use a smaller eps",
-            names[0], names[1], complex_cells, surf["refinements"], surf["h"],
+            "%s ⊕ %s: the lattice may miss boundary in %d cells after %d refinements (a "
+            "feature thinner than %.3g: %d complex, %d silent ones no piece covers), so the "
+            "bound is %.4g, not %.4g; use a smaller eps",
+            names[0], names[1], complex_cells + int(surf["silent_cells"]), surf["refinements"],
+            surf["h"], complex_cells, int(surf["silent_cells"]), surf["error_bound"], grid_bound,
         )
     per_level = surf["cells_per_level"]
     stats = {
@@ -282,6 +290,7 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
         "grid_error_bound": float(surf["error_bound"]),
         "complex_cells": complex_cells,
         "unresolved_cells": int(surf["unresolved_cells"]),
+        "silent_cells": int(surf["silent_cells"]),
         "complex_edges": int(surf["complex_edges"]),
         "refinements": int(surf["refinements"]),
         "planar_cells": int(surf["planar_cells"]),
@@ -335,7 +344,7 @@ def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
              len(mesh.faces), surf["error_bound"], stats["seconds"]["total"])
     return MinkowskiResult(
         mesh=mesh, error_bound=float(surf["error_bound"]), eps=eps_value,
-        bound_kind="two-sided", bound_guaranteed=surface_stats["complex_cells"] == 0,
+        bound_kind="two-sided", bound_guaranteed=True,
         exact=True, stats=stats, primitives=pair.native, pair=pair)
 
 
@@ -369,7 +378,8 @@ def minkowski_sum(
             default: when stderr is a terminal).
         max_cells: octree leaf budget (default ``tol.max_cells``, else derived from the
             memory limit: :mod:`planner.budget`).
-        max_refinements: how often the grid may be halved while complex cells remain.
+        max_refinements: how often the grid may be halved while complex cells lie farther
+            from the surface than the grid's bound (their reach widens the bound).
         simplify: collapse the interiors of flat patches (the same surface with far fewer
             triangles; the bound is unchanged).
         exact: ``True``: the exact source (boundary convolution of the two meshes, no

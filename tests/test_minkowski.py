@@ -400,6 +400,42 @@ def test_slot_at_coarse_eps_is_honest(cache_dir):
     membership_agreement(r, bar, ball, n=800, seed=3, min_points=200)
 
 
+def _closing_hole():
+    """A 2.2 x 2.2 x 1 plate with a 32-gon hole of inradius 0.5 cos(π/32) ≈ 0.4976 and a
+    ball of radius 0.5: the sum just closes the hole inside the plate and leaves above and
+    below it a needle-thin conical crevice on the axis, thinner than any cell for its first
+    ~0.1, which lattice edges slip past; and where the true crevice ends (by FCL)."""
+    import manifold3d
+
+    plate = (manifold3d.Manifold.cube([2.2, 2.2, 1.0], True)
+             - manifold3d.Manifold.cylinder(3.0, 0.5, -1.0, 32, True))
+    a, b = shapes.from_manifold(plate, "plate with a hole"), shapes.icosphere(2, 0.5)
+    zs = np.linspace(0.5, 0.75, 2001)
+    axis = np.column_stack([np.zeros_like(zs), np.zeros_like(zs), zs])
+    free = ~oracle.in_minkowski_sum(axis, a, b)
+    assert free.any() and not free[0], "the crevice starts above the plate's face"
+    return a, b, axis[np.argmax(free)]
+
+
+@pytest.mark.parametrize("eps, refinements", [(0.06, 2), (0.092, 0)])
+def test_boundary_the_lattice_misses_is_within_the_bound(eps, refinements):
+    """Where the crevice slips between the lattice edges the surface fills it, and the bound
+    must cover that (at eps 0.092 without refinement the tip lies farther from the surface
+    than the grid's part: only the cells it passes, bounded by their distance to the
+    surface, cover it)."""
+    a, b, tip = _closing_hole()
+    r = planner.minkowski_sum(a, b, exact=True, eps=eps, max_refinements=refinements,
+                              progress=False)
+    check_result(r, eps=eps)
+    assert r.bound_guaranteed
+    d_tip = oracle.surface_distance(r.mesh, tip[None])[0]
+    assert d_tip <= r.error_bound
+    if refinements == 0:
+        assert d_tip > r.eps, "the case must exercise a miss beyond the grid's part"
+    d_true_to_ours, d_ours_to_true = oracle.hausdorff_estimate(r.mesh, a, b, n=150, seed=0)
+    assert d_true_to_ours <= r.error_bound and d_ours_to_true <= r.error_bound
+
+
 # --------------------------------------------------------------------------------------
 # (4) the C-obstacle convention: CO = O ⊕ (−R) = {t : (R + t) ∩ O ≠ ∅}
 # --------------------------------------------------------------------------------------

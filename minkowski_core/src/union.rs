@@ -1,11 +1,11 @@
 //! The union-approximation driver: octree, surface, and refinement while complex cells
-//! remain.
+//! lie farther from the surface than the grid's bound allows.
 
 use crate::error::{CoreError, CoreResult};
 use crate::math::Aabb;
 use crate::minkowski::PolytopeSet;
 use crate::octree::{CellSource, LevelCounts, Octree};
-use crate::surface::{extract, merge_coplanar, Surface, EDGE_CLAMP, MAX_OPEN_REPORTED};
+use crate::surface::{extract, loose_reach, merge_coplanar, Surface, EDGE_CLAMP, MAX_OPEN_REPORTED};
 use std::time::Instant;
 
 /// Parameters of [`approximate_union`].
@@ -15,7 +15,8 @@ pub struct UnionParams {
     pub eps: f64,
     /// Leaf budget of one octree.
     pub max_cells: usize,
-    /// How many times the grid may be halved while complex cells remain.
+    /// How many times the grid may be halved while complex cells lie too far from the
+    /// surface ([`surface_error_bound`]).
     pub max_refinements: u32,
     /// Collapse interior vertices of planar patches ([`merge_coplanar`]): same surface,
     /// far fewer triangles on flat facets.
@@ -37,8 +38,8 @@ pub struct UnionResult {
     /// Finest cell size used.
     pub h: f64,
     /// Two-sided Hausdorff bound of the surface to the union's boundary that is proved for
-    /// this surface: `grid_error_bound(h)`, twice that with unresolved cells, infinite with
-    /// complex cells.
+    /// this surface: `grid_error_bound(h)`, and where the lattice may have missed boundary
+    /// (loose cells) at least its reach ([`loose_reach`]).
     pub error_bound: f64,
     /// Grid halvings done.
     pub refinements: u32,
@@ -76,24 +77,22 @@ pub fn grid_error_bound(h: f64) -> f64 {
     3f64.sqrt() * h * (1.0 + 2.0 * EDGE_CLAMP)
 }
 
-/// The bound that holds for `surface` extracted at cell size `h` (infinite while complex
-/// cells remain): the grid's, or the plane-resolved cells' deviation where that is larger.
+/// The bound that holds for `surface` extracted at cell size `h`: the grid's, the loose
+/// cells' reach ([`loose_reach`]: how far boundary the lattice did not see may lie from the
+/// surface, at most twice the grid's next to a sign change) or the plane-resolved cells'
+/// deviation, whichever is largest.
 pub fn surface_error_bound(surface: &Surface, h: f64) -> f64 {
-    let grid = if surface.complex_cells > 0 {
-        f64::INFINITY
-    } else if surface.unresolved_cells > 0 {
-        2.0 * grid_error_bound(h)
-    } else {
-        grid_error_bound(h)
-    };
-    grid.max(surface.planar_deviation)
+    let grid = grid_error_bound(h);
+    grid.max(loose_reach(surface, 2.0 * grid)).max(surface.planar_deviation)
 }
 
 /// Approximate the boundary of the union of `set` at resolution `params.eps`: the grid has
 /// `grid_error_bound(h) = eps`, which is the proved bound when every band cell resolves the
 /// boundary and twice it with unresolved cells (each next to a resolved one). While complex
-/// cells remain (no bound at all) the grid is halved, at most `max_refinements` times and
-/// only while the next grid (about four times the band cells) is expected to fit the budget.
+/// cells (boundary the samples missed, no sign change next to it) lie farther from the
+/// surface than that, the grid is halved, at most `max_refinements` times and only while
+/// the next grid (about four times the band cells) is expected to fit the budget; the bound
+/// then includes their reach.
 ///
 /// # Errors
 /// [`CoreError::InvalidParameter`] for a bad eps, [`CoreError::ResourceLimit`] when even
@@ -152,7 +151,8 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
             continue;
         }
         let bound = surface_error_bound(&surface, h);
-        let done = bound.is_finite();
+        // complex cells within the unresolved cells' allowance need no finer grid
+        let done = bound <= (2.0 * grid_error_bound(h)).max(surface.planar_deviation);
         let next_fits = 4 * (oct.leaves.len() + surface.band_cells) <= params.max_cells;
         best = Some(UnionResult {
             surface,

@@ -87,6 +87,18 @@ pub trait CellSource: Sync {
     /// intervals of `[0, 1]`, given its [`CellSource::boundary_intervals`] `bnd` and the
     /// known memberships `sa`, `sb` of its ends.
     fn solid_intervals(&self, a: Vec3, b: Vec3, sa: bool, sb: bool, bnd: &[(f64, f64)], out: &mut Vec<(f64, f64)>);
+    /// Whether the boundary provably misses `cell`, a finest MIXED cell with records `own`
+    /// whose corners all have membership `inside` and whose edges the boundary does not
+    /// cross: a sliver or void thinner than the cell can slip between the lattice edges,
+    /// and the surface's bound covers such a cell only by its distance to the surface
+    /// ([`crate::surface::Surface::loose_at`]). Default: an inside cell whose regions
+    /// between its candidates' planes are all inside ([`planes_clear`]).
+    fn misses_boundary(&self, cell: &Aabb, own: &[u32], inside: bool) -> bool
+    where
+        Self: Sized,
+    {
+        inside && planes_clear(self, cell, own)
+    }
     /// The planes of the boundary candidates of a MIXED cell with records `own`, when
     /// every candidate is flat and they lie on at most [`planar::MAX_PLANES`] planes (the
     /// cell is then resolved exactly at its size, see [`planar`]). Default: `None`.
@@ -97,6 +109,18 @@ pub trait CellSource: Sync {
         let _ = own;
         None
     }
+}
+
+/// Whether no boundary lies in `cell` (records `own`) by its candidates' planes
+/// ([`CellSource::plane_cut`]): the boundary lies on them, between regions of the cell
+/// that differ, so when every region on either side of every exact plane piece is
+/// inside, the cell holds none (a point on a piece is then a limit of inside points on
+/// both sides).
+pub fn planes_clear<S: CellSource>(src: &S, cell: &Aabb, own: &[u32]) -> bool {
+    let Some(pieces) = src.plane_cut(own).and_then(|cut| cut.pieces(cell)) else {
+        return false;
+    };
+    pieces.iter().all(|p| p.deviation == 0.0 && p.sides.iter().all(|&q| src.cell_contains(own, q)))
 }
 
 impl CellSource for crate::minkowski::PolytopeSet {

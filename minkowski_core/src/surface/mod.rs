@@ -8,7 +8,9 @@
 //! cell's primitives (not interpolated). The same clipping finds *complex edges* — ones the
 //! boundary crosses more than once, or crosses twice with no sign change (thin slots,
 //! needles) — where the sampling is too coarse for the two-sided bound, so the caller can
-//! refine. Triangle orientation comes from integer determinants on the lattice, never from
+//! refine. A *silent* cell (no sign change, no complex edge) may still hold boundary that
+//! slips between its edges (a needle-thin void); the source clears it or it counts, with the
+//! unresolved cells, in what the bound must cover ([`loose_reach`]). Triangle orientation comes from integer determinants on the lattice, never from
 //! rounded geometry, so the mesh is consistently oriented.
 //!
 //! Cells above the finest level that the source resolved by at most three planes
@@ -17,12 +19,14 @@
 //! Entry point: [`extract`].
 
 pub mod planar;
+mod reach;
 mod resolve;
 mod simplify;
 pub mod stitch;
 #[cfg(test)]
 mod surface_tests;
 
+pub use reach::loose_reach;
 pub use simplify::merge_coplanar;
 
 use crate::math::{Aabb, Vec3};
@@ -62,13 +66,22 @@ pub struct Surface {
     /// Edges the boundary crosses more than once or without a sign change.
     pub complex_edges: usize,
     /// Cells whose corners all have one sign although solid (a sliver) or free space (a
-    /// gap) crosses one of their edges: the samples do not see that piece of boundary. Next
-    /// to a cell with a sign change this costs accuracy (the bound doubles to
-    /// `2 sqrt(3) h`), not closedness.
+    /// gap) crosses one of their edges: the samples do not see that piece of boundary. This
+    /// costs accuracy (the bound takes the cell's reach, [`loose_reach`]; next to a cell
+    /// with a sign change at most `2 sqrt(3) h`), not closedness.
     pub unresolved_cells: usize,
-    /// Unresolved cells with no 26-neighbour that has a sign change: there no bound holds
-    /// (a thin feature or passage may be lost), so the caller refines.
+    /// Silent cells the source could not clear ([`CellSource::misses_boundary`]): no sign
+    /// change and no edge the boundary crosses, yet boundary candidates meet them, so a
+    /// sliver or void thinner than the cell may lie between their edges unseen.
+    pub silent_cells: usize,
+    /// Unresolved cells with no 26-neighbour that has a sign change: a thin feature or
+    /// passage there may be lost, and the boundary in them is only as near the surface as
+    /// the cells are, so the caller bounds that ([`loose_reach`]) or refines.
     pub complex_cells: usize,
+    /// Every unresolved or uncleared silent cell, and whether a 26-neighbour has a sign
+    /// change (the surface then passes within the two cells' joint diagonal): what the
+    /// bound must cover beyond the grid's ([`loose_reach`]).
+    pub loose_at: Vec<(Aabb, bool)>,
     /// Edges whose clipped crossings disagreed with the lattice signs (rounding); should be 0.
     pub inconsistent_edges: usize,
     /// MIXED cells above the finest level, resolved by planes: their surface is exact.
@@ -550,11 +563,22 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarPolygons) ->
         s.crease_conflicts = conflicts.len();
         s.open_at.extend(conflicts.into_iter().take(MAX_OPEN_REPORTED));
     }
-    for (&li, &(_, unresolved)) in band.iter().zip(&flags) {
-        if !unresolved {
+    // silent cells (no sign change, no edge the boundary crosses) the source cannot clear
+    let unproved: Vec<bool> = band
+        .par_iter()
+        .zip(&flags)
+        .zip(&cell_points)
+        .map(|((&li, &(sign_change, unresolved)), idx)| {
+            let l = &oct.leaves[li];
+            !sign_change && !unresolved && !src.misses_boundary(&oct.cell_box(l), oct.records(l), inside[idx[0] as usize])
+        })
+        .collect();
+    for ((&li, &(_, unresolved)), &silent) in band.iter().zip(&flags).zip(&unproved) {
+        if !unresolved && !silent {
             continue;
         }
-        s.unresolved_cells += 1;
+        s.unresolved_cells += unresolved as usize;
+        s.silent_cells += silent as usize;
         let l = &oct.leaves[li];
         let mut near = false;
         'n: for dz in -1i64..=1 {
@@ -571,7 +595,8 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarPolygons) ->
                 }
             }
         }
-        if !near {
+        s.loose_at.push((oct.cell_box(l), near));
+        if unresolved && !near {
             s.complex_cells += 1;
             if s.open_at.len() < MAX_OPEN_REPORTED {
                 s.open_at.push(oct.cell_box(l));
