@@ -56,7 +56,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))                 # tests/: shapes
 sys.path.insert(0, str(HERE.parent.parent))          # repository root: planner
 
-from benchlib import jsonable  # noqa: E402
+from benchlib import jsonable, peak_mb  # noqa: E402
 
 ASSETS = HERE.parent.parent.parent / "shared" / "assets" / "assemblies"
 HOLE = ASSETS / "factory_round_peg_8mm" / "meshes" / "factory_round_hole_8mm_subdiv_3x.obj"
@@ -169,16 +169,6 @@ def _manifold(V, F, r, k):
 TOOLS = {"ours": _ours, "libigl": _libigl, "manifold": _manifold}
 
 
-def _peak_mb() -> float:
-    """This process's peak resident memory (``VmHWM``: its own since its ``exec``, unlike
-    ``ru_maxrss``, which keeps the parent's)."""
-    with open("/proc/self/status", encoding="ascii") as status:
-        for line in status:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024
-    return float("nan")
-
-
 def worker(spec_path: str) -> int:
     """Run one tool on one input (a JSON spec), write the output mesh and the measurements.
     Imports and inputs are made before the clock starts."""
@@ -186,11 +176,11 @@ def worker(spec_path: str) -> int:
     data = np.load(spec["input"])
     V, F = np.ascontiguousarray(data["V"]), np.ascontiguousarray(data["F"])
     run = TOOLS[spec["tool"]](V, F, spec["r"], spec["param"])
-    base = _peak_mb()
+    base = peak_mb()
     cpu0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
     SV, SF, extra = run()
     wall, cpu1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_SELF)
-    peak = _peak_mb()
+    peak = peak_mb()
     np.savez(spec["output"], V=np.asarray(SV, dtype=np.float64), F=np.asarray(SF, dtype=np.int64))
     cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
     Path(spec["result"]).write_text(json.dumps(jsonable(

@@ -23,7 +23,6 @@ import argparse
 import json
 import os
 import platform
-import resource
 import subprocess
 import sys
 import tempfile
@@ -37,7 +36,7 @@ sys.path.insert(0, str(HERE.parent))                 # tests/: shapes, oracle
 sys.path.insert(0, str(HERE.parent.parent))          # repository root: planner
 
 import shapes  # noqa: E402
-from benchlib import jsonable  # noqa: E402
+from benchlib import jsonable, peak_mb  # noqa: E402
 
 PAIRS = {
     "L-bracket ⊕ cube": (shapes.l_bracket, lambda: shapes.box((1.0, 1.0, 1.0))),
@@ -99,7 +98,7 @@ def child(tool: str, pair: str, rel_eps: float, out_mesh: str) -> dict:
         import planner  # noqa: PLC0415
         import planner.minkowski  # noqa: F401, PLC0415
         import planner.sources  # noqa: F401, PLC0415
-    base_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    base_rss = peak_mb()
     t0, c0 = time.perf_counter(), time.process_time()
     if tool == "minkplan":
         r = planner.minkowski_sum(a, b, exact=True, eps=rel_eps * diag, progress=False)
@@ -115,7 +114,7 @@ def child(tool: str, pair: str, rel_eps: float, out_mesh: str) -> dict:
         row["b_shift"] = shift.tolist()
     row["seconds"] = time.perf_counter() - t0
     row["cpu_seconds"] = time.process_time() - c0
-    row["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    row["peak_mb"] = peak_mb()
     row["peak_mb_before"] = base_rss
     row["triangles"] = len(mesh.faces)
     row["volume"] = float(mesh.volume)

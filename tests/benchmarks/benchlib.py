@@ -20,3 +20,17 @@ def jsonable(x):
     if isinstance(x, Path):
         return str(x)
     return x
+
+
+def peak_mb() -> float:
+    """This process's peak resident memory in MB (``VmHWM``: its own since its ``exec``,
+    unlike ``ru_maxrss``, which keeps the forking parent's); NaN where there is no
+    ``/proc``."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return float("nan")
