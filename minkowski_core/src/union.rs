@@ -88,11 +88,10 @@ pub fn surface_error_bound(surface: &Surface, h: f64) -> f64 {
 
 /// Approximate the boundary of the union of `set` at resolution `params.eps`: the grid has
 /// `grid_error_bound(h) = eps`, which is the proved bound when every band cell resolves the
-/// boundary and twice it with unresolved cells (each next to a resolved one). While complex
-/// cells (boundary the samples missed, no sign change next to it) lie farther from the
-/// surface than that, the grid is halved, at most `max_refinements` times and only while
-/// the next grid (about four times the band cells) is expected to fit the budget; the bound
-/// then includes their reach.
+/// boundary; cells where the lattice may have missed boundary widen it by their reach
+/// ([`surface_error_bound`]). While that is above twice the grid's, the grid is halved, at
+/// most `max_refinements` times and only while the next grid (about four times the band
+/// cells) is expected to fit the budget.
 ///
 /// # Errors
 /// [`CoreError::InvalidParameter`] for a bad eps, [`CoreError::ResourceLimit`] when even

@@ -93,9 +93,8 @@ def assembly_path(name: str) -> Path:
 # run in a fresh interpreter: one assembly's seconds and peak memory, as the CLI sees them
 _FRESH = """
 import json, sys, time
-def peak_mb():  # VmHWM: this process's own peak since its exec (ru_maxrss keeps the parent's)
-    with open("/proc/self/status", encoding="ascii") as status:
-        return next(int(l.split()[1]) / 1024 for l in status if l.startswith("VmHWM:"))
+sys.path.insert(0, "tests/benchmarks")  # the child runs in the repository root
+from benchlib import peak_mb
 t0, c0 = time.perf_counter(), time.process_time()
 from planner import load_assembly, plan_assembly
 interference = float(sys.argv[3]) if len(sys.argv) > 3 else None

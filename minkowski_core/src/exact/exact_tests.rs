@@ -679,36 +679,29 @@ fn flat_cells_of_a_box_sum_are_exact_polygons_at_their_size() {
 
 #[test]
 fn a_void_between_the_corners_of_a_cell_is_not_cleared_and_solid_cells_are() {
-    // a hollow box ⊕ a small box: the void [1.1, 1.9]³ lies inside a cell whose corners
+    // a hollow box ⊕ a small box: the void [-0.9, 0.9]³ lies inside a cell whose corners
     // are all in the solid, so no corner and no edge of it sees the void
-    let (mut v, mut f) = (Vec::new(), Vec::new());
-    push_box(Vec3::splat(0.0), Vec3::splat(3.0), &mut v, &mut f);
-    let n0 = f.len();
-    push_box(Vec3::splat(1.0), Vec3::splat(2.0), &mut v, &mut f);
-    for t in &mut f[n0..] {
-        t.swap(1, 2);
-    }
-    let src = ExactSource::new(vec![TriMesh::new(v, &f, "hollow").unwrap()], box_mesh([-0.1; 3], [0.1; 3]), 0.0, None);
+    let src = ExactSource::new(vec![hollow_box()], box_mesh([-0.1; 3], [0.1; 3]), 0.0, None);
     let own_of = |cell: &Aabb| {
         let mut out = Vec::new();
         let label = src.classify(cell, &src.root_records(), true, &mut out);
         (label, out)
     };
-    let around_void = Aabb::new(Vec3::splat(0.95), Vec3::splat(2.05));
+    let around_void = Aabb::new(Vec3::splat(-1.05), Vec3::splat(1.05));
     let (label, own) = own_of(&around_void);
     assert_eq!(label, Label::Mixed);
-    let corners = (0..8).map(|i| Vec3::new([0.95, 2.05][i & 1], [0.95, 2.05][i >> 1 & 1], [0.95, 2.05][i >> 2 & 1]));
+    let corners = (0..8).map(|i| Vec3::new([-1.05, 1.05][i & 1], [-1.05, 1.05][i >> 1 & 1], [-1.05, 1.05][i >> 2 & 1]));
     assert!(corners.clone().all(|c| src.contains_point(c)), "every corner is in the solid");
-    assert!(!src.contains_point(Vec3::splat(1.5)), "the void is free");
+    assert!(!src.contains_point(Vec3::ZERO), "the void is free");
     assert!(!src.misses_boundary(&around_void, &own, true), "the void's walls are boundary the corners miss");
     // a cell against the outer face from inside holds no boundary but on its face: cleared
-    let under_top = Aabb::new(Vec3::new(0.5, 0.5, 3.0), Vec3::new(0.6, 0.6, 3.1));
+    let under_top = Aabb::new(Vec3::new(-1.5, -1.5, 2.0), Vec3::new(-1.4, -1.4, 2.1));
     let (label, own) = own_of(&under_top);
     assert_eq!(label, Label::Mixed);
     assert!(src.misses_boundary(&under_top, &own, true));
     // a cell inside the void that the void's floor (a facet) meets holds solid, so as a
     // cell of free corners it is never cleared
-    let over_void_wall = Aabb::new(Vec3::new(1.2, 1.2, 1.1), Vec3::new(1.4, 1.4, 1.2));
+    let over_void_wall = Aabb::new(Vec3::new(-0.3, -0.3, -0.9), Vec3::new(-0.1, -0.1, -0.8));
     let (label, own) = own_of(&over_void_wall);
     assert_eq!(label, Label::Mixed);
     assert!(!src.misses_boundary(&over_void_wall, &own, false));

@@ -747,19 +747,16 @@ impl CellSource for ExactSource {
         Label::Mixed
     }
 
-    /// Inside: a single piece, or a nested vertex, holds the whole cell (walls aside), or
-    /// its candidates lie on a few planes and every region they cut the cell into is
-    /// inside (the boundary lies on those planes, between regions that differ). Outside:
-    /// never — every record of a finest cell (a facet, a pair's pieces) meets it and lies
-    /// in the solid, so such a cell holds solid the lattice missed.
+    /// Inside: a single piece, or a nested vertex, holds the whole cell (a FULL witness;
+    /// walls aside), or its candidates lie on a few planes and every region they cut the
+    /// cell into is inside (the boundary lies on those planes, between regions that
+    /// differ). Outside: never — every record of a finest cell (a facet, a pair's pieces)
+    /// meets it and lies in the solid, so such a cell holds solid the lattice missed.
     fn misses_boundary(&self, cell: &Aabb, own: &[u32], inside: bool) -> bool {
         if !inside || records(own).any(|r| matches!(r, Rec::Wall(_))) {
             return false;
         }
-        if self.piece_contains_box(cell).is_some() || (0..self.obstacles.len()).any(|k| self.vertex_nested(k, cell)) {
-            return true;
-        }
-        crate::octree::planes_clear(self, cell, own)
+        self.box_shown(cell).is_some() || crate::octree::planes_clear(self, cell, own)
     }
 
     fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {

@@ -46,7 +46,7 @@ impl ExactSource {
     }
 
     /// A wall slab, one piece, or one vertex nested for the whole box.
-    fn box_shown(&self, bx: &Aabb) -> Option<Witness> {
+    pub(super) fn box_shown(&self, bx: &Aabb) -> Option<Witness> {
         if self.walls.is_some() {
             if let Some(side) = (0..6).find(|&side| self.wall_box(side, bx).0) {
                 return Some(Witness::Wall { side });
