@@ -9,6 +9,7 @@ for a sealed box); a pocket with an exit is never proved closed.
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ from conftest import SHARED_ASSETS
 import planner
 from planner.errors import ResourceLimitError
 from planner.planning import OctreeParams
+from planner.planning.local_proof import wall_off
 from planner.planning.slabs import subsets
 from planner.problem import Body, PlannerSettings, Robot, Scenario
 from planner.validation import FclChecker
@@ -206,3 +208,35 @@ def test_a_time_limit_spent_on_local_proofs_is_the_answer_not_a_larger_cspace():
     assert outcome.status == "not_found" and outcome.reason == "time_limit", outcome.message
     assert "local proofs" in outcome.message and outcome.cspace is None
     assert outcome.timings["total"] < 60  # the slab's last round may overrun, not a search
+
+
+class _GrowingCSpace:
+    """A stand-in C-space isolating :func:`wall_off`'s round loop: never walled off, each
+    round's component ten times the last, refining costs ``per_leaf`` seconds a leaf."""
+
+    n_obstacle_prims = 0
+
+    def __init__(self, per_leaf: float) -> None:
+        self.per_leaf, self.members, self.refined = per_leaf, 10, []
+
+    def enclosure(self, point):
+        return {"wall_prims": [], "verified": False,
+                "component_leaves": list(range(self.members))}
+
+    def leaves(self):
+        return {}
+
+    def refine(self, chosen, ring, levels):
+        time.sleep(self.per_leaf * len(chosen))
+        self.refined.append(len(chosen))
+        self.members *= 10
+        return {"refined": len(chosen)}
+
+
+def test_a_wall_off_round_projected_past_the_deadline_is_not_started():
+    cs = _GrowingCSpace(per_leaf=0.02)  # 0.2 s for the first round, 2 s for the next
+    t0 = time.perf_counter()
+    raw, rounds = wall_off(cs, np.zeros(3), bounds_faces=[False] * 6,
+                           deadline=t0 + 1.0, select=lambda cs, leaves, members: list(members))
+    assert raw is None and rounds == 1 and cs.refined == [10]
+    assert time.perf_counter() - t0 < 1.0  # stopped before the deadline, not after it

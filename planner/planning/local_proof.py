@@ -120,14 +120,18 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
     bounds_faces = [bool(box[0][s // 2] <= lo[s // 2]) if s % 2 == 0 else
                     bool(box[1][s // 2] >= hi[s // 2]) for s in range(6)]
     side = float(np.max(box[1] - box[0]))
+    per_triangle = 0.0  # seconds per robot triangle of the last subset's C-space
     for label, robot in subsets(scenario.robot):
         t_subset = time.perf_counter()
-        if t_subset > deadline:
+        if t_subset + per_triangle * len(robot.mesh.faces) > deadline:
+            log.info("local proof at the %s, %s: its C-space would end after the time limit",
+                     which, label)
             break
         whole = robot is scenario.robot
         try:
             cs = source.cspace(scenario.obstacles, robot, box, side / FLOOR_DIVISIONS,
                                side / COARSE_DIVISIONS)
+            per_triangle = (time.perf_counter() - t_subset) / max(len(robot.mesh.faces), 1)
             raw, rounds = wall_off(cs, point, bounds_faces=bounds_faces, deadline=deadline,
                                    select=inside_obstacles)
         except ResourceLimitError:
@@ -201,12 +205,14 @@ def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float
     until it is walled off by verified FULL leaves, none a wall of the C-space's box
     except on a side in ``bounds_faces`` (``2 · axis + upper``: a face of the problem's
     own bounds). ``(certificate, rounds)``; the certificate is ``None`` when that did not
-    happen within ``max_rounds`` or the deadline.
+    happen within ``max_rounds`` or the deadline (a round is not started when the last
+    one's seconds per refined leaf say it would end after the deadline).
 
     Raises:
         ResourceLimitError: a refinement would pass the memory limit.
     """
     rounds = 0
+    per_leaf = 0.0  # seconds per refined leaf in the last round
     while True:
         raw = cs.enclosure(point.tolist())
         if raw is None:  # the point's leaf is FULL: not free after all
@@ -220,9 +226,15 @@ def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float
                   artificial, raw["verified"])
         members = np.asarray(raw["component_leaves"], dtype=np.int64)
         chosen = select(cs, cs.leaves(), members)
-        if not chosen or rounds >= max_rounds or time.perf_counter() > deadline:
+        if not chosen or rounds >= max_rounds:
             return None, rounds
+        if time.perf_counter() + per_leaf * len(chosen) > deadline:
+            log.debug("wall_off round %d: refining %d leaves would pass the deadline",
+                      rounds, len(chosen))
+            return None, rounds
+        t_round = time.perf_counter()
         stats = cs.refine(chosen, ring=False, levels=1)
         if stats["refined"] == 0:
             return None, rounds
+        per_leaf = (time.perf_counter() - t_round) / len(chosen)
         rounds += 1
