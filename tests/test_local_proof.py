@@ -19,7 +19,7 @@ from conftest import SHARED_ASSETS
 import planner
 from planner.errors import ResourceLimitError
 from planner.planning import OctreeParams
-from planner.planning.local_proof import wall_off
+from planner.planning.local_proof import Deadline, wall_off
 from planner.planning.slabs import subsets
 from planner.problem import Body, PlannerSettings, Robot, Scenario
 from planner.validation import FclChecker
@@ -236,7 +236,9 @@ class _GrowingCSpace:
 def test_a_wall_off_round_projected_past_the_deadline_is_not_started():
     cs = _GrowingCSpace(per_leaf=0.02)  # 0.2 s for the first round, 2 s for the next
     t0 = time.perf_counter()
-    raw, rounds = wall_off(cs, np.zeros(3), bounds_faces=[False] * 6,
-                           deadline=t0 + 1.0, select=lambda cs, leaves, members: list(members))
+    deadline = Deadline(t0 + 1.0)
+    raw, rounds = wall_off(cs, np.zeros(3), bounds_faces=[False] * 6, deadline=deadline,
+                           select=lambda cs, leaves, members: list(members))
     assert raw is None and rounds == 1 and cs.refined == [10]
     assert time.perf_counter() - t0 < 1.0  # stopped before the deadline, not after it
+    assert deadline.reached  # the planner answers time_limit, not a C-space over the bounds

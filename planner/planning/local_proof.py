@@ -19,8 +19,9 @@ not converge; but a robot in a pocket is walled off by the C-obstacle cells near
    FULL leaf around it is verified by the core and none is a wall of the box that is not a
    face of the bounds. Then no path leaves the component, whatever lies outside the box:
    no path (exact on the exact source). Otherwise nothing is claimed and the planner
-   searches the whole bounds as before — unless the time limit went on the proofs (then
-   the answer is ``not_found``, ``time_limit``) or the proof ran out of memory
+   searches the whole bounds as before — unless the time limit went on the proofs, or a
+   step of them was not started because it would have ended after it (then the answer is
+   ``not_found``, ``time_limit``) or the proof ran out of memory
    (:class:`~planner.errors.ResourceLimitError`, raised). Then the pocket's walls need
    finer cells than the limit allows; a path out of the pocket would pass a gap narrower
    than the flood's step, which the C-space over the whole bounds would have to resolve
@@ -49,7 +50,8 @@ from planner.validation import FclChecker
 from .slabs import subsets
 
 __all__ = ["FLOOD_DIVISIONS", "FLOOD_MAX_NODES", "MARGIN_STEPS",
-           "LocalProof", "leaf_boxes", "prove_end_enclosed", "surface_pairs", "wall_off"]
+           "Deadline", "LocalProof", "leaf_boxes", "prove_end_enclosed", "surface_pairs",
+           "wall_off"]
 
 log = logging.getLogger(__name__)
 
@@ -77,6 +79,22 @@ _STEPS = ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1))
 
 
 @dataclass
+class Deadline:
+    """A ``time.perf_counter()`` value ``at`` and whether some step was not started
+    because it would have ended after it (``reached``)."""
+
+    at: float
+    reached: bool = False
+
+    def would_pass(self, seconds: float = 0.0) -> bool:
+        """Whether a step of ``seconds`` started now would end after the deadline (then
+        ``reached`` is set)."""
+        passes = time.perf_counter() + seconds > self.at
+        self.reached |= passes
+        return passes
+
+
+@dataclass
 class LocalProof:
     """A proved enclosure of one end: its C-space (over the box ``summary["box"]``), the
     core's certificate (``raw``, as :meth:`CSpace.enclosure` gives it) and a summary for
@@ -97,9 +115,10 @@ def surface_pairs(scenario: Scenario) -> int:
 
 
 def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
-                       which: str, *, deadline: float) -> LocalProof | None:
+                       which: str, *, deadline: Deadline) -> LocalProof | None:
     """A proof that the ``which`` end (``"start"`` or ``"goal"``) is walled off near it,
-    or ``None`` (see the module documentation).
+    or ``None`` (see the module documentation); ``deadline.reached`` tells whether the
+    time limit stopped it.
 
     Raises:
         ResourceLimitError: the box's C-space or its refinement would pass the memory
@@ -123,7 +142,7 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
     per_triangle = 0.0  # seconds per robot triangle of the last subset's C-space
     for label, robot in subsets(scenario.robot):
         t_subset = time.perf_counter()
-        if t_subset + per_triangle * len(robot.mesh.faces) > deadline:
+        if deadline.would_pass(per_triangle * len(robot.mesh.faces)):
             log.info("local proof at the %s, %s: its C-space would end after the time limit",
                      which, label)
             break
@@ -198,7 +217,7 @@ def leaf_boxes(cs, leaves: dict[str, np.ndarray], ids: np.ndarray) -> tuple[np.n
     return lo, lo + (cs.floor * 2.0 ** leaves["level"][ids].astype(np.float64))[:, None]
 
 
-def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float,
+def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float | Deadline,
              select: Callable[[Any, dict[str, np.ndarray], np.ndarray], list[int]],
              max_rounds: int = MAX_ROUNDS) -> tuple[dict[str, Any] | None, int]:
     """Refine the component of ``point`` (the leaves ``select`` picks, once per round)
@@ -211,6 +230,7 @@ def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float
     Raises:
         ResourceLimitError: a refinement would pass the memory limit.
     """
+    clock = deadline if isinstance(deadline, Deadline) else Deadline(deadline)
     rounds = 0
     per_leaf = 0.0  # seconds per refined leaf in the last round
     while True:
@@ -228,7 +248,7 @@ def wall_off(cs, point: np.ndarray, *, bounds_faces: list[bool], deadline: float
         chosen = select(cs, cs.leaves(), members)
         if not chosen or rounds >= max_rounds:
             return None, rounds
-        if time.perf_counter() + per_leaf * len(chosen) > deadline:
+        if clock.would_pass(per_leaf * len(chosen)):
             log.debug("wall_off round %d: refining %d leaves would pass the deadline",
                       rounds, len(chosen))
             return None, rounds

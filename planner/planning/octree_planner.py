@@ -48,7 +48,7 @@ from planner.validation import FclChecker
 from .certificates import certificate_document
 from .direct import Direct, direct_motion, triangle_pairs
 from .endpoints import Ends, attach_ends
-from .local_proof import LocalProof, prove_end_enclosed, surface_pairs
+from .local_proof import Deadline, LocalProof, prove_end_enclosed, surface_pairs
 from .outcome import PlanOutcome
 from .report import Clock, cell_report, smallest_mixed_cell
 from .search import SearchResult, SearchRun, search, search_without_margin
@@ -225,9 +225,9 @@ class OctreePlanner:
         if (self._src.kind != "exact" or self.margin > 0
                 or surface_pairs(sc) < self.params.local_first_pairs):
             return None
-        deadline = time.perf_counter() + sc.settings.time_limit
+        deadline = Deadline(time.perf_counter() + sc.settings.time_limit)
         for which in ("start", "goal"):
-            if time.perf_counter() > deadline:
+            if deadline.would_pass():
                 break
             self.bar.show(f"minkplan: a local proof at the {which}")
             try:
@@ -238,7 +238,7 @@ class OctreePlanner:
                 raise self._refusal(exc, f"the local proof at the {which}") from exc
             if proof is not None:
                 return proof
-        self.out_of_time = time.perf_counter() > deadline
+        self.out_of_time = deadline.reached or deadline.would_pass()
         return None
 
     @property
