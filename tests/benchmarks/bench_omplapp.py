@@ -30,6 +30,7 @@ import dataclasses
 import datetime
 import json
 import logging
+import math
 import statistics
 import sys
 import time
@@ -40,7 +41,7 @@ ROOT = HERE.parent.parent
 sys.path.insert(0, str(ROOT))
 
 import planner  # noqa: E402
-from planner.errors import ScenarioError  # noqa: E402
+from planner.errors import MinkplanError, ScenarioError  # noqa: E402
 from planner.io import load_scenario  # noqa: E402
 from planner.ompl_log import Run, write_log  # noqa: E402
 from planner.output import jsonable  # noqa: E402
@@ -64,8 +65,11 @@ def read(cfg: Path):
 def one_run(scenario, name: str, seed: int) -> tuple[Run, dict]:
     settings = dataclasses.replace(scenario.settings, seed=seed)
     t0 = time.perf_counter()
-    outcome = plan(dataclasses.replace(scenario, settings=settings), planner=name,
-                   progress=False)
+    try:
+        outcome = plan(dataclasses.replace(scenario, settings=settings), planner=name,
+                       progress=False)
+    except MinkplanError as error:
+        return refused(name, seed, time.perf_counter() - t0, error)
     seconds = time.perf_counter() - t0
     validation = outcome.validation or {}
     valid = bool(outcome.found and validation.get("valid"))
@@ -74,6 +78,15 @@ def one_run(scenario, name: str, seed: int) -> tuple[Run, dict]:
     return run, {"planner": name, "seed": seed, "status": str(outcome.status),
                  "reason": outcome.reason, "seconds": seconds, "valid": valid,
                  "length": outcome.length, "message": outcome.message}
+
+
+def refused(name: str, seed: int, seconds: float, error: MinkplanError) -> tuple[Run, dict]:
+    """A run the planner refused (a memory or size limit): not found, with the refusal."""
+    reason = f"refused: {type(error).__name__}"
+    run = Run(seconds, "not_found", reason=reason)
+    return run, {"planner": name, "seed": seed, "status": "not_found", "reason": reason,
+                 "seconds": seconds, "valid": False, "length": math.nan,
+                 "message": str(error)}
 
 
 def bench_problem(cfg: Path, planners: list[str], runs: int, time_limit: float | None):
