@@ -19,9 +19,10 @@ from conftest import SHARED_ASSETS
 import planner
 from planner.errors import ResourceLimitError
 from planner.planning import OctreeParams
-from planner.planning.local_proof import Deadline, wall_off
+from planner.planning.local_proof import Deadline, prove_end_enclosed, wall_off
 from planner.planning.slabs import subsets
 from planner.problem import Body, PlannerSettings, Robot, Scenario
+from planner.sources import choose_for
 from planner.validation import FclChecker
 
 LOCAL_ALWAYS = OctreeParams(local_first_pairs=0)
@@ -242,3 +243,18 @@ def test_a_wall_off_round_projected_past_the_deadline_is_not_started():
     assert raw is None and rounds == 1 and cs.refined == [10]
     assert time.perf_counter() - t0 < 1.0  # stopped before the deadline, not after it
     assert deadline.reached  # the planner answers time_limit, not a C-space over the bounds
+
+
+def test_the_pace_of_one_local_cspace_keeps_the_next_from_passing_the_deadline():
+    # the start's proof measures the seconds per robot triangle of its C-space; the goal's
+    # proof (the same deadline) does not start one that this pace says would end too late
+    sealed = box_room(False, [0, 0, 0], [0, 0, 7])
+    source = choose_for([sealed.robot, *sealed.obstacles], sealed.settings)
+    checker = FclChecker.for_parts(sealed.robot, sealed.obstacles)
+    measured = Deadline(time.perf_counter() + 60.0)
+    proof = prove_end_enclosed(sealed, source, checker, "start", deadline=measured)
+    assert proof is not None and measured.cspace_pace > 0 and not measured.reached
+    slow = Deadline(time.perf_counter() + 60.0, cspace_pace=60.0)  # a minute a triangle
+    t0 = time.perf_counter()
+    assert prove_end_enclosed(sealed, source, checker, "start", deadline=slow) is None
+    assert slow.reached and time.perf_counter() - t0 < 10.0

@@ -80,11 +80,14 @@ _STEPS = ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1))
 
 @dataclass
 class Deadline:
-    """A ``time.perf_counter()`` value ``at`` and whether some step was not started
-    because it would have ended after it (``reached``)."""
+    """A ``time.perf_counter()`` value ``at``, whether some step was not started because
+    it would have ended after it (``reached``), and the seconds per robot triangle the
+    last local C-space took to build (``cspace_pace``, 0 before the first: the start's
+    and the goal's proofs share it)."""
 
     at: float
     reached: bool = False
+    cspace_pace: float = 0.0
 
     def would_pass(self, seconds: float = 0.0) -> bool:
         """Whether a step of ``seconds`` started now would end after the deadline (then
@@ -139,10 +142,9 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
     bounds_faces = [bool(box[0][s // 2] <= lo[s // 2]) if s % 2 == 0 else
                     bool(box[1][s // 2] >= hi[s // 2]) for s in range(6)]
     side = float(np.max(box[1] - box[0]))
-    per_triangle = 0.0  # seconds per robot triangle of the last subset's C-space
     for label, robot in subsets(scenario.robot):
         t_subset = time.perf_counter()
-        if deadline.would_pass(per_triangle * len(robot.mesh.faces)):
+        if deadline.would_pass(deadline.cspace_pace * len(robot.mesh.faces)):
             log.info("local proof at the %s, %s: its C-space would end after the time limit",
                      which, label)
             break
@@ -150,7 +152,8 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
         try:
             cs = source.cspace(scenario.obstacles, robot, box, side / FLOOR_DIVISIONS,
                                side / COARSE_DIVISIONS)
-            per_triangle = (time.perf_counter() - t_subset) / max(len(robot.mesh.faces), 1)
+            deadline.cspace_pace = ((time.perf_counter() - t_subset)
+                                    / max(len(robot.mesh.faces), 1))
             raw, rounds = wall_off(cs, point, bounds_faces=bounds_faces, deadline=deadline,
                                    select=inside_obstacles)
         except ResourceLimitError:

@@ -105,7 +105,7 @@ fn fan_top_box(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
 }
 
 /// One mesh of overlapping boxes (a shell each), as CAD exports of several bodies come.
-pub(super) fn boxes_mesh(boxes: &[([f64; 3], [f64; 3])]) -> TriMesh {
+pub(crate) fn boxes_mesh(boxes: &[([f64; 3], [f64; 3])]) -> TriMesh {
     let (mut v, mut f) = (Vec::new(), Vec::new());
     for &(lo, hi) in boxes {
         push_box(Vec3::from_array(lo), Vec3::from_array(hi), &mut v, &mut f);
@@ -368,7 +368,7 @@ fn overlapping_shells_are_their_union_and_cavities_are_holes() {
 
 /// A closed, outward torus around the z axis (`n` major by `m` minor segments); its quads
 /// are planar, so their diagonals are flat edges.
-pub(super) fn torus_mesh(big: f64, small: f64, n: usize, m: usize) -> TriMesh {
+pub(crate) fn torus_mesh(big: f64, small: f64, n: usize, m: usize) -> TriMesh {
     let mut v = Vec::new();
     for i in 0..n {
         let phi = std::f64::consts::TAU * i as f64 / n as f64;
@@ -391,7 +391,7 @@ pub(super) fn torus_mesh(big: f64, small: f64, n: usize, m: usize) -> TriMesh {
 }
 
 /// A closed, outward UV sphere of radius `r` (`n` segments around, `m` rings).
-fn sphere_mesh(r: f64, n: usize, m: usize) -> TriMesh {
+pub(crate) fn sphere_mesh(r: f64, n: usize, m: usize) -> TriMesh {
     let mut v = vec![Vec3::new(0.0, 0.0, -r), Vec3::new(0.0, 0.0, r)];
     for j in 1..m {
         let th = -std::f64::consts::FRAC_PI_2 + std::f64::consts::PI * j as f64 / m as f64;

@@ -37,7 +37,7 @@ mod depth;
 #[cfg(test)]
 mod depth_tests;
 #[cfg(test)]
-mod exact_tests;
+pub(crate) mod exact_tests;
 mod gauss;
 mod mesh;
 mod piece;

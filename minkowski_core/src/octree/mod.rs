@@ -79,7 +79,7 @@ pub trait CellSource: Sync {
     }
     /// Whether `p`, a point of a cell with records `cand`, lies in the (closed) solid.
     fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool;
-    /// Where on the segment `a → b` (inside a finest cell with records `cand`) the boundary
+    /// Where on the segment `a → b` (inside a cell with records `cand`) the boundary
     /// may lie: sorted, merged parameter intervals of `[0, 1]`. Each stretch between them
     /// lies wholly inside or wholly outside the solid, so with none the ends agree.
     fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>);

@@ -21,6 +21,8 @@
 pub mod planar;
 mod reach;
 mod resolve;
+#[cfg(test)]
+mod resolve_tests;
 mod simplify;
 pub mod stitch;
 #[cfg(test)]

@@ -1,0 +1,77 @@
+//! Cells resolved by planes: answers carried between the regions of a cut are the answers
+//! point queries give, and they spare most of the queries (about 19 in 20 on a torus ⊕
+//! sphere).
+
+use super::resolve::resolve_cell;
+use crate::exact::exact_tests::{boxes_mesh, sphere_mesh, torus_mesh};
+use crate::exact::ExactSource;
+use crate::math::{Aabb, Vec3};
+use crate::octree::{CellSource, Label, Octree};
+use crate::surface::planar::Cut;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The exact source, counting its point queries; with `carry` off, every segment may meet
+/// the boundary, so each region of a cut is queried.
+struct Counted<'a> {
+    src: &'a ExactSource,
+    carry: bool,
+    queries: AtomicUsize,
+}
+
+impl CellSource for Counted<'_> {
+    fn root_records(&self) -> Vec<u32> {
+        self.src.root_records()
+    }
+    fn classify(&self, cell: &Aabb, cand: &[u32], finest: bool, out: &mut Vec<u32>) -> Label {
+        self.src.classify(cell, cand, finest, out)
+    }
+    fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {
+        self.queries.fetch_add(1, Ordering::Relaxed);
+        self.src.cell_contains(cand, p)
+    }
+    fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>) {
+        if self.carry {
+            self.src.boundary_intervals(cand, a, b, out);
+        } else {
+            out.clear();
+            out.push((0.0, 1.0));
+        }
+    }
+    fn solid_intervals(&self, a: Vec3, b: Vec3, sa: bool, sb: bool, bnd: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
+        self.src.solid_intervals(a, b, sa, sb, bnd, out)
+    }
+    fn plane_cut(&self, own: &[u32]) -> Option<Cut> {
+        self.src.plane_cut(own)
+    }
+}
+
+#[test]
+fn carried_region_answers_are_the_point_queries_answers() {
+    let sums = [
+        // curved ⊕ curved: cells with many planes and many regions
+        (ExactSource::new(vec![torus_mesh(10.0, 3.0, 24, 12)], sphere_mesh(0.9, 12, 7), 0.0, None), 0.15),
+        // flat faces, edges and corners of an L of two boxes, rounded by the sphere
+        (ExactSource::new(vec![boxes_mesh(&[([0.0; 3], [4.0, 1.0, 1.0]), ([0.0; 3], [1.0, 3.0, 1.0])])], sphere_mesh(0.3, 12, 7), 0.0, None), 0.05),
+    ];
+    for (src, h) in &sums {
+        let oct = Octree::build_resolving_planes(src, &src.aabb, *h, 4_000_000, &[]).unwrap();
+        let carried = Counted { src, carry: true, queries: AtomicUsize::new(0) };
+        let queried = Counted { src, carry: false, queries: AtomicUsize::new(0) };
+        let (mut cells, mut polygons) = (0, 0);
+        for leaf in oct.leaves.iter().filter(|l| l.label == Label::Mixed) {
+            let (cell, recs) = (oct.cell_box(leaf), oct.records(leaf));
+            let with = resolve_cell(&carried, &cell, recs, 1);
+            let without = resolve_cell(&queried, &cell, recs, 1);
+            assert_eq!(with.is_some(), without.is_some(), "cell {cell:?}");
+            if let (Some(a), Some(b)) = (with, without) {
+                assert_eq!(a.polys, b.polys, "cell {cell:?}");
+                assert_eq!(a.creased, b.creased);
+                cells += 1;
+                polygons += a.polys.len();
+            }
+        }
+        let (q_with, q_without) = (carried.queries.into_inner(), queried.queries.into_inner());
+        assert!(cells > 50 && polygons > 5 * cells, "{cells} cells resolved, {polygons} polygons");
+        assert!(10 * q_with < q_without, "{q_with} queries with carrying, {q_without} without");
+    }
+}
