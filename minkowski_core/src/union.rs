@@ -4,7 +4,7 @@
 use crate::error::{CoreError, CoreResult};
 use crate::math::Aabb;
 use crate::minkowski::PolytopeSet;
-use crate::octree::{CellSource, LevelCounts, Octree};
+use crate::octree::{CellSource, Label, LevelCounts, Octree};
 use crate::surface::{extract, loose_reach, merge_coplanar, Surface, EDGE_CLAMP, MAX_OPEN_REPORTED};
 use std::time::Instant;
 
@@ -26,7 +26,8 @@ pub struct UnionParams {
     /// boundary is not that simple. Where the polygons and the band do not join into a
     /// closed manifold surface, or an exact edge or corner meets the sampled band (which
     /// would chamfer it), the grid is rebuilt sampling around those places while that
-    /// leaves fewer of them (up to `MAX_JOIN_RETRIES` times), then everywhere.
+    /// leaves fewer of them (up to `MAX_JOIN_RETRIES` times), then everywhere (at once
+    /// when the boxes around them would hold half the band sampling everywhere gives).
     pub planes: bool,
 }
 
@@ -61,6 +62,16 @@ pub struct UnionResult {
 /// Rebuilds sampling around the edges where plane-resolved cells failed to join the band,
 /// before sampling everywhere.
 const MAX_JOIN_RETRIES: u32 = 3;
+
+/// Finest band cells a box sampled around one bad place adds, about: the box reaches 4
+/// cells past the place each way, and the band crosses its 9 × 9 × 9 cells in some 9 × 9.
+const BAND_CELLS_PER_PLACE: usize = 81;
+
+/// The finest cells the band would have if every MIXED leaf of `oct` were sampled, about:
+/// a leaf `2^l` cells wide holds `4^l` of them (the boundary is a surface).
+fn band_if_sampled(oct: &Octree) -> usize {
+    oct.leaves.iter().filter(|l| l.label == Label::Mixed).map(|l| 1usize << (2 * l.level as u32)).sum()
+}
 
 /// Finest cell size whose grid bound is `eps`.
 pub fn cell_size_for_eps(eps: f64) -> f64 {
@@ -142,7 +153,9 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
             // an exact edge or corner next to the sampled band is not joined (the band
             // chamfers it): sample around it while that leaves fewer such places, else
             // everywhere
-            if retries > MAX_JOIN_RETRIES || surface.open_edges > MAX_OPEN_REPORTED || bad >= last_bad {
+            // sampling around that many places would sample most of the band anyway
+            let most = bad.saturating_mul(BAND_CELLS_PER_PLACE) >= band_if_sampled(&oct) / 2;
+            if retries > MAX_JOIN_RETRIES || surface.open_edges > MAX_OPEN_REPORTED || bad >= last_bad || most {
                 planes = false;
             }
             last_bad = bad;

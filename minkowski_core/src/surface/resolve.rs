@@ -25,6 +25,11 @@ pub const SUB_LEVELS: u32 = 3;
 /// candidates (on part2k ⊕ icosphere, two thirds of the queries are carried).
 const CARRY_TRIES: usize = 8;
 
+/// Record words a region's carries may clip against in all: a carry costs a clip per
+/// record, so a cell with many records (coplanar facets of a finely tessellated face)
+/// tries fewer, or none (two grates: a few hundred facets on a few planes per cell).
+const CARRY_WORDS: usize = 256;
+
 /// The exact surface in one cell.
 #[derive(Default)]
 pub struct CellSurface {
@@ -76,12 +81,13 @@ fn cut_surface<S: CellSource>(src: &S, recs: &[u32], cut: &Cut, pieces: Vec<Piec
     // the cell lies on candidates, so none lies between them), else one point query
     let mut answered: Vec<(usize, bool, Vec3)> = Vec::new();
     let mut scratch = Vec::new();
+    let tries = CARRY_TRIES.min(CARRY_WORDS / recs.len().max(1));
     let mut inside = |p: Vec3| {
         let region = cut.region(p);
         if let Some(&(_, known, _)) = answered.iter().find(|r| r.0 == region) {
             return known;
         }
-        let carried = answered.iter().rev().take(CARRY_TRIES).find_map(|&(_, known, q)| {
+        let carried = answered.iter().rev().take(tries).find_map(|&(_, known, q)| {
             src.boundary_intervals(recs, q, p, &mut scratch);
             scratch.is_empty().then_some(known)
         });
