@@ -60,7 +60,7 @@ from benchlib import jsonable, peak_mb  # noqa: E402
 
 ASSETS = HERE.parent.parent.parent / "shared" / "assets" / "assemblies"
 HOLE = ASSETS / "factory_round_peg_8mm" / "meshes" / "factory_round_hole_8mm_subdiv_3x.obj"
-RESULTS = HERE / "results" / "2026-12-02-offsets"
+RESULTS = HERE / "results" / f"{datetime.date.today().isoformat()}-offsets"
 TIMEOUT = 600.0
 
 
@@ -441,7 +441,7 @@ def main(argv=None) -> int:
                         "the exact boundary, per kind of feature)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, default=RESULTS,
-                   help="write PREFIX.md and PREFIX.json (default: results/2026-12-02-offsets)")
+                   help="write PREFIX.md and PREFIX.json (default: results/<date>-offsets)")
     args = p.parse_args(argv)
     if args.worker:
         return worker(args.worker)
