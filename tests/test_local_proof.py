@@ -167,7 +167,7 @@ def test_a_slab_of_the_robot_walls_it_off_and_one_that_slips_out_is_not_taken():
     # the y slab (1 wide in x, as the cube) does not, and walls the cube off
     slotted = slotted_room(0.75, [0, 0, 0], [0, 0, 7])
     slotted = dataclasses.replace(slotted, settings=dataclasses.replace(slotted.settings,
-                                                                        time_limit=120))
+                                                                        time_limit=300))
     outcome = planner.plan(slotted, params=LOCAL_ALWAYS)
     assert outcome.status == "no_path", outcome.message
     assert outcome.certificate["local"]["robot"]["subset"] == "y slab"
