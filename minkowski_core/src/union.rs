@@ -21,7 +21,8 @@ pub struct UnionParams {
     /// Collapse interior vertices of planar patches ([`merge_coplanar`]): same surface,
     /// far fewer triangles on flat facets.
     pub simplify: bool,
-    /// Keep cells the source resolves by at most three planes as exact polygons at their
+    /// Keep cells the source resolves by a few planes (at most
+    /// [`crate::surface::planar::MAX_PLANES`]) as exact polygons at their
     /// size ([`Octree::build_resolving_planes`]); the sampled band is left only where the
     /// boundary is not that simple. Where the polygons and the band do not join into a
     /// closed manifold surface, or an exact edge or corner meets the sampled band (which

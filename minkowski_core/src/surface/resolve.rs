@@ -3,11 +3,11 @@
 //!
 //! A cell resolved by planes gives the plane pieces whose two sides differ in membership
 //! (one answer per region of the cut, shared by the pieces: carried along a segment that
-//! meets no candidate from a region answered before, else one point query). A finest cell that is not
-//! resolvable is split below the lattice a few times ([`SUB_LEVELS`]): its sub-cells take
-//! their own records from the source (as any child cell does) and are resolved the same
-//! way, so a vertex where many facets meet, or two facets crossing at a grazing angle, is
-//! still exact. Their polygons meet each other exactly inside the cell, and the cell's
+//! meets no candidate from a region answered before, else one point query). A finest cell
+//! that is not resolvable is split below the lattice a few times ([`SUB_LEVELS`]): its
+//! sub-cells take their own records from the source (as any child cell does) and are
+//! resolved the same way, so a vertex where many facets meet, or two facets crossing at a
+//! grazing angle, is still exact. Their polygons meet each other exactly inside the cell, and the cell's
 //! neighbours on its faces as any resolved cell's do.
 //!
 //! Entry point: [`resolve_cell`].
