@@ -24,11 +24,13 @@ pub struct UnionParams {
     /// Keep cells the source resolves by a few planes (at most
     /// [`crate::surface::planar::MAX_PLANES`]) as exact polygons at their
     /// size ([`Octree::build_resolving_planes`]); the sampled band is left only where the
-    /// boundary is not that simple. Where the polygons and the band do not join into a
-    /// closed manifold surface, or an exact edge or corner meets the sampled band (which
-    /// would chamfer it), the grid is rebuilt sampling around those places while that
-    /// leaves fewer of them (up to `MAX_JOIN_RETRIES` times), then everywhere (at once
-    /// when the boxes around them would hold half the band sampling everywhere gives).
+    /// boundary is not that simple (an exact edge running into the band is chamfered
+    /// there, within its bound). Where the polygons and the band do not join into a
+    /// closed manifold surface, or the band has complex cells, the grid is rebuilt
+    /// sampling around those places while that leaves fewer of them (up to
+    /// `MAX_JOIN_RETRIES` times per grid); then complex cells left in a closed join are
+    /// bounded and refined as a sampled grid's, and an open join samples everywhere (at
+    /// once when the boxes around the places would hold half the band that gives).
     pub planes: bool,
 }
 
@@ -145,23 +147,24 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         let surface = extract(&oct, set);
         t_surf += t1.elapsed().as_secs_f64();
         // where the exact polygons did not join the band, or the band has complex cells
-        // next to them, sample around those places (a few times), then everywhere
-        let joined_badly = surface.open_edges > 0 || surface.crease_conflicts > 0 || (surface.complex_cells > 0 && surface.planar_cells > 0);
+        // next to them, sample around those places while that leaves fewer of them; then,
+        // if the join is closed, its complex cells are thin features the bound covers as
+        // the sampled grid's (they are there too); else sample everywhere
+        let joined_badly = surface.open_edges > 0 || (surface.complex_cells > 0 && surface.planar_cells > 0);
         if planes && joined_badly {
-            let bad = surface.open_edges + surface.crease_conflicts + surface.complex_cells;
+            let bad = surface.open_edges + surface.complex_cells;
             open_seen += bad;
             retries += 1;
-            // an exact edge or corner next to the sampled band is not joined (the band
-            // chamfers it): sample around it while that leaves fewer such places, else
-            // everywhere
             // sampling around that many places would sample most of the band anyway
             let most = bad.saturating_mul(BAND_CELLS_PER_PLACE) >= band_if_sampled(&oct) / 2;
-            if retries > MAX_JOIN_RETRIES || surface.open_edges > MAX_OPEN_REPORTED || bad >= last_bad || most {
-                planes = false;
+            let anew = surface.open_at.iter().any(|b| !sampled.iter().any(|s| s.contains_point(b.min) && s.contains_point(b.max)));
+            let stuck = retries > MAX_JOIN_RETRIES || surface.open_edges > MAX_OPEN_REPORTED || bad >= last_bad || most || !anew;
+            if !stuck || surface.open_edges > 0 {
+                planes = !stuck;
+                last_bad = bad;
+                sampled.extend(surface.open_at.iter().map(|b| b.inflated(4.0 * h)));
+                continue;
             }
-            last_bad = bad;
-            sampled.extend(surface.open_at.iter().map(|b| b.inflated(4.0 * h)));
-            continue;
         }
         let bound = surface_error_bound(&surface, h);
         // complex cells within the unresolved cells' allowance need no finer grid
@@ -184,6 +187,7 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         }
         h *= 0.5;
         round += 1;
+        (retries, last_bad) = (0, usize::MAX);
     }
     let mut r = best.expect("at least one round");
     r.triangles_extracted = r.surface.faces.len();

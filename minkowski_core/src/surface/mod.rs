@@ -13,7 +13,7 @@
 //! unresolved cells, in what the bound must cover ([`loose_reach`]). Triangle orientation comes from integer determinants on the lattice, never from
 //! rounded geometry, so the mesh is consistently oriented.
 //!
-//! Cells above the finest level that the source resolved by at most three planes
+//! Cells the source resolved by a few planes (at most [`planar::MAX_PLANES`])
 //! ([`planar`]) give their exact polygons instead, joined to the sampled band ([`stitch`]).
 //!
 //! Entry point: [`extract`].
@@ -99,9 +99,6 @@ pub struct Surface {
     /// The boxes of those edges and vertices, then of the complex cells (at most
     /// [`MAX_OPEN_REPORTED`]).
     pub open_at: Vec<Aabb>,
-    /// Sampled cells with a surface next to a plane-resolved cell with an exact edge or
-    /// corner (their boxes are in [`Surface::open_at`]).
-    pub crease_conflicts: usize,
     /// Closed slivers (two layers folded onto each other, under two cells across) removed
     /// after the join ([`stitch::drop_slivers`]).
     pub slivers_dropped: usize,
@@ -332,9 +329,6 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
         if !cell.polys.is_empty() {
             let k = (l.level, key(l.ijk[0], l.ijk[1], l.ijk[2]));
             out.with_surface.insert(k);
-            if cell.creased {
-                out.creased.insert(k);
-            }
             out.polys.extend(cell.polys);
         }
     }
@@ -348,8 +342,6 @@ struct PlanarPolygons {
     polys: Vec<Vec<Vec3>>,
     /// The cells with some.
     with_surface: PlanarSet,
-    /// Those with an edge or a corner (polygons on two planes or more).
-    creased: PlanarSet,
     /// How many cells were resolved by planes.
     cells: usize,
     /// Per leaf, whether it was resolved by planes (empty: none was).
@@ -546,25 +538,6 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarPolygons) ->
     // surface passes within the two cells' joint diagonal (2 sqrt(3) h) of its points
     let mut resolved: Vec<u64> = band.iter().zip(&flags).filter(|(_, c)| c.0).map(|(&li, _)| leaf_corner_key(li, 0)).collect();
     resolved.sort_unstable();
-    // an exact edge or corner must not meet the sampled surface (the band chamfers it):
-    // such plane-resolved cells are reported, for the caller to sample there too
-    if !planar.creased.is_empty() {
-        let conflicts: Vec<Aabb> = band
-            .par_iter()
-            .zip(&flags)
-            .filter(|(_, f)| f.0)
-            .filter_map(|(&li, _)| {
-                let l = &oct.leaves[li];
-                let near = (-1i64..=1).flat_map(|dz| (-1i64..=1).flat_map(move |dy| (-1i64..=1).map(move |dx| [dx, dy, dz]))).any(|d| {
-                    let c: Vec<i64> = (0..3).map(|a| l.ijk[a] as i64 + d[a]).collect();
-                    c.iter().all(|&x| x >= 0) && in_planar(&planar.creased, c[0] as u32, c[1] as u32, c[2] as u32, oct.depth)
-                });
-                near.then(|| oct.cell_box(l))
-            })
-            .collect();
-        s.crease_conflicts = conflicts.len();
-        s.open_at.extend(conflicts.into_iter().take(MAX_OPEN_REPORTED));
-    }
     // silent cells (no sign change, no edge the boundary crosses) the source cannot clear
     let unproved: Vec<bool> = band
         .par_iter()

@@ -35,8 +35,6 @@ const CARRY_WORDS: usize = 256;
 pub struct CellSurface {
     /// Polygons, outward (counter-clockwise seen from outside).
     pub polys: Vec<Vec<Vec3>>,
-    /// Whether they lie on two planes or more (an edge or a corner of the surface).
-    pub creased: bool,
     /// How far the boundary may lie from them ([`Piece::deviation`]).
     pub deviation: f64,
 }
@@ -51,7 +49,6 @@ pub fn resolve_cell<S: CellSource>(src: &S, cell: &Aabb, recs: &[u32], sub_level
         return None;
     }
     let mut out = CellSurface::default();
-    let mut planes_seen: Vec<Vec3> = Vec::new();
     let mut own = Vec::new();
     for child in octants(cell) {
         own.clear();
@@ -59,17 +56,9 @@ pub fn resolve_cell<S: CellSource>(src: &S, cell: &Aabb, recs: &[u32], sub_level
             continue;
         }
         let part = resolve_cell(src, &child, &own, sub_levels - 1)?;
-        out.creased |= part.creased;
         out.deviation = out.deviation.max(part.deviation);
-        for poly in &part.polys {
-            let n = (poly[1] - poly[0]).cross(poly[2] - poly[0]).normalize_or_zero();
-            if !planes_seen.iter().any(|m| m.dot(n) > 1.0 - 1e-9) {
-                planes_seen.push(n);
-            }
-        }
         out.polys.extend(part.polys);
     }
-    out.creased |= planes_seen.len() >= 2;
     Some(out)
 }
 
@@ -95,7 +84,6 @@ fn cut_surface<S: CellSource>(src: &S, recs: &[u32], cut: &Cut, pieces: Vec<Piec
         answered.push((region, known, p));
         known
     };
-    let mut planes_used = 0u32; // a bit per plane with a polygon
     let mut out = CellSurface::default();
     for p in pieces {
         let (front, behind) = (inside(p.sides[0]), inside(p.sides[1]));
@@ -111,11 +99,9 @@ fn cut_surface<S: CellSource>(src: &S, recs: &[u32], cut: &Cut, pieces: Vec<Piec
                 continue;
             }
         };
-        planes_used |= 1 << p.plane;
         out.deviation = out.deviation.max(p.deviation);
         out.polys.push(polygon);
     }
-    out.creased = planes_used.count_ones() >= 2;
     Some(out)
 }
 
