@@ -5,7 +5,7 @@ use crate::error::{CoreError, CoreResult};
 use crate::math::Aabb;
 use crate::minkowski::PolytopeSet;
 use crate::octree::{CellSource, Label, LevelCounts, Octree};
-use crate::surface::{extract, loose_reach, merge_coplanar, Surface, EDGE_CLAMP, MAX_OPEN_REPORTED};
+use crate::surface::{extract, loose_reach, merge_coplanar, ResolvedCells, Surface, EDGE_CLAMP, MAX_OPEN_REPORTED};
 use std::time::Instant;
 
 /// Parameters of [`approximate_union`].
@@ -132,6 +132,7 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
     let mut sampled: Vec<Aabb> = Vec::new();
     let (mut open_seen, mut retries, mut last_bad) = (0, 0, usize::MAX);
     let mut round = 0;
+    let mut resolved = ResolvedCells::default();
     while round <= params.max_refinements {
         let t0 = Instant::now();
         let built = if planes { Octree::build_resolving_planes(set, region, h, params.max_cells, &sampled) } else { Octree::build(set, region, h, params.max_cells) };
@@ -144,7 +145,7 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         };
         t_oct += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let surface = extract(&oct, set);
+        let surface = extract(&oct, set, &mut resolved);
         t_surf += t1.elapsed().as_secs_f64();
         // where the exact polygons did not join the band, or the band has complex cells
         // next to them, sample around those places while that leaves fewer of them; then,

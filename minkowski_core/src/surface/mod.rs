@@ -258,8 +258,11 @@ impl EdgeIntervals {
 ///
 /// MIXED cells above the finest level (an octree from [`Octree::build_resolving_planes`])
 /// give their exact polygons ([`planar`]), joined to the band's triangles ([`stitch`]).
-pub fn extract<S: CellSource>(oct: &Octree, src: &S) -> Surface {
-    let planar = planar_polygons(oct, src);
+///
+/// `resolved` keeps each cell's plane resolution for the next extraction over the same
+/// source (a rebuild sampling around other places, or a finer grid, meets most cells again).
+pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &mut ResolvedCells) -> Surface {
+    let planar = planar_polygons(oct, src, resolved);
     let mut s = sample_band(oct, src, &planar);
     s.planar_cells = planar.cells;
     s.planar_pieces = planar.polys.len();
@@ -294,7 +297,7 @@ type PlanarSet = std::collections::HashSet<(u8, u64)>;
 
 /// The exact polygons of the MIXED cells above the finest level (outward, counter-clockwise),
 /// the cells that have some, and how many such cells there are.
-fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
+fn planar_polygons<S: CellSource>(oct: &Octree, src: &S, resolved: &mut ResolvedCells) -> PlanarPolygons {
     // above the finest level the octree kept only resolvable MIXED cells; at the finest
     // level, those outside the sampled boxes are tried here
     let sampled: &[Aabb] = match &oct.planar {
@@ -306,18 +309,26 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
         l.label == Label::Mixed && (l.level > 0 || !sampled.iter().any(|b| b.overlaps(&oct.cell_box(l))))
     };
     let cells: Vec<usize> = (0..oct.leaves.len()).filter(|&i| tried(i)).collect();
-    let per_cell: Vec<(usize, Option<resolve::CellSurface>)> = cells
+    let per_cell: Vec<(usize, CellKey, Option<resolve::CellSurface>, bool)> = cells
         .par_iter()
         .map(|&li| {
             let leaf = &oct.leaves[li];
             // a finest cell is split below the lattice if need be; above, a cell the octree
             // kept as resolvable that is not after all leaves a hole the stitch check sees
             let sub_levels = if leaf.level == 0 { resolve::SUB_LEVELS } else { 0 };
-            (li, resolve::resolve_cell(src, &oct.cell_box(leaf), oct.records(leaf), sub_levels))
+            let (cell, recs) = (oct.cell_box(leaf), oct.records(leaf));
+            let k = cell_key(&cell, recs, sub_levels);
+            match resolved.0.get(&k) {
+                Some(known) => (li, k, known.clone(), false),
+                None => (li, k, resolve::resolve_cell(src, &cell, recs, sub_levels), true),
+            }
         })
         .collect();
     let mut out = PlanarPolygons { resolved: vec![false; oct.leaves.len()], ..Default::default() };
-    for (li, cell) in per_cell {
+    for (li, k, cell, fresh) in per_cell {
+        if fresh {
+            resolved.0.insert(k, cell.clone());
+        }
         let l = &oct.leaves[li];
         if cell.is_none() && l.level == 0 {
             continue; // sampled
@@ -334,6 +345,22 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S) -> PlanarPolygons {
     }
     out
 }
+
+/// A cell's box (its corners' bits), a hash of its records and the levels it may be split.
+type CellKey = ([u64; 6], u64, u32);
+
+fn cell_key(cell: &Aabb, recs: &[u32], sub_levels: u32) -> CellKey {
+    use std::hash::{Hash, Hasher};
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    recs.hash(&mut hasher);
+    let c = [cell.min.x, cell.min.y, cell.min.z, cell.max.x, cell.max.y, cell.max.z];
+    (c.map(f64::to_bits), hasher.finish(), sub_levels)
+}
+
+/// Cells already resolved by planes over one source, and what they gave (`None`: not
+/// resolvable), kept across the extractions of one sum.
+#[derive(Default)]
+pub struct ResolvedCells(std::collections::HashMap<CellKey, Option<resolve::CellSurface>>);
 
 /// What the plane-resolved cells gave.
 #[derive(Default)]

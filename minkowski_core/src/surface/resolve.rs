@@ -31,7 +31,7 @@ const CARRY_TRIES: usize = 8;
 const CARRY_WORDS: usize = 256;
 
 /// The exact surface in one cell.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct CellSurface {
     /// Polygons, outward (counter-clockwise seen from outside).
     pub polys: Vec<Vec<Vec3>>,

@@ -1,6 +1,6 @@
 //! Cells resolved by planes: answers carried between the regions of a cut are the answers
 //! point queries give, and they spare most of the queries (about 19 in 20 on a torus ⊕
-//! sphere).
+//! sphere); resolutions kept from one extraction give the next the same surface.
 
 use super::resolve::resolve_cell;
 use crate::exact::exact_tests::{boxes_mesh, sphere_mesh, torus_mesh};
@@ -73,4 +73,23 @@ fn carried_region_answers_are_the_point_queries_answers() {
         assert!(cells > 50 && polygons > 5 * cells, "{cells} cells resolved, {polygons} polygons");
         assert!(10 * q_with < q_without, "{q_with} queries with carrying, {q_without} without");
     }
+}
+
+#[test]
+fn a_second_extraction_takes_the_kept_resolutions_and_gives_the_same_surface() {
+    let src = ExactSource::new(vec![torus_mesh(10.0, 3.0, 24, 12)], sphere_mesh(0.9, 12, 7), 0.0, None);
+    let oct = Octree::build_resolving_planes(&src, &src.aabb, 0.15, 4_000_000, &[]).unwrap();
+    let mut kept = super::ResolvedCells::default();
+    let first = super::extract(&oct, &src, &mut kept);
+    assert!(first.planar_cells > 100, "{} plane-resolved cells", first.planar_cells);
+    let counted = || Counted { src: &src, carry: true, queries: AtomicUsize::new(0) };
+    let (again_src, fresh_src) = (counted(), counted());
+    let again = super::extract(&oct, &again_src, &mut kept);
+    let fresh = super::extract(&oct, &fresh_src, &mut super::ResolvedCells::default());
+    for s in [&again, &fresh] {
+        assert_eq!((&s.vertices, &s.faces, s.planar_cells), (&first.vertices, &first.faces, first.planar_cells));
+    }
+    // with the kept resolutions only the sampled band queries points
+    assert_eq!(again_src.queries.load(Ordering::Relaxed), first.point_queries);
+    assert!(fresh_src.queries.load(Ordering::Relaxed) > first.point_queries + 100);
 }
