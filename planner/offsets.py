@@ -134,6 +134,7 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
              "h": float(raw["h"]), "refinements": int(raw["refinements"]),
              "planar_cells": int(raw["planar_cells"]), "planar_pieces": int(raw["planar_pieces"]),
              "planes_fallback_edges": int(raw["planes_fallback_edges"]),
+             "holes_closed": int(raw["holes_closed"]),
              "seconds": time.perf_counter() - t0}
     return OffsetResult(surface, radius, float(raw["error_bound"]), step, stats)
 

@@ -203,6 +203,7 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("planar_pieces", s.planar_pieces)?;
     d.set_item("planar_deviation", s.planar_deviation)?;
     d.set_item("planes_fallback_edges", r.planes_fallback_edges)?;
+    d.set_item("holes_closed", s.loops_closed)?;
     Ok(d)
 }
 

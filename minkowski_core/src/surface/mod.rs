@@ -91,7 +91,8 @@ pub struct Surface {
     /// Exact polygons those cells gave.
     pub planar_pieces: usize,
     /// How far the true boundary may lie from those polygons: 0 where they are exact, the
-    /// gap of nearly coincident facet planes taken as one where there were such.
+    /// gap of nearly coincident facet planes taken as one where there were such, or the
+    /// diameter of a small hole closed where they met ([`Surface::loops_closed`]).
     pub planar_deviation: f64,
     /// Edges left open (or used twice), or vertices pinched, where those polygons met the
     /// band: 0 for a closed manifold surface (the caller samples there instead when not).
@@ -99,6 +100,10 @@ pub struct Surface {
     /// The boxes of those edges and vertices, then of the complex cells (at most
     /// [`MAX_OPEN_REPORTED`]).
     pub open_at: Vec<Aabb>,
+    /// Holes under a cell across where polygons met at a crevice or needle thinner than the
+    /// weld tolerance, closed by a fan ([`stitch::close_small_loops`]; their diameter counts
+    /// in `planar_deviation`).
+    pub loops_closed: usize,
     /// Closed slivers (two layers folded onto each other, under two cells across) removed
     /// after the join ([`stitch::drop_slivers`]).
     pub slivers_dropped: usize,
@@ -269,6 +274,9 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &mut ResolvedCell
     s.planar_deviation = planar.deviation;
     if !planar.polys.is_empty() {
         stitch::join(&mut s, &planar.polys, STITCH_TOL * oct.h, (oct.origin, oct.h));
+        let closed = stitch::close_small_loops(&mut s, oct.h);
+        s.loops_closed = closed.loops;
+        s.planar_deviation = s.planar_deviation.max(closed.diameter);
         s.slivers_dropped = stitch::drop_slivers(&mut s, 2.0 * oct.h, 1e-4 * oct.h.powi(3));
         let open = stitch::open_edges(&s.faces);
         let pinched = if open.is_empty() { stitch::pinched_vertices(&s.faces) } else { Vec::new() };

@@ -293,6 +293,53 @@ fn fill_face_gaps(s: &mut Surface, tol: f64, lattice: (Vec3, f64)) {
     }
 }
 
+/// What [`close_small_loops`] filled.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LoopsClosed {
+    /// How many loops.
+    pub loops: usize,
+    /// The largest diameter (box diagonal) of one: how far a point of the fill may lie
+    /// from the boundary.
+    pub diameter: f64,
+}
+
+/// Close the small holes left where the polygons of neighbouring cells or sub-cells meet
+/// at a crevice or needle thinner than the weld tolerance (the two sides' corners weld to
+/// different vertices, or not at all, and a few open edges ring a hole less than a cell
+/// across): every loop of open edges at most `size` across is filled by a fan about its
+/// centroid. Each loop vertex is a boundary point (an exact polygon corner or edge
+/// crossing, moved by at most the weld tolerance), so every point of the fill lies within
+/// the loop's diameter of the boundary; and the boundary lay on the polygons and band
+/// triangles already, so the fill removes none of it. Larger loops are left (the caller
+/// sees them open).
+pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
+    let open = open_edges(&s.faces);
+    let mut out = LoopsClosed::default();
+    if open.is_empty() {
+        return out;
+    }
+    // the fill runs each open edge backwards: b -> a
+    let mut next: HashMap<u32, Vec<u32>> = HashMap::new();
+    for &(a, b) in &open {
+        next.entry(b).or_default().push(a);
+    }
+    for ring in cycles(&mut next) {
+        let corners: Vec<Vec3> = ring.iter().map(|&v| s.vertices[v as usize]).collect();
+        let diameter = Aabb::from_points(&corners).diagonal();
+        if diameter > size {
+            continue;
+        }
+        let centre = s.vertices.len() as u32;
+        s.vertices.push(corners.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / corners.len() as f64);
+        for i in 0..ring.len() {
+            s.faces.push([centre, ring[i], ring[(i + 1) % ring.len()]]);
+        }
+        out.loops += 1;
+        out.diameter = out.diameter.max(diameter);
+    }
+    out
+}
+
 /// The simple cycles of the directed graph `next` (each edge used once; a walk that comes
 /// back to a vertex of its own path cuts the loop there), at least three vertices each.
 fn cycles(next: &mut HashMap<u32, Vec<u32>>) -> Vec<Vec<u32>> {
@@ -423,6 +470,32 @@ mod tests {
         let right = vec![v(0.5, 0.0), v(0.5, 1.0), v(1.0, 1.0), v(1.0, 0.0)];
         join(&mut s, &[top, left, right], 1e-9, (Vec3::splat(0.25), 1.0));
         assert!(open_edges(&s.faces).is_empty(), "{:?}", open_edges(&s.faces));
+    }
+
+    #[test]
+    fn a_small_hole_is_closed_by_a_fan_and_a_large_one_is_left() {
+        // an open box: a unit cube without its top, whose rim is a loop 1 x 1 across
+        let corners: Vec<Vec3> = (0..8).map(|c| Vec3::new((c & 1) as f64, ((c >> 1) & 1) as f64, ((c >> 2) & 1) as f64)).collect();
+        let quads = [[0, 2, 3, 1], [0, 1, 5, 4], [1, 3, 7, 5], [3, 2, 6, 7], [2, 0, 4, 6]];
+        let faces: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+        let mut s = Surface { vertices: corners.clone(), faces: faces.clone(), ..Default::default() };
+        assert_eq!(close_small_loops(&mut s, 1.0), LoopsClosed::default(), "the rim is sqrt(2) across");
+        assert_eq!(open_edges(&s.faces).len(), 4);
+        let closed = close_small_loops(&mut s, 1.5);
+        assert_eq!(closed.loops, 1);
+        assert!((closed.diameter - 2f64.sqrt()).abs() < 1e-12);
+        assert!(open_edges(&s.faces).is_empty(), "{:?}", open_edges(&s.faces));
+        // outward: the fill faces up, and the closed box encloses the unit volume
+        let volume: f64 = s
+            .faces
+            .iter()
+            .map(|f| {
+                let p = f.map(|v| s.vertices[v as usize]);
+                p[0].dot(p[1].cross(p[2])) / 6.0
+            })
+            .sum();
+        assert!((volume - 1.0).abs() < 1e-12, "{volume}");
+        assert_eq!(s.vertices[8], Vec3::new(0.5, 0.5, 1.0), "the fan's centre is the rim's centroid");
     }
 
     #[test]
