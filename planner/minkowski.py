@@ -297,6 +297,7 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
         "planar_pieces": int(surf["planar_pieces"]),
         "planes_fallback_edges": int(surf["planes_fallback_edges"]),
         "holes_closed": int(surf["holes_closed"]),
+        "sheets_unzipped": int(surf["sheets_unzipped"]),
         "threads": core.num_threads(),
     }
     if stats["planes_fallback_edges"]:

@@ -135,6 +135,7 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
              "planar_cells": int(raw["planar_cells"]), "planar_pieces": int(raw["planar_pieces"]),
              "planes_fallback_edges": int(raw["planes_fallback_edges"]),
              "holes_closed": int(raw["holes_closed"]),
+             "sheets_unzipped": int(raw["sheets_unzipped"]),
              "seconds": time.perf_counter() - t0}
     return OffsetResult(surface, radius, float(raw["error_bound"]), step, stats)
 

@@ -204,6 +204,7 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("planar_deviation", s.planar_deviation)?;
     d.set_item("planes_fallback_edges", r.planes_fallback_edges)?;
     d.set_item("holes_closed", s.loops_closed)?;
+    d.set_item("sheets_unzipped", s.sheets_unzipped)?;
     Ok(d)
 }
 

@@ -132,10 +132,10 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
     let mut sampled: Vec<Aabb> = Vec::new();
     let (mut open_seen, mut retries, mut last_bad) = (0, 0, usize::MAX);
     let mut round = 0;
-    let mut resolved = ResolvedCells::default();
+    let resolved = ResolvedCells::default();
     while round <= params.max_refinements {
         let t0 = Instant::now();
-        let built = if planes { Octree::build_resolving_planes(set, region, h, params.max_cells, &sampled) } else { Octree::build(set, region, h, params.max_cells) };
+        let built = if planes { Octree::build_resolving_planes(set, region, h, params.max_cells, &sampled, &resolved) } else { Octree::build(set, region, h, params.max_cells) };
         let oct = match built {
             Ok(o) => o,
             Err(e) => match best {
@@ -145,7 +145,7 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         };
         t_oct += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let surface = extract(&oct, set, &mut resolved);
+        let surface = extract(&oct, set, &resolved);
         t_surf += t1.elapsed().as_secs_f64();
         // where the exact polygons did not join the band, or the band has complex cells
         // next to them, sample around those places while that leaves fewer of them; then,

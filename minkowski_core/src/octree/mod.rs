@@ -17,6 +17,7 @@ use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
 use crate::polytope::ConvexPolytope;
 use crate::surface::planar::Cut;
+use crate::surface::{cell_key, resolve_cell, ResolvedCells};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
@@ -235,7 +236,8 @@ pub struct Octree {
     /// Candidate arena: for each MIXED leaf, records `[prim, k, plane_1 .. plane_k]`.
     pub cands: Vec<u32>,
     /// Built by [`Octree::build_resolving_planes`]: the boxes where cells are sampled all the
-    /// same (elsewhere MIXED leaves the source resolves by planes are exact, at any level);
+    /// same (elsewhere MIXED leaves the source resolves by planes are exact, at any level,
+    /// and their surfaces are in the [`ResolvedCells`] it was given);
     /// `None` for [`Octree::build`].
     pub planar: Option<Vec<Aabb>>,
 }
@@ -250,8 +252,9 @@ struct Ctx<'a> {
     budget: usize,
     max_words: usize,
     /// Stop at MIXED cells the source resolves by planes ([`CellSource::plane_cut`]),
-    /// except those meeting one of these boxes.
-    planar: Option<&'a [Aabb]>,
+    /// except those meeting one of these boxes; their surfaces are kept in the cache for
+    /// the extraction.
+    planar: Option<(&'a [Aabb], &'a ResolvedCells)>,
     count: AtomicUsize,
     words: AtomicUsize,
     abort: AtomicBool,
@@ -260,9 +263,21 @@ struct Ctx<'a> {
 type Out = (Vec<Leaf>, Vec<u32>);
 
 /// Whether the MIXED cell `cell` with records `own` is resolved by planes: outside the
-/// `sampled` boxes, and cut safely by the planes of its candidates.
-pub fn resolvable<S: CellSource + ?Sized>(src: &S, sampled: &[Aabb], cell: &Aabb, own: &[u32]) -> bool {
-    !sampled.iter().any(|b| b.overlaps(cell)) && src.plane_cut(own).is_some_and(|cut| cut.pieces(cell).is_some())
+/// `sampled` boxes, and its surface exact by the planes of its candidates
+/// ([`resolve_cell`], kept in `resolved` for the extraction, which then need not cut the
+/// cell again).
+pub fn resolvable<S: CellSource + ?Sized>(src: &S, (sampled, resolved): (&[Aabb], &ResolvedCells), cell: &Aabb, own: &[u32]) -> bool {
+    if sampled.iter().any(|b| b.overlaps(cell)) || src.plane_cut(own).is_none() {
+        return false;
+    }
+    let key = cell_key(cell, own, 0);
+    if let Some(known) = resolved.get(&key) {
+        return known.is_some();
+    }
+    let surface = resolve_cell(src, cell, own, 0);
+    let found = surface.is_some();
+    resolved.insert(key, surface);
+    found
 }
 
 impl Octree {
@@ -285,15 +300,16 @@ impl Octree {
     /// [`Octree::build`] that keeps MIXED cells the source resolves by planes
     /// ([`CellSource::plane_cut`]) as leaves at their size: such leaves are MIXED above
     /// the finest level. Cells meeting a box of `sampled` are split as usual (where joining their polygons
-    /// to the band failed before).
+    /// to the band failed before). The surfaces of the cells it resolves go into `resolved`
+    /// (cells met there before take what they gave), so the extraction does not cut them again.
     ///
     /// # Errors
     /// As [`Octree::build`].
-    pub fn build_resolving_planes<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, sampled: &[Aabb]) -> CoreResult<Octree> {
-        Self::build_with(source, region, h, max_cells, MAX_RECORD_WORDS, Some(sampled))
+    pub fn build_resolving_planes<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, sampled: &[Aabb], resolved: &ResolvedCells) -> CoreResult<Octree> {
+        Self::build_with(source, region, h, max_cells, MAX_RECORD_WORDS, Some((sampled, resolved)))
     }
 
-    fn build_with<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, max_words: usize, planar: Option<&[Aabb]>) -> CoreResult<Octree> {
+    fn build_with<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, max_words: usize, planar: Option<(&[Aabb], &ResolvedCells)>) -> CoreResult<Octree> {
         if h <= 0.0 || !h.is_finite() {
             return Err(CoreError::InvalidParameter { name: "cell size".into(), value: h, detail: "must be positive and finite".into() });
         }
@@ -317,7 +333,7 @@ impl Octree {
         if ctx.abort.load(Ordering::Relaxed) {
             return Err(CoreError::ResourceLimit { budget: max_cells, cell_size: h, detail: "octree leaves".into() });
         }
-        Ok(Octree { origin, h, depth: depth as u8, leaves, cands, planar: planar.map(<[Aabb]>::to_vec) })
+        Ok(Octree { origin, h, depth: depth as u8, leaves, cands, planar: planar.map(|(sampled, _)| sampled.to_vec()) })
     }
 
     /// The closed box of a leaf.
@@ -464,7 +480,7 @@ impl Ctx<'_> {
 
     /// Whether a MIXED cell above the finest level stays a leaf: resolved by planes.
     fn resolved(&self, cell: &Aabb, own: &[u32]) -> bool {
-        self.planar.is_some_and(|sampled| resolvable(self.src, sampled, cell, own))
+        self.planar.is_some_and(|planar| resolvable(self.src, planar, cell, own))
     }
 
     fn leaf(&self, ijk: [u32; 3], level: u8, label: Label, cand_len: usize) -> Leaf {

@@ -2,40 +2,9 @@
 
 use crate::math::Vec3;
 use crate::octree::Octree;
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
+use crate::util::FastMap;
 
-/// A small, fast hasher for the 128-bit cell keys (splitmix64 finaliser).
-#[derive(Default, Clone, Copy)]
-pub(crate) struct KeyHasher(u64);
-
-#[inline]
-fn mix(mut x: u64) -> u64 {
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
-}
-
-impl Hasher for KeyHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut b = [0u8; 8];
-            b[..chunk.len()].copy_from_slice(chunk);
-            self.0 = mix(self.0 ^ u64::from_le_bytes(b));
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = mix(self.0 ^ v);
-    }
-    fn write_u128(&mut self, v: u128) {
-        self.0 = mix(mix(self.0 ^ (v >> 64) as u64) ^ v as u64);
-    }
-}
-
-type Map = HashMap<u128, u32, BuildHasherDefault<KeyHasher>>;
+type Map = FastMap<u128, u32>;
 
 /// The key of the cell of size `2^level` finest cells with lower corner `ijk`.
 #[inline]

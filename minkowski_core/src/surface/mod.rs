@@ -29,13 +29,14 @@ pub mod stitch;
 mod surface_tests;
 
 pub use reach::loose_reach;
+pub use resolve::{resolve_cell, CellSurface};
 pub use simplify::merge_coplanar;
 
 use crate::math::{Aabb, Vec3};
 use crate::octree::{CellSource, Label, Octree};
-use crate::util::UnionFind;
+use crate::util::{FastMap, UnionFind};
 use rayon::prelude::*;
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 /// Vertices are kept this fraction of an edge away from lattice points, so that no two
 /// vertices coincide (a boundary exactly through a lattice point would otherwise give
@@ -104,6 +105,9 @@ pub struct Surface {
     /// weld tolerance, closed by a fan ([`stitch::close_small_loops`]; their diameter counts
     /// in `planar_deviation`).
     pub loops_closed: usize,
+    /// Copies of vertices made where sheets of the joined surface touch (along a hair-thin
+    /// edge or at a point), one per sheet ([`stitch::unzip_touching_sheets`]).
+    pub sheets_unzipped: usize,
     /// Closed slivers (two layers folded onto each other, under two cells across) removed
     /// after the join ([`stitch::drop_slivers`]).
     pub slivers_dropped: usize,
@@ -266,7 +270,7 @@ impl EdgeIntervals {
 ///
 /// `resolved` keeps each cell's plane resolution for the next extraction over the same
 /// source (a rebuild sampling around other places, or a finer grid, meets most cells again).
-pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &mut ResolvedCells) -> Surface {
+pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -> Surface {
     let planar = planar_polygons(oct, src, resolved);
     let mut s = sample_band(oct, src, &planar);
     s.planar_cells = planar.cells;
@@ -276,10 +280,21 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &mut ResolvedCell
         stitch::join(&mut s, &planar.polys, STITCH_TOL * oct.h, (oct.origin, oct.h));
         let closed = stitch::close_small_loops(&mut s, oct.h);
         s.loops_closed = closed.loops;
-        s.planar_deviation = s.planar_deviation.max(closed.diameter);
+        if closed.loops > 0 {
+            // a fill point is within the loop's diameter of a loop vertex, and that within
+            // the weld of the boundary
+            s.planar_deviation = s.planar_deviation.max(closed.diameter + STITCH_TOL * oct.h);
+        }
+        let (mut open, mut pinched) = open_or_pinched(&s.faces);
+        if !open.is_empty() || !pinched.is_empty() {
+            let at = open.iter().flat_map(|&(a, b)| [a, b]).chain(pinched.iter().copied()).collect();
+            s.sheets_unzipped = stitch::unzip_touching_sheets(&mut s, at);
+        }
+        // (a sheet unzipped from the rest may be a sliver: a triangle and its reverse)
         s.slivers_dropped = stitch::drop_slivers(&mut s, 2.0 * oct.h, 1e-4 * oct.h.powi(3));
-        let open = stitch::open_edges(&s.faces);
-        let pinched = if open.is_empty() { stitch::pinched_vertices(&s.faces) } else { Vec::new() };
+        if s.sheets_unzipped > 0 || s.slivers_dropped > 0 {
+            (open, pinched) = open_or_pinched(&s.faces);
+        }
         s.open_edges = open.len() + pinched.len();
         let at: Vec<Aabb> = open
             .iter()
@@ -292,6 +307,14 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &mut ResolvedCell
     s
 }
 
+/// The open edges of `faces` ([`stitch::open_edges`]) and, when there are none, the pinched
+/// vertices ([`stitch::pinched_vertices`]).
+fn open_or_pinched(faces: &[[u32; 3]]) -> (Vec<(u32, u32)>, Vec<u32>) {
+    let open = stitch::open_edges(faces);
+    let pinched = if open.is_empty() { stitch::pinched_vertices(faces) } else { Vec::new() };
+    (open, pinched)
+}
+
 /// Most open edges whose boxes [`Surface::open_at`] keeps.
 pub const MAX_OPEN_REPORTED: usize = 10_000;
 
@@ -301,11 +324,11 @@ pub const MAX_OPEN_REPORTED: usize = 10_000;
 const STITCH_TOL: f64 = 4.0 * EDGE_CLAMP;
 
 /// Plane-resolved cells with a surface, by `(level, lattice key of their lower corner)`.
-type PlanarSet = std::collections::HashSet<(u8, u64)>;
+type PlanarSet = crate::util::FastSet<(u8, u64)>;
 
 /// The exact polygons of the MIXED cells above the finest level (outward, counter-clockwise),
 /// the cells that have some, and how many such cells there are.
-fn planar_polygons<S: CellSource>(oct: &Octree, src: &S, resolved: &mut ResolvedCells) -> PlanarPolygons {
+fn planar_polygons<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -> PlanarPolygons {
     // above the finest level the octree kept only resolvable MIXED cells; at the finest
     // level, those outside the sampled boxes are tried here
     let sampled: &[Aabb] = match &oct.planar {
@@ -317,7 +340,7 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S, resolved: &mut Resolved
         l.label == Label::Mixed && (l.level > 0 || !sampled.iter().any(|b| b.overlaps(&oct.cell_box(l))))
     };
     let cells: Vec<usize> = (0..oct.leaves.len()).filter(|&i| tried(i)).collect();
-    let per_cell: Vec<(usize, CellKey, Option<resolve::CellSurface>, bool)> = cells
+    let per_cell: Vec<(usize, CellKey, Option<CellSurface>, bool)> = cells
         .par_iter()
         .map(|&li| {
             let leaf = &oct.leaves[li];
@@ -326,8 +349,8 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S, resolved: &mut Resolved
             let sub_levels = if leaf.level == 0 { resolve::SUB_LEVELS } else { 0 };
             let (cell, recs) = (oct.cell_box(leaf), oct.records(leaf));
             let k = cell_key(&cell, recs, sub_levels);
-            match resolved.0.get(&k) {
-                Some(known) => (li, k, known.clone(), false),
+            match resolved.get(&k) {
+                Some(known) => (li, k, known, false),
                 None => (li, k, resolve::resolve_cell(src, &cell, recs, sub_levels), true),
             }
         })
@@ -335,7 +358,7 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S, resolved: &mut Resolved
     let mut out = PlanarPolygons { resolved: vec![false; oct.leaves.len()], ..Default::default() };
     for (li, k, cell, fresh) in per_cell {
         if fresh {
-            resolved.0.insert(k, cell.clone());
+            resolved.insert(k, cell.clone());
         }
         let l = &oct.leaves[li];
         if cell.is_none() && l.level == 0 {
@@ -355,20 +378,39 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S, resolved: &mut Resolved
 }
 
 /// A cell's box (its corners' bits), a hash of its records and the levels it may be split.
-type CellKey = ([u64; 6], u64, u32);
+pub type CellKey = ([u64; 6], u64, u32);
 
-fn cell_key(cell: &Aabb, recs: &[u32], sub_levels: u32) -> CellKey {
+/// The key of `cell` with records `recs`, resolved splitting it up to `sub_levels` times.
+pub fn cell_key(cell: &Aabb, recs: &[u32], sub_levels: u32) -> CellKey {
     use std::hash::{Hash, Hasher};
-    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    let mut hasher = crate::util::KeyHasher::default();
     recs.hash(&mut hasher);
     let c = [cell.min.x, cell.min.y, cell.min.z, cell.max.x, cell.max.y, cell.max.z];
     (c.map(f64::to_bits), hasher.finish(), sub_levels)
 }
 
 /// Cells already resolved by planes over one source, and what they gave (`None`: not
-/// resolvable), kept across the extractions of one sum.
+/// resolvable), kept across the octree builds and extractions of one sum (the octree
+/// resolves the cells it keeps as leaves; the extraction takes their surfaces from here).
 #[derive(Default)]
-pub struct ResolvedCells(std::collections::HashMap<CellKey, Option<resolve::CellSurface>>);
+pub struct ResolvedCells(Mutex<FastMap<CellKey, Option<CellSurface>>>);
+
+impl ResolvedCells {
+    /// What `key`'s cell gave, if it was resolved before.
+    pub fn get(&self, key: &CellKey) -> Option<Option<CellSurface>> {
+        self.lock().get(key).cloned()
+    }
+
+    /// Keep what `key`'s cell gave.
+    pub fn insert(&self, key: CellKey, surface: Option<CellSurface>) {
+        self.lock().insert(key, surface);
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, FastMap<CellKey, Option<CellSurface>>> {
+        // a panic elsewhere while holding the lock leaves the map as it was: still usable
+        self.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+}
 
 /// What the plane-resolved cells gave.
 #[derive(Default)]

@@ -105,9 +105,12 @@ impl Cut {
                 continue;
             }
             // the section split by the line of every other (kept) plane in it
-            let mut parts = vec![section];
+            let (mut parts, mut next) = (vec![section], Vec::new());
             for (_, &(m, v)) in planes.iter().enumerate().filter(|&(j, _)| j != i && merged.rep[j] == j) {
-                parts = parts.iter().flat_map(|poly| [clip(poly, m, v), clip(poly, -m, -v)]).filter(|p| area(p) > THIN * THIN * size * size).collect();
+                for poly in parts.drain(..) {
+                    split(poly, (m, v), THIN * THIN * size * size, &mut next);
+                }
+                std::mem::swap(&mut parts, &mut next);
             }
             for poly in parts {
                 out.push(piece(cell, &poly, (i, n), planes, &merged, size)?);
@@ -242,6 +245,32 @@ fn plane_section(cell: &Aabb, n: Vec3, w: f64) -> Vec<Vec3> {
         a.total_cmp(&b)
     });
     pts
+}
+
+/// The parts of the convex polygon `poly` where `m · x <= v` and where `m · x >= v`, in
+/// that order, as [`clip`] gives them, each appended to `out` when its area is above
+/// `min_area`. A polygon wholly on one side (most of them: a plane's line misses most
+/// parts of a section) is moved there, not clipped (its other part would be at most the
+/// corners on the line: no area).
+fn split(poly: Vec<Vec3>, (m, v): (Vec3, f64), min_area: f64, out: &mut Vec<Vec<Vec3>>) {
+    let (mut below, mut above, mut on) = (false, false, 0);
+    for &p in &poly {
+        let f = m.dot(p) - v;
+        below |= f < 0.0;
+        above |= f > 0.0;
+        on += usize::from(f == 0.0);
+    }
+    let mut keep = |part: Vec<Vec3>| {
+        if area(&part) > min_area {
+            out.push(part);
+        }
+    };
+    if below != above && on < 3 {
+        keep(poly);
+    } else {
+        keep(clip(&poly, m, v));
+        keep(clip(&poly, -m, -v));
+    }
 }
 
 /// The part of the convex polygon `poly` where `m · x <= v` (Sutherland–Hodgman).

@@ -12,13 +12,13 @@
 
 use super::Surface;
 use crate::math::Vec3;
+use crate::util::FastMap;
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// Rings of hash-grid bins searched around a loose cell before every vertex is tried.
 const MAX_RING: i64 = 8;
 
-type Bins = HashMap<[i64; 3], Vec<Vec3>>;
+type Bins = FastMap<[i64; 3], Vec<Vec3>>;
 
 /// The largest distance from a point of a loose cell to the surface (an upper bound), a
 /// cell next to a sign change taking at most `near_cap`: `0` with no loose cells,
@@ -60,7 +60,7 @@ fn bin_of(p: Vec3, bin: f64) -> [i64; 3] {
 }
 
 fn bin_points(points: &[Vec3], bin: f64) -> Bins {
-    let mut bins = Bins::new();
+    let mut bins = Bins::default();
     for &p in points {
         bins.entry(bin_of(p, bin)).or_default().push(p);
     }

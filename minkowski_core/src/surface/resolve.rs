@@ -41,7 +41,7 @@ pub struct CellSurface {
 
 /// The surface in `cell` (records `recs`), splitting it up to `sub_levels` times where it
 /// is not resolvable by planes; `None` when some part of it is not.
-pub fn resolve_cell<S: CellSource>(src: &S, cell: &Aabb, recs: &[u32], sub_levels: u32) -> Option<CellSurface> {
+pub fn resolve_cell<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], sub_levels: u32) -> Option<CellSurface> {
     if let Some(surface) = src.plane_cut(recs).and_then(|cut| Some((cut, cut.pieces(cell)?))).and_then(|(cut, pieces)| cut_surface(src, recs, &cut, pieces)) {
         return Some(surface);
     }
@@ -64,7 +64,7 @@ pub fn resolve_cell<S: CellSource>(src: &S, cell: &Aabb, recs: &[u32], sub_level
 
 /// The pieces of `cut` whose sides differ, oriented outward; `None` when a sheet thinner
 /// than the planes taken as one lies between them ([`Piece::slab`]).
-fn cut_surface<S: CellSource>(src: &S, recs: &[u32], cut: &Cut, pieces: Vec<Piece>) -> Option<CellSurface> {
+fn cut_surface<S: CellSource + ?Sized>(src: &S, recs: &[u32], cut: &Cut, pieces: Vec<Piece>) -> Option<CellSurface> {
     // one answer per region of the cut (pieces share them): carried from a region answered
     // before when the segment between their points meets no candidate (the boundary in
     // the cell lies on candidates, so none lies between them), else one point query

@@ -54,7 +54,7 @@ fn carried_region_answers_are_the_point_queries_answers() {
         (ExactSource::new(vec![boxes_mesh(&[([0.0; 3], [4.0, 1.0, 1.0]), ([0.0; 3], [1.0, 3.0, 1.0])])], sphere_mesh(0.3, 12, 7), 0.0, None), 0.05),
     ];
     for (src, h) in &sums {
-        let oct = Octree::build_resolving_planes(src, &src.aabb, *h, 4_000_000, &[]).unwrap();
+        let oct = Octree::build_resolving_planes(src, &src.aabb, *h, 4_000_000, &[], &super::ResolvedCells::default()).unwrap();
         let carried = Counted { src, carry: true, queries: AtomicUsize::new(0) };
         let queried = Counted { src, carry: false, queries: AtomicUsize::new(0) };
         let (mut cells, mut polygons) = (0, 0);
@@ -78,14 +78,15 @@ fn carried_region_answers_are_the_point_queries_answers() {
 #[test]
 fn a_second_extraction_takes_the_kept_resolutions_and_gives_the_same_surface() {
     let src = ExactSource::new(vec![torus_mesh(10.0, 3.0, 24, 12)], sphere_mesh(0.9, 12, 7), 0.0, None);
-    let oct = Octree::build_resolving_planes(&src, &src.aabb, 0.15, 4_000_000, &[]).unwrap();
-    let mut kept = super::ResolvedCells::default();
-    let first = super::extract(&oct, &src, &mut kept);
+    // (the octree resolves the cells it keeps into a cache of its own here)
+    let oct = Octree::build_resolving_planes(&src, &src.aabb, 0.15, 4_000_000, &[], &super::ResolvedCells::default()).unwrap();
+    let kept = super::ResolvedCells::default();
+    let first = super::extract(&oct, &src, &kept);
     assert!(first.planar_cells > 100, "{} plane-resolved cells", first.planar_cells);
     let counted = || Counted { src: &src, carry: true, queries: AtomicUsize::new(0) };
     let (again_src, fresh_src) = (counted(), counted());
-    let again = super::extract(&oct, &again_src, &mut kept);
-    let fresh = super::extract(&oct, &fresh_src, &mut super::ResolvedCells::default());
+    let again = super::extract(&oct, &again_src, &kept);
+    let fresh = super::extract(&oct, &fresh_src, &super::ResolvedCells::default());
     for s in [&again, &fresh] {
         assert_eq!((&s.vertices, &s.faces, s.planar_cells), (&first.vertices, &first.faces, first.planar_cells));
     }

@@ -13,8 +13,8 @@
 use super::Surface;
 use crate::bvh::Bvh;
 use crate::math::{Aabb, Vec3};
+use crate::util::{FastMap, FastSet};
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// Add the convex polygons `polys` (each counter-clockwise about its outward normal) to
 /// `s`, welding corners within `tol` and splitting edges at T-junctions (see the module
@@ -64,7 +64,7 @@ pub fn cancel_opposite_twins(faces: &mut Vec<[u32; 3]>) -> usize {
             ((a, c, b), true)
         }
     };
-    let mut by_key: HashMap<(u32, u32, u32), [Vec<usize>; 2]> = HashMap::new();
+    let mut by_key: FastMap<(u32, u32, u32), [Vec<usize>; 2]> = FastMap::default();
     for (i, f) in faces.iter().enumerate() {
         let (k, rev) = canonical(f);
         by_key.entry(k).or_default()[rev as usize].push(i);
@@ -98,14 +98,14 @@ pub fn drop_slivers(s: &mut Surface, size: f64, volume: f64) -> usize {
         uf.union(f[0] as usize, f[1] as usize);
         uf.union(f[0] as usize, f[2] as usize);
     }
-    let mut parts: HashMap<usize, (f64, Aabb)> = HashMap::new();
+    let mut parts: FastMap<usize, (f64, Aabb)> = FastMap::default();
     for f in &s.faces {
         let p = f.map(|v| s.vertices[v as usize]);
         let e = parts.entry(uf.find(f[0] as usize)).or_insert((0.0, Aabb::empty()));
         e.0 += p[0].dot(p[1].cross(p[2])) / 6.0;
         e.1 = e.1.union(&Aabb::from_points(&p));
     }
-    let slivers: std::collections::HashSet<usize> = parts.iter().filter(|(_, (v, b))| v.abs() < volume && b.extent().max_element() <= size).map(|(&r, _)| r).collect();
+    let slivers: FastSet<usize> = parts.iter().filter(|(_, (v, b))| v.abs() < volume && b.extent().max_element() <= size).map(|(&r, _)| r).collect();
     if slivers.is_empty() || slivers.len() == parts.len() {
         return 0;
     }
@@ -168,6 +168,69 @@ pub fn pinched_vertices(faces: &[[u32; 3]]) -> Vec<u32> {
     out
 }
 
+/// Give each sheet its own copy of a vertex where sheets of the surface touch: two parts of
+/// the sum meeting along a hair-thin edge or at a point (or coming within the weld
+/// tolerance there, so their corners welded), which leaves an edge used twice each way or
+/// a pinched vertex. About such a vertex the triangles fall into fans that each close
+/// (the simple cycles of its link); every fan but the first gets a copy of the vertex at
+/// the same place. `at`: the vertices to look at (the ends of open edges, pinched ones).
+/// Nothing moves, so the surface is the same point set; edges left open (a real hole) are
+/// left to the caller. Returns how many copies were made.
+pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>) -> usize {
+    at.sort_unstable();
+    at.dedup();
+    if at.is_empty() {
+        return 0;
+    }
+    // the triangles about each of those vertices
+    let mut star: FastMap<u32, Vec<usize>> = at.iter().map(|&v| (v, Vec::new())).collect();
+    for (i, f) in s.faces.iter().enumerate() {
+        for v in f {
+            if let Some(tris) = star.get_mut(v) {
+                tris.push(i);
+            }
+        }
+    }
+    let mut copies = 0;
+    for v in at {
+        for fan in fans(&s.faces, v, &star[&v]).into_iter().skip(1) {
+            let copy = s.vertices.len() as u32;
+            s.vertices.push(s.vertices[v as usize]);
+            for t in fan {
+                for corner in s.faces[t].iter_mut().filter(|c| **c == v) {
+                    *corner = copy;
+                }
+            }
+            copies += 1;
+        }
+    }
+    copies
+}
+
+/// The triangles `tris` about vertex `v` as closed fans (each a simple cycle of `v`'s link,
+/// the edge opposite `v` in each triangle, walked in order); one fan when they do not all
+/// fall into closed fans (an open edge, or a triangle used twice).
+fn fans(faces: &[[u32; 3]], v: u32, tris: &[usize]) -> Vec<Vec<usize>> {
+    // per triangle, its link edge x -> y (the corners after v, in order)
+    let mut by_edge: FastMap<(u32, u32), usize> = FastMap::default();
+    let mut next: FastMap<u32, Vec<u32>> = FastMap::default();
+    for &t in tris {
+        let f = faces[t];
+        let Some(i) = f.iter().position(|&c| c == v) else { continue };
+        let (x, y) = (f[(i + 1) % 3], f[(i + 2) % 3]);
+        if by_edge.insert((x, y), t).is_some() {
+            return vec![tris.to_vec()];
+        }
+        next.entry(x).or_default().push(y);
+    }
+    let rings = cycles(&mut next);
+    let fans: Vec<Vec<usize>> = rings.iter().map(|ring| (0..ring.len()).filter_map(|i| by_edge.get(&(ring[i], ring[(i + 1) % ring.len()])).copied()).collect()).collect();
+    if fans.iter().map(Vec::len).sum::<usize>() != by_edge.len() {
+        return vec![tris.to_vec()];
+    }
+    fans
+}
+
 /// Directed edges used by one triangle whose reverse no triangle uses, and directed edges
 /// used more than once (both break a closed manifold).
 pub fn open_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
@@ -196,7 +259,7 @@ fn split_t_junctions(s: &mut Surface, tol: f64) {
     ends.sort_unstable();
     ends.dedup();
     // per open edge: (parameter, vertex) of the points on it
-    let mut on: HashMap<(u32, u32), Vec<(f64, u32)>> = HashMap::new();
+    let mut on: FastMap<(u32, u32), Vec<(f64, u32)>> = FastMap::default();
     for &v in &ends {
         let p = s.vertices[v as usize];
         bvh.for_each_at_point(p, |i| {
@@ -263,7 +326,7 @@ fn fill_face_gaps(s: &mut Surface, tol: f64, lattice: (Vec3, f64)) {
         let c = x.round();
         ((x - c).abs() * h <= tol).then_some(c as i64)
     };
-    let mut by_plane: HashMap<LatticePlane, Vec<(u32, u32)>> = HashMap::new();
+    let mut by_plane: FastMap<LatticePlane, Vec<(u32, u32)>> = FastMap::default();
     for &(a, b) in &open {
         for axis in 0..3 {
             if let (Some(ca), Some(cb)) = (on_plane(a, axis), on_plane(b, axis)) {
@@ -275,10 +338,10 @@ fn fill_face_gaps(s: &mut Surface, tol: f64, lattice: (Vec3, f64)) {
     }
     let mut planes: Vec<(LatticePlane, Vec<(u32, u32)>)> = by_plane.into_iter().collect();
     planes.sort_unstable_by_key(|p| p.0);
-    let mut filled = std::collections::HashSet::new();
+    let mut filled = FastSet::default();
     for ((axis, _), edges) in planes {
         // the fill runs each open edge backwards: b -> a
-        let mut next: HashMap<u32, Vec<u32>> = HashMap::new();
+        let mut next: FastMap<u32, Vec<u32>> = FastMap::default();
         for &(a, b) in edges.iter().filter(|e| !filled.contains(*e)) {
             next.entry(b).or_default().push(a);
         }
@@ -309,7 +372,7 @@ pub struct LoopsClosed {
 /// across): every loop of open edges at most `size` across is filled by a fan about its
 /// centroid. Each loop vertex is a boundary point (an exact polygon corner or edge
 /// crossing, moved by at most the weld tolerance), so every point of the fill lies within
-/// the loop's diameter of the boundary; and the boundary lay on the polygons and band
+/// the loop's diameter (plus that tolerance) of the boundary; and the boundary lay on the polygons and band
 /// triangles already, so the fill removes none of it. Larger loops are left (the caller
 /// sees them open).
 pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
@@ -319,7 +382,7 @@ pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
         return out;
     }
     // the fill runs each open edge backwards: b -> a
-    let mut next: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut next: FastMap<u32, Vec<u32>> = FastMap::default();
     for &(a, b) in &open {
         next.entry(b).or_default().push(a);
     }
@@ -342,13 +405,13 @@ pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
 
 /// The simple cycles of the directed graph `next` (each edge used once; a walk that comes
 /// back to a vertex of its own path cuts the loop there), at least three vertices each.
-fn cycles(next: &mut HashMap<u32, Vec<u32>>) -> Vec<Vec<u32>> {
+fn cycles(next: &mut FastMap<u32, Vec<u32>>) -> Vec<Vec<u32>> {
     let mut starts: Vec<u32> = next.keys().copied().collect();
     starts.sort_unstable();
     let mut out = Vec::new();
     for start in starts {
         let mut path = vec![start];
-        let mut at: HashMap<u32, usize> = HashMap::from([(start, 0)]);
+        let mut at: FastMap<u32, usize> = FastMap::from_iter([(start, 0)]);
         while let Some(&v) = path.last() {
             let Some(w) = next.get_mut(&v).and_then(|outs| outs.pop()) else { break };
             if let Some(&i) = at.get(&w) {
@@ -406,12 +469,12 @@ fn ring_triangles(ring: &[u32], pos: &[Vec3], axis: usize) -> Option<Vec<[u32; 3
 /// A hash grid of vertices for welding.
 struct Grid {
     cell: f64,
-    buckets: HashMap<[i64; 3], Vec<(u32, Vec3)>>,
+    buckets: FastMap<[i64; 3], Vec<(u32, Vec3)>>,
 }
 
 impl Grid {
     fn new(cell: f64) -> Grid {
-        Grid { cell, buckets: HashMap::new() }
+        Grid { cell, buckets: FastMap::default() }
     }
 
     fn key(&self, p: Vec3) -> [i64; 3] {
@@ -430,10 +493,17 @@ impl Grid {
     /// The nearest vertex within `tol` of `p`, or a new one appended to `vertices`.
     fn weld(&mut self, p: Vec3, tol: f64, vertices: &mut Vec<Vec3>) -> u32 {
         let k = self.key(p);
+        // the buckets the ball of radius `tol` about `p` reaches (one, unless it is near a
+        // bucket's side: the buckets are wider than `tol`)
+        let reach = |axis: usize| {
+            let x = p[axis] / self.cell - k[axis] as f64;
+            let r = tol / self.cell;
+            (if x < r { -1 } else { 0 })..=(if x > 1.0 - r { 1 } else { 0 })
+        };
         let mut best: Option<(f64, u32)> = None;
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
+        for dz in reach(2) {
+            for dy in reach(1) {
+                for dx in reach(0) {
                     if let Some(b) = self.buckets.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
                         for &(v, q) in b {
                             let d = (q - p).length();
@@ -496,6 +566,49 @@ mod tests {
             .sum();
         assert!((volume - 1.0).abs() < 1e-12, "{volume}");
         assert_eq!(s.vertices[8], Vec3::new(0.5, 0.5, 1.0), "the fan's centre is the rim's centroid");
+    }
+
+    /// Two closed unit cubes (outward), the second moved by `offset`, in one surface whose
+    /// coincident corners are one vertex.
+    fn two_cubes(offset: Vec3) -> Surface {
+        let quads = [[0, 2, 3, 1], [0, 1, 5, 4], [1, 3, 7, 5], [3, 2, 6, 7], [2, 0, 4, 6], [4, 5, 7, 6]];
+        let mut s = Surface::default();
+        let mut ids: FastMap<[i64; 3], u32> = FastMap::default();
+        for shift in [Vec3::ZERO, offset] {
+            let corner: Vec<u32> = (0..8)
+                .map(|c| {
+                    let p = Vec3::new((c & 1) as f64, ((c >> 1) & 1) as f64, ((c >> 2) & 1) as f64) + shift;
+                    *ids.entry([p.x as i64, p.y as i64, p.z as i64]).or_insert_with(|| {
+                        s.vertices.push(p);
+                        s.vertices.len() as u32 - 1
+                    })
+                })
+                .collect();
+            s.faces.extend(quads.iter().flat_map(|q| [[corner[q[0]], corner[q[1]], corner[q[2]]], [corner[q[0]], corner[q[2]], corner[q[3]]]]));
+        }
+        s
+    }
+
+    #[test]
+    fn sheets_touching_along_an_edge_or_at_a_corner_get_their_own_vertices() {
+        for (offset, shared, copies) in [(Vec3::new(1.0, 1.0, 0.0), 2, 2), (Vec3::ONE, 1, 1)] {
+            let mut s = two_cubes(offset);
+            assert_eq!(s.vertices.len(), 16 - shared);
+            let (open, pinched) = (open_edges(&s.faces), pinched_vertices(&s.faces));
+            assert!(!open.is_empty() || !pinched.is_empty(), "the cubes touch: not a manifold");
+            let at = open.iter().flat_map(|&(a, b)| [a, b]).chain(pinched).collect();
+            let before = s.clone();
+            assert_eq!(unzip_touching_sheets(&mut s, at), copies);
+            assert!(open_edges(&s.faces).is_empty() && pinched_vertices(&s.faces).is_empty());
+            // the same triangles, place for place
+            let at_places = |s: &Surface| s.faces.iter().map(|f| f.map(|v| s.vertices[v as usize].to_array())).collect::<Vec<_>>();
+            assert_eq!(at_places(&s), at_places(&before));
+        }
+        // a real hole is left as it is
+        let mut s = two_cubes(Vec3::new(3.0, 0.0, 0.0));
+        s.faces.pop();
+        let at = open_edges(&s.faces).iter().flat_map(|&(a, b)| [a, b]).collect();
+        assert_eq!(unzip_touching_sheets(&mut s, at), 0);
     }
 
     #[test]

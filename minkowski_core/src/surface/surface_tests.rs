@@ -37,6 +37,6 @@ fn empty_band_gives_empty_surface() {
     let set = PolytopeSet::new(vec![ConvexPolytope::from_points(&pts)]);
     let mut oct = Octree::build(&set, &set.aabb, 0.25, 100000).unwrap();
     oct.leaves.retain(|l| l.label != crate::octree::Label::Mixed);
-    let s = extract(&oct, &set, &mut super::ResolvedCells::default());
+    let s = extract(&oct, &set, &super::ResolvedCells::default());
     assert!(s.faces.is_empty() && s.vertices.is_empty());
 }
