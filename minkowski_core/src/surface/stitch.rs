@@ -14,7 +14,6 @@ use super::Surface;
 use crate::bvh::Bvh;
 use crate::math::{Aabb, Vec3};
 use crate::util::{FastMap, FastSet};
-use rayon::prelude::*;
 
 /// Add the convex polygons `polys` (each counter-clockwise about its outward normal) to
 /// `s`, welding corners within `tol` and splitting edges at T-junctions (see the module
@@ -139,31 +138,46 @@ fn drop_unused_vertices(s: &mut Surface) {
 /// the joined surface touch at a point. On a closed surface with every edge used once each
 /// way, these are what is left of a non-manifold join.
 pub fn pinched_vertices(faces: &[[u32; 3]]) -> Vec<u32> {
-    // per corner: (vertex, the edge opposite it), the link's directed edges
-    let mut link: Vec<(u32, u32, u32)> = faces.par_iter().flat_map_iter(|f| (0..3).map(move |i| (f[i], f[(i + 1) % 3], f[(i + 2) % 3]))).collect();
-    link.par_sort_unstable();
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < link.len() {
-        let v = link[i].0;
-        let mut j = i;
-        while j < link.len() && link[j].0 == v {
-            j += 1;
+    let Some(n) = faces.iter().flatten().max().map(|&v| v as usize + 1) else {
+        return Vec::new();
+    };
+    // per vertex (a counting sort): the edges opposite it, its link's directed edges
+    let mut start = vec![0usize; n + 1];
+    for &v in faces.iter().flatten() {
+        start[v as usize + 1] += 1;
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut link = vec![(0u32, 0u32); start[n]];
+    for f in faces {
+        for i in 0..3 {
+            let v = f[i] as usize;
+            link[fill[v]] = (f[(i + 1) % 3], f[(i + 2) % 3]);
+            fill[v] += 1;
         }
+    }
+    let mut out = Vec::new();
+    for v in 0..n {
+        let star = &mut link[start[v]..start[v + 1]];
+        if star.is_empty() {
+            continue;
+        }
+        star.sort_unstable();
         // follow the link from its first edge: one cycle must use all of it
-        let star = &link[i..j];
-        let (mut at, mut steps) = (star[0].2, 1usize);
-        while at != star[0].1 && steps <= star.len() {
-            match star.binary_search_by(|e| (e.1).cmp(&at)) {
-                Ok(k) => at = star[k].2,
+        let star = &*star;
+        let (mut at, mut steps) = (star[0].1, 1usize);
+        while at != star[0].0 && steps <= star.len() {
+            match star.binary_search_by(|e| (e.0).cmp(&at)) {
+                Ok(k) => at = star[k].1,
                 Err(_) => break,
             }
             steps += 1;
         }
-        if at != star[0].1 || steps != star.len() {
-            out.push(v);
+        if at != star[0].0 || steps != star.len() {
+            out.push(v as u32);
         }
-        i = j;
     }
     out
 }
@@ -232,18 +246,49 @@ fn fans(faces: &[[u32; 3]], v: u32, tris: &[usize]) -> Vec<Vec<usize>> {
 }
 
 /// Directed edges used by one triangle whose reverse no triangle uses, and directed edges
-/// used more than once (both break a closed manifold).
+/// used more than once (both break a closed manifold), in order; an edge used `k > 1`
+/// times is listed `k` times. Edges are bucketed by their lower vertex (a counting sort),
+/// so each is compared only with the few that share it: linear in the triangles.
 pub fn open_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
-    let mut e: Vec<u64> = faces.par_iter().flat_map_iter(|f| (0..3).map(move |i| ((f[i] as u64) << 32) | f[(i + 1) % 3] as u64)).collect();
-    e.par_sort_unstable();
-    let reversed = |k: u64| k.rotate_right(32);
+    let Some(n) = faces.iter().flatten().max().map(|&v| v as usize + 1) else {
+        return Vec::new();
+    };
+    let directed = || faces.iter().flat_map(|f| (0..3).map(move |i| (f[i], f[(i + 1) % 3])));
+    // per lower vertex: (upper vertex, whether the edge runs from upper to lower)
+    let mut start = vec![0usize; n + 1];
+    for (a, b) in directed() {
+        start[a.min(b) as usize + 1] += 1;
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut items = vec![0u64; start[n]];
+    for (a, b) in directed() {
+        let lo = a.min(b) as usize;
+        items[fill[lo]] = (u64::from(a.max(b)) << 1) | u64::from(a > b);
+        fill[lo] += 1;
+    }
     let mut out = Vec::new();
-    for (i, &k) in e.iter().enumerate() {
-        let twice = (i > 0 && e[i - 1] == k) || (i + 1 < e.len() && e[i + 1] == k);
-        if twice || e.binary_search(&reversed(k)).is_err() {
-            out.push(((k >> 32) as u32, k as u32));
+    for lo in 0..n {
+        let list = &mut items[start[lo]..start[lo + 1]];
+        list.sort_unstable();
+        for group in list.chunk_by(|x, y| x >> 1 == y >> 1) {
+            let hi = (group[0] >> 1) as u32;
+            let up = group.iter().filter(|&&x| x & 1 == 0).count(); // lo -> hi
+            let down = group.len() - up; // hi -> lo
+            let lo = lo as u32;
+            if lo == hi {
+                // an edge from a vertex to itself is its own reverse
+                out.extend(std::iter::repeat_n((lo, lo), if up > 1 { up } else { 0 }));
+                continue;
+            }
+            let listed = |uses: usize, reverse: usize| if uses > 1 || (uses == 1 && reverse == 0) { uses } else { 0 };
+            out.extend(std::iter::repeat_n((lo, hi), listed(up, down)));
+            out.extend(std::iter::repeat_n((hi, lo), listed(down, up)));
         }
     }
+    out.sort_unstable();
     out
 }
 
@@ -609,6 +654,36 @@ mod tests {
         s.faces.pop();
         let at = open_edges(&s.faces).iter().flat_map(|&(a, b)| [a, b]).collect();
         assert_eq!(unzip_touching_sheets(&mut s, at), 0);
+    }
+
+    #[test]
+    fn open_edges_are_the_edges_without_one_reverse_or_used_twice() {
+        // random triangles over few vertices: repeated edges, missing reverses, corners
+        // welded together; against counting every directed edge
+        let mut state = 7u64;
+        let mut next = |m: u64| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 33) % m) as u32
+        };
+        for _ in 0..200 {
+            let faces: Vec<[u32; 3]> = (0..1 + next(40)).map(|_| [next(9), next(9), next(9)]).collect();
+            let mut uses: FastMap<(u32, u32), usize> = FastMap::default();
+            for f in &faces {
+                for i in 0..3 {
+                    *uses.entry((f[i], f[(i + 1) % 3])).or_default() += 1;
+                }
+            }
+            let mut expected: Vec<(u32, u32)> = uses
+                .iter()
+                .flat_map(|(&(a, b), &k)| {
+                    let reverse = uses.get(&(b, a)).copied().unwrap_or(0);
+                    let listed = if k > 1 || reverse == 0 { k } else { 0 };
+                    std::iter::repeat_n((a, b), listed)
+                })
+                .collect();
+            expected.sort_unstable();
+            assert_eq!(open_edges(&faces), expected, "{faces:?}");
+        }
     }
 
     #[test]
