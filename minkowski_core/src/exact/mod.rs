@@ -776,6 +776,19 @@ impl CellSource for ExactSource {
         self.exact_point(p)
     }
 
+    fn meets_boundary(&self, cand: &[u32], a: Vec3, b: Vec3, _scratch: &mut Vec<(f64, f64)>) -> bool {
+        // as `boundary_intervals`, stopping at the first record that meets the segment
+        records(cand).any(|rec| match rec {
+            Rec::Wall(side) => self.wall_gap(side, a) <= 0.0 || self.wall_gap(side, b) <= 0.0,
+            Rec::Facet(i) => self.facet_clip(i, a, b, self.margin).is_some(),
+            Rec::Pair(k, na, nb) => {
+                let seg = Aabb::new(a.min(b), a.max(b));
+                let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+                self.any_pair_under(k, [na, nb], self.margin, |bx| bx.overlaps(&seg), |i, j| Piece::new(&ta[i], &tb[j], self.margin, false).clip(a, b).is_some())
+            }
+        })
+    }
+
     fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>) {
         out.clear();
         for rec in records(cand) {

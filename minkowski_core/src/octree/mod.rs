@@ -84,6 +84,13 @@ pub trait CellSource: Sync {
     /// may lie: sorted, merged parameter intervals of `[0, 1]`. Each stretch between them
     /// lies wholly inside or wholly outside the solid, so with none the ends agree.
     fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>);
+    /// Whether the boundary may lie on the segment `a → b` inside a cell with records
+    /// `cand`: its [`CellSource::boundary_intervals`] are not empty (`scratch` holds them
+    /// meanwhile). Sources answer at the first candidate that meets it.
+    fn meets_boundary(&self, cand: &[u32], a: Vec3, b: Vec3, scratch: &mut Vec<(f64, f64)>) -> bool {
+        self.boundary_intervals(cand, a, b, scratch);
+        !scratch.is_empty()
+    }
     /// The parts of the segment `a → b` that lie in the solid, as sorted, merged parameter
     /// intervals of `[0, 1]`, given its [`CellSource::boundary_intervals`] `bnd` and the
     /// known memberships `sa`, `sb` of its ends.

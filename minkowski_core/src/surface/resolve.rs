@@ -76,10 +76,7 @@ fn cut_surface<S: CellSource + ?Sized>(src: &S, recs: &[u32], cut: &Cut, pieces:
         if let Some(&(_, known, _)) = answered.iter().find(|r| r.0 == region) {
             return known;
         }
-        let carried = answered.iter().rev().take(tries).find_map(|&(_, known, q)| {
-            src.boundary_intervals(recs, q, p, &mut scratch);
-            scratch.is_empty().then_some(known)
-        });
+        let carried = answered.iter().rev().take(tries).find_map(|&(_, known, q)| (!src.meets_boundary(recs, q, p, &mut scratch)).then_some(known));
         let known = carried.unwrap_or_else(|| src.cell_contains(recs, p));
         answered.push((region, known, p));
         known
