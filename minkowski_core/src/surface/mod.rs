@@ -101,8 +101,8 @@ pub struct Surface {
     /// The boxes of those edges and vertices, then of the complex cells (at most
     /// [`MAX_OPEN_REPORTED`]).
     pub open_at: Vec<Aabb>,
-    /// Holes under a cell across where polygons met at a crevice or needle thinner than the
-    /// weld tolerance, closed by a fan ([`stitch::close_small_loops`]; their diameter counts
+    /// Holes narrower than the grid's bound where polygons met at a crevice or needle
+    /// thinner than the weld tolerance, closed by a fan ([`stitch::close_small_loops`]; their diameter counts
     /// in `planar_deviation`).
     pub loops_closed: usize,
     /// Copies of vertices made where sheets of the joined surface touch (along a hair-thin
@@ -278,7 +278,8 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -
     s.planar_deviation = planar.deviation;
     if !planar.polys.is_empty() {
         stitch::join(&mut s, &planar.polys, STITCH_TOL * oct.h, (oct.origin, oct.h));
-        let closed = stitch::close_small_loops(&mut s, oct.h);
+        // holes no wider than the grid's bound leaves room for (so the bound stays the grid's)
+        let closed = stitch::close_small_loops(&mut s, (3f64.sqrt() - STITCH_TOL) * oct.h);
         s.loops_closed = closed.loops;
         if closed.loops > 0 {
             // a fill point is within the loop's diameter of a loop vertex, and that within

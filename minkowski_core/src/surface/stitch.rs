@@ -43,7 +43,11 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], tol: f64, lattice: (Vec3, f64)
     }
     split_t_junctions(s, tol);
     fill_face_gaps(s, tol, lattice);
-    if cancel_opposite_twins(&mut s.faces) > 0 {
+    // a triangle two of whose corners welded into one is a segment: no area, and its edges
+    // would count as used twice
+    let before = s.faces.len();
+    s.faces.retain(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0]);
+    if cancel_opposite_twins(&mut s.faces) > 0 || s.faces.len() < before {
         drop_unused_vertices(s);
     }
 }
@@ -413,8 +417,8 @@ pub struct LoopsClosed {
 
 /// Close the small holes left where the polygons of neighbouring cells or sub-cells meet
 /// at a crevice or needle thinner than the weld tolerance (the two sides' corners weld to
-/// different vertices, or not at all, and a few open edges ring a hole less than a cell
-/// across): every loop of open edges at most `size` across is filled by a fan about its
+/// different vertices, or not at all, and a few open edges ring a small hole): every
+/// loop of open edges at most `size` across is filled by a fan about its
 /// centroid. Each loop vertex is a boundary point (an exact polygon corner or edge
 /// crossing, moved by at most the weld tolerance), so every point of the fill lies within
 /// the loop's diameter (plus that tolerance) of the boundary; and the boundary lay on the polygons and band
