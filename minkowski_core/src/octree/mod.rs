@@ -278,8 +278,8 @@ pub fn resolvable<S: CellSource + ?Sized>(src: &S, (sampled, resolved): (&[Aabb]
         return false;
     }
     let key = cell_key(cell, own, 0);
-    if let Some(known) = resolved.get(&key) {
-        return known.is_some();
+    if let Some(known) = resolved.resolves(&key) {
+        return known;
     }
     let surface = resolve_cell(src, cell, own, 0);
     let found = surface.is_some();

@@ -92,8 +92,9 @@ pub struct Surface {
     /// Exact polygons those cells gave.
     pub planar_pieces: usize,
     /// How far the true boundary may lie from those polygons: 0 where they are exact, the
-    /// gap of nearly coincident facet planes taken as one where there were such, or the
-    /// diameter of a small hole closed where they met ([`Surface::loops_closed`]).
+    /// gap of nearly coincident facet planes taken as one where there were such, or how far
+    /// the fill of a small hole closed where they met may lie from it (its diameter and
+    /// its vertices' own distance, [`Surface::loops_closed`]).
     pub planar_deviation: f64,
     /// Edges left open (or used twice), or vertices pinched, where those polygons met the
     /// band: 0 for a closed manifold surface (the caller samples there instead when not).
@@ -102,8 +103,8 @@ pub struct Surface {
     /// [`MAX_OPEN_REPORTED`]).
     pub open_at: Vec<Aabb>,
     /// Holes narrower than the grid's bound where polygons met at a crevice or needle
-    /// thinner than the weld tolerance, closed by a fan ([`stitch::close_small_loops`]; their diameter counts
-    /// in `planar_deviation`).
+    /// thinner than the weld tolerance, closed by a fan ([`stitch::close_small_loops`]; their
+    /// diameter counts in `planar_deviation`).
     pub loops_closed: usize,
     /// Copies of vertices made where sheets of the joined surface touch (along a hair-thin
     /// edge or at a point), one per sheet ([`stitch::unzip_touching_sheets`]).
@@ -278,13 +279,15 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -
     s.planar_deviation = planar.deviation;
     if !planar.polys.is_empty() {
         stitch::join(&mut s, &planar.polys, STITCH_TOL * oct.h, (oct.origin, oct.h));
-        // holes no wider than the grid's bound leaves room for (so the bound stays the grid's)
-        let closed = stitch::close_small_loops(&mut s, (3f64.sqrt() - STITCH_TOL) * oct.h);
+        // a fill point is within its loop's diameter of a loop vertex, and that within the
+        // weld and the polygons' deviation of the boundary (a band vertex is on it, unless
+        // its edge's crossings were inconsistent: then within half the edge); holes up to
+        // what the grid's bound leaves room for are closed, so it stays the grid's
+        let off = STITCH_TOL * oct.h + s.planar_deviation + if s.inconsistent_edges > 0 { 0.5 * 3f64.sqrt() * oct.h } else { 0.0 };
+        let closed = stitch::close_small_loops(&mut s, 3f64.sqrt() * oct.h - off);
         s.loops_closed = closed.loops;
         if closed.loops > 0 {
-            // a fill point is within the loop's diameter of a loop vertex, and that within
-            // the weld of the boundary
-            s.planar_deviation = s.planar_deviation.max(closed.diameter + STITCH_TOL * oct.h);
+            s.planar_deviation = s.planar_deviation.max(closed.diameter + off);
         }
         let (mut open, mut pinched) = open_or_pinched(&s.faces);
         if !open.is_empty() || !pinched.is_empty() {
@@ -400,6 +403,11 @@ impl ResolvedCells {
     /// What `key`'s cell gave, if it was resolved before.
     pub fn get(&self, key: &CellKey) -> Option<Option<CellSurface>> {
         self.lock().get(key).cloned()
+    }
+
+    /// Whether `key`'s cell was resolved, if it was tried before.
+    pub fn resolves(&self, key: &CellKey) -> Option<bool> {
+        self.lock().get(key).map(Option::is_some)
     }
 
     /// Keep what `key`'s cell gave.

@@ -357,6 +357,35 @@ mod tests {
     }
 
     #[test]
+    fn a_split_is_the_two_clips_to_the_bit() {
+        // random convex polygons (sections of the unit cube) and lines, some through corners
+        let cell = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let mut state = 11u64;
+        let mut unit = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut checked = 0;
+        for _ in 0..2000 {
+            let n = Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize();
+            let poly = plane_section(&cell, n, n.dot(Vec3::splat(0.5)) + 0.3 * (unit() - 0.5));
+            if poly.len() < 3 {
+                continue;
+            }
+            let m = Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize();
+            // through a corner of the polygon half the time, so corners lie on the line
+            let v = if unit() < 0.5 { m.dot(poly[0]) } else { m.dot(Vec3::splat(unit())) };
+            let min_area = 1e-12;
+            let expected: Vec<Vec<Vec3>> = [clip(&poly, m, v), clip(&poly, -m, -v)].into_iter().filter(|p| area(p) > min_area).collect();
+            let mut got = Vec::new();
+            split(poly, (m, v), min_area, &mut got);
+            assert_eq!(got, expected);
+            checked += 1;
+        }
+        assert!(checked > 1000);
+    }
+
+    #[test]
     fn thin_cuts_are_not_resolved_and_parallel_ones_are() {
         let cell = Aabb::new(Vec3::ZERO, Vec3::ONE);
         let mut cut = Cut::new();

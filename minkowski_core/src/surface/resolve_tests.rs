@@ -94,3 +94,28 @@ fn a_second_extraction_takes_the_kept_resolutions_and_gives_the_same_surface() {
     assert_eq!(again_src.queries.load(Ordering::Relaxed), first.point_queries);
     assert!(fresh_src.queries.load(Ordering::Relaxed) > first.point_queries + 100);
 }
+
+#[test]
+fn the_extraction_takes_the_surfaces_the_octree_resolved() {
+    let src = ExactSource::new(vec![torus_mesh(10.0, 3.0, 24, 12)], sphere_mesh(0.9, 12, 7), 0.0, None);
+    let counted = || Counted { src: &src, carry: true, queries: AtomicUsize::new(0) };
+    let (shared_src, fresh_src) = (counted(), counted());
+    let shared = super::ResolvedCells::default();
+    let oct = Octree::build_resolving_planes(&shared_src, &src.aabb, 0.15, 4_000_000, &[], &shared).unwrap();
+    let built = shared_src.queries.swap(0, Ordering::Relaxed);
+    let with = super::extract(&oct, &shared_src, &shared);
+    let without = super::extract(&oct, &fresh_src, &super::ResolvedCells::default());
+    assert_eq!((&with.vertices, &with.faces), (&without.vertices, &without.faces));
+    assert!(with.planar_cells > 100, "{} plane-resolved cells", with.planar_cells);
+    // every cell above the finest level with a surface was resolved (a point query at
+    // least: its first region) by the build, and not again
+    let above = oct
+        .leaves
+        .iter()
+        .filter(|l| l.label == Label::Mixed && l.level > 0)
+        .filter(|l| shared.get(&super::cell_key(&oct.cell_box(l), oct.records(l), 0)).is_some_and(|c| c.is_some_and(|c| !c.polys.is_empty())))
+        .count();
+    let (q_with, q_without) = (shared_src.queries.into_inner(), fresh_src.queries.into_inner());
+    assert!(built > 0 && above > 100, "{built} queries building, {above} cells resolved above the finest level");
+    assert!(q_with + above <= q_without, "{q_with} queries with the build's cache, {q_without} without");
+}

@@ -41,15 +41,22 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], tol: f64, lattice: (Vec3, f64)
             }
         }
     }
-    split_t_junctions(s, tol);
-    fill_face_gaps(s, tol, lattice);
     // a triangle two of whose corners welded into one is a segment: no area, and its edges
     // would count as used twice
-    let before = s.faces.len();
-    s.faces.retain(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0]);
-    if cancel_opposite_twins(&mut s.faces) > 0 || s.faces.len() < before {
+    let mut dropped = drop_degenerate(&mut s.faces);
+    split_t_junctions(s, tol);
+    fill_face_gaps(s, tol, lattice);
+    dropped += drop_degenerate(&mut s.faces);
+    if cancel_opposite_twins(&mut s.faces) > 0 || dropped > 0 {
         drop_unused_vertices(s);
     }
+}
+
+/// Remove the triangles with a corner twice (segments, of no area). Returns how many went.
+fn drop_degenerate(faces: &mut Vec<[u32; 3]>) -> usize {
+    let before = faces.len();
+    faces.retain(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0]);
+    before - faces.len()
 }
 
 /// Remove every pair of a triangle and its reverse (the same corners, facing the other
@@ -191,7 +198,8 @@ pub fn pinched_vertices(faces: &[[u32; 3]]) -> Vec<u32> {
 /// tolerance there, so their corners welded), which leaves an edge used twice each way or
 /// a pinched vertex. About such a vertex the triangles fall into fans that each close
 /// (the simple cycles of its link); every fan but the first gets a copy of the vertex at
-/// the same place. `at`: the vertices to look at (the ends of open edges, pinched ones).
+/// the same place. `at`: the vertices to look at (the ends of open edges, or the pinched
+/// vertices when there are none).
 /// Nothing moves, so the surface is the same point set; edges left open (a real hole) are
 /// left to the caller. Returns how many copies were made.
 pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>) -> usize {
@@ -411,22 +419,24 @@ pub struct LoopsClosed {
     /// How many loops.
     pub loops: usize,
     /// The largest diameter (box diagonal) of one: how far a point of the fill may lie
-    /// from the boundary.
+    /// from its loop's vertices.
     pub diameter: f64,
 }
 
 /// Close the small holes left where the polygons of neighbouring cells or sub-cells meet
 /// at a crevice or needle thinner than the weld tolerance (the two sides' corners weld to
 /// different vertices, or not at all, and a few open edges ring a small hole): every
-/// loop of open edges at most `size` across is filled by a fan about its
-/// centroid. Each loop vertex is a boundary point (an exact polygon corner or edge
-/// crossing, moved by at most the weld tolerance), so every point of the fill lies within
-/// the loop's diameter (plus that tolerance) of the boundary; and the boundary lay on the polygons and band
-/// triangles already, so the fill removes none of it. Larger loops are left (the caller
-/// sees them open).
+/// loop of edges used once with no reverse, at most `size` across, is filled by a fan
+/// about its centroid (edges used twice are sheets touching, left to
+/// [`unzip_touching_sheets`]). Each loop vertex is a polygon corner (within the weld
+/// tolerance and the polygons' own deviation of the boundary) or a band crossing (on it),
+/// so every point of the fill lies within the loop's diameter plus those of the boundary;
+/// and the boundary lay on the polygons and band triangles already, so the fill removes
+/// none of it. Larger loops are left (the caller sees them open).
 pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
-    let open = open_edges(&s.faces);
     let mut out = LoopsClosed::default();
+    // edges used once with no reverse: listed once (one used k > 1 times is listed k times)
+    let open: Vec<(u32, u32)> = open_edges(&s.faces).chunk_by(|x, y| x == y).filter(|g| g.len() == 1).map(|g| g[0]).collect();
     if open.is_empty() {
         return out;
     }
