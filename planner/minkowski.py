@@ -151,6 +151,15 @@ def _grid_eps(box: np.ndarray, diag: float, eps, max_cells: int, *, from_memory:
     return eps_value
 
 
+def bound_by_region(surf: dict) -> dict[str, float]:
+    """The native surface ``surf``'s two-sided bound by the kind of region it holds for
+    (``error_bound`` is the largest): ``planes``, cells resolved by facet planes (0: exact;
+    the gap of planes taken as one, or a small hole closed, otherwise); ``sampled``, the
+    band sampled at eps (the grid's bound; 0 without one); ``missed``, cells where the
+    lattice may have missed boundary (their reach; 0 without any)."""
+    return {key: float(surf[f"bound_{key}"]) for key in ("planes", "sampled", "missed")}
+
+
 def _cell_totals(per_level) -> dict[str, int]:
     """Leaves per label over all levels."""
     return {name: int(sum(c[i] for c in per_level))
@@ -296,6 +305,7 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
         "planar_cells": int(surf["planar_cells"]),
         "planar_pieces": int(surf["planar_pieces"]),
         "planes_fallback_edges": int(surf["planes_fallback_edges"]),
+        "bound_by_region": bound_by_region(surf),
         "holes_closed": int(surf["holes_closed"]),
         "sheets_unzipped": int(surf["sheets_unzipped"]),
         "threads": core.num_threads(),

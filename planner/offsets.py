@@ -33,6 +33,7 @@ from planner.errors import GeometryError, InvalidParameterError, ResourceLimitEr
 
 from .meshes import load_mesh
 from .meshes.kinds import classify
+from .minkowski import bound_by_region
 from .progress import StatusLine
 from .tolerances import tol
 
@@ -134,6 +135,7 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
              "h": float(raw["h"]), "refinements": int(raw["refinements"]),
              "planar_cells": int(raw["planar_cells"]), "planar_pieces": int(raw["planar_pieces"]),
              "planes_fallback_edges": int(raw["planes_fallback_edges"]),
+             "bound_by_region": bound_by_region(raw),
              "holes_closed": int(raw["holes_closed"]),
              "sheets_unzipped": int(raw["sheets_unzipped"]),
              "seconds": time.perf_counter() - t0}

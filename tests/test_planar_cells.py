@@ -50,6 +50,8 @@ def test_box_sum_is_its_six_faces():
     r = exact_sum(a, b)
     assert len(r.mesh.faces) == 12
     assert r.stats["band_cells"] == 0 and r.stats["planar_cells"] > 0
+    # exact where resolved by planes, and nothing was sampled or missed
+    assert r.stats["bound_by_region"] == {"planes": 0.0, "sampled": 0.0, "missed": 0.0}
     corners = np.array([[x, y, z] for x in (-1.3, 1.3) for y in (-0.7, 0.7) for z in (-0.85, 0.85)])
     assert np.abs(np.sort(r.mesh.vertices, axis=0) - np.sort(corners, axis=0)).max() < 1e-12
 
@@ -166,6 +168,9 @@ def test_a_crevice_thinner_than_the_weld_is_closed_within_the_bound_without_samp
     # where two sheets of it come within the weld (a few places on this part), each sheet
     # gets its own vertices, so nothing is sampled around: the join is closed at once
     assert r.stats["sheets_unzipped"] > 0 and r.stats["planes_fallback_edges"] == 0
+    # the closed holes are what the plane-resolved part's bound holds for, within the grid's
+    by_region = r.stats["bound_by_region"]
+    assert 0.0 < by_region["planes"] <= r.error_bound and by_region["missed"] <= r.error_bound
     assert r.error_bound <= 2.0 * r.stats["eps"]
     # the crevice is there in the true sum: free points at its mouth
     mouth = np.array([[-4.30, 0.60, -3.60], [-4.30, 0.60, -2.45]])

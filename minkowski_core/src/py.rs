@@ -203,6 +203,12 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("planar_pieces", s.planar_pieces)?;
     d.set_item("planar_deviation", s.planar_deviation)?;
     d.set_item("planes_fallback_edges", r.planes_fallback_edges)?;
+    // the bound by where it comes from: plane-resolved cells (0: exact), the sampled band
+    // (the grid's), and cells where the lattice may have missed boundary (their reach)
+    let grid = crate::union::grid_error_bound(r.h);
+    d.set_item("bound_planes", s.planar_deviation)?;
+    d.set_item("bound_sampled", if s.band_cells > 0 { grid } else { 0.0 })?;
+    d.set_item("bound_missed", crate::surface::loose_reach(s, 2.0 * grid))?;
     d.set_item("holes_closed", s.loops_closed)?;
     d.set_item("sheets_unzipped", s.sheets_unzipped)?;
     Ok(d)
