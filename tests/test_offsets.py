@@ -116,6 +116,9 @@ def test_a_torus_keeps_its_hole_until_the_radius_fills_it(r, genus):
     result = planner.offset(torus, r, eps=0.05)  # the hole's radius is about 0.7
     euler = result.mesh.euler_number
     assert result.mesh.is_watertight and euler == 2 - 2 * genus, euler
+    # the bound by region kind: round parts sampled at the grid's, none above the total
+    by_region = result.stats["bound_by_region"]
+    assert 0.0 < by_region["sampled"] and max(by_region.values()) <= result.error_bound
 
 
 def test_an_opening_removes_a_fin_thinner_than_twice_the_radius():

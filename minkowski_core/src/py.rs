@@ -208,7 +208,7 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     let grid = crate::union::grid_error_bound(r.h);
     d.set_item("bound_planes", s.planar_deviation)?;
     d.set_item("bound_sampled", if s.band_cells > 0 { grid } else { 0.0 })?;
-    d.set_item("bound_missed", crate::surface::loose_reach(s, 2.0 * grid))?;
+    d.set_item("bound_missed", r.missed_reach)?;
     d.set_item("holes_closed", s.loops_closed)?;
     d.set_item("sheets_unzipped", s.sheets_unzipped)?;
     Ok(d)

@@ -45,6 +45,9 @@ pub struct UnionResult {
     /// this surface: `grid_error_bound(h)`, and where the lattice may have missed boundary
     /// (loose cells) at least its reach ([`loose_reach`]).
     pub error_bound: f64,
+    /// The part of the bound from cells where the lattice may have missed boundary (their
+    /// [`loose_reach`], taken on the surface before simplification: it measures to vertices).
+    pub missed_reach: f64,
     /// Grid halvings done.
     pub refinements: u32,
     /// Leaves per level and label of the final octree.
@@ -168,6 +171,7 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
             }
         }
         let bound = surface_error_bound(&surface, h);
+        let missed_reach = loose_reach(&surface, 2.0 * grid_error_bound(h));
         // complex cells within the unresolved cells' allowance need no finer grid
         let done = bound <= (2.0 * grid_error_bound(h)).max(surface.planar_deviation);
         let next_fits = 4 * (oct.leaves.len() + surface.band_cells) <= params.max_cells;
@@ -175,6 +179,7 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
             surface,
             h,
             error_bound: bound,
+            missed_reach,
             refinements: round,
             level_counts: oct.level_counts(),
             seconds_octree: t_oct,
