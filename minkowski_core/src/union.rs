@@ -97,10 +97,11 @@ pub fn grid_error_bound(h: f64) -> f64 {
 /// The bound that holds for `surface` extracted at cell size `h`: the grid's, the loose
 /// cells' reach ([`loose_reach`]: how far boundary the lattice did not see may lie from the
 /// surface, at most twice the grid's next to a sign change) or the plane-resolved cells'
-/// deviation, whichever is largest.
-pub fn surface_error_bound(surface: &Surface, h: f64) -> f64 {
+/// deviation, whichever is largest; and, of those, the loose cells' reach.
+pub fn surface_error_bound(surface: &Surface, h: f64) -> (f64, f64) {
     let grid = grid_error_bound(h);
-    grid.max(loose_reach(surface, 2.0 * grid)).max(surface.planar_deviation)
+    let missed = loose_reach(surface, 2.0 * grid);
+    (grid.max(missed).max(surface.planar_deviation), missed)
 }
 
 /// Approximate the boundary of the union of `set` at resolution `params.eps`: the grid has
@@ -170,8 +171,7 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
                 continue;
             }
         }
-        let bound = surface_error_bound(&surface, h);
-        let missed_reach = loose_reach(&surface, 2.0 * grid_error_bound(h));
+        let (bound, missed_reach) = surface_error_bound(&surface, h);
         // complex cells within the unresolved cells' allowance need no finer grid
         let done = bound <= (2.0 * grid_error_bound(h)).max(surface.planar_deviation);
         let next_fits = 4 * (oct.leaves.len() + surface.band_cells) <= params.max_cells;
