@@ -152,23 +152,9 @@ pub fn pinched_vertices(faces: &[[u32; 3]]) -> Vec<u32> {
     let Some(n) = faces.iter().flatten().max().map(|&v| v as usize + 1) else {
         return Vec::new();
     };
-    // per vertex (a counting sort): the edges opposite it, its link's directed edges
-    let mut start = vec![0usize; n + 1];
-    for &v in faces.iter().flatten() {
-        start[v as usize + 1] += 1;
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut link = vec![(0u32, 0u32); start[n]];
-    for f in faces {
-        for i in 0..3 {
-            let v = f[i] as usize;
-            link[fill[v]] = (f[(i + 1) % 3], f[(i + 2) % 3]);
-            fill[v] += 1;
-        }
-    }
+    // per vertex: the edges opposite it, its link's directed edges
+    let corners = || faces.iter().flat_map(|f| (0..3).map(move |i| (f[i] as usize, (f[(i + 1) % 3], f[(i + 2) % 3]))));
+    let (start, mut link) = buckets(n, corners);
     let mut out = Vec::new();
     for v in 0..n {
         let star = &mut link[start[v]..start[v + 1]];
@@ -257,6 +243,25 @@ fn fans(faces: &[[u32; 3]], v: u32, tris: &[usize]) -> Vec<Vec<usize>> {
     fans
 }
 
+/// The values of `items()` (key below `n`, value) grouped by key (a counting sort): key
+/// `k`'s are `values[start[k]..start[k + 1]]`. `items` is called twice (count, then place).
+fn buckets<T: Copy + Default, I: Iterator<Item = (usize, T)>>(n: usize, items: impl Fn() -> I) -> (Vec<usize>, Vec<T>) {
+    let mut start = vec![0usize; n + 1];
+    for (k, _) in items() {
+        start[k + 1] += 1;
+    }
+    for k in 0..n {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut values = vec![T::default(); start[n]];
+    for (k, v) in items() {
+        values[fill[k]] = v;
+        fill[k] += 1;
+    }
+    (start, values)
+}
+
 /// Directed edges used by one triangle whose reverse no triangle uses, and directed edges
 /// used more than once (both break a closed manifold), in order; an edge used `k > 1`
 /// times is listed `k` times. Edges are bucketed by their lower vertex (a counting sort),
@@ -267,20 +272,8 @@ pub fn open_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
     };
     let directed = || faces.iter().flat_map(|f| (0..3).map(move |i| (f[i], f[(i + 1) % 3])));
     // per lower vertex: (upper vertex, whether the edge runs from upper to lower)
-    let mut start = vec![0usize; n + 1];
-    for (a, b) in directed() {
-        start[a.min(b) as usize + 1] += 1;
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut items = vec![0u64; start[n]];
-    for (a, b) in directed() {
-        let lo = a.min(b) as usize;
-        items[fill[lo]] = (u64::from(a.max(b)) << 1) | u64::from(a > b);
-        fill[lo] += 1;
-    }
+    let keyed = || directed().map(|(a, b)| (a.min(b) as usize, (u64::from(a.max(b)) << 1) | u64::from(a > b)));
+    let (start, mut items) = buckets(n, keyed);
     let mut out = Vec::new();
     for lo in 0..n {
         let list = &mut items[start[lo]..start[lo + 1]];
