@@ -46,7 +46,7 @@ pub struct Tri {
 }
 
 impl Tri {
-    fn new(p: [Vec3; 3]) -> Tri {
+    pub(crate) fn new(p: [Vec3; 3]) -> Tri {
         let e = [p[1] - p[0], p[2] - p[1], p[0] - p[2]];
         let n = unit(e[0].cross(e[1]), e[0].length() * e[1].length());
         let m = [unit(n.cross(e[0]), e[0].length()), unit(n.cross(e[1]), e[1].length()), unit(n.cross(e[2]), e[2].length())];

@@ -54,7 +54,7 @@ pub use convolution::{convolution, convolution_within, Facet, FlatPlanes};
 use convolution::{convolution_scan, planar_regions};
 pub use depth::{facet_nearest, Depth};
 pub use mesh::{MeshNode, Tri, TriMesh};
-pub use piece::{pair_contains_point, Piece};
+pub use piece::{pair_box_relation, pair_contains_box, pair_contains_point, BoxRelation, Piece};
 
 use crate::bvh::Bvh;
 use crate::error::{CoreError, CoreResult};
@@ -296,13 +296,13 @@ impl ExactSource {
     fn piece_contains_box(&self, cell: &Aabb) -> Option<Witness> {
         for k in 0..self.obstacles.len() {
             let mut hit = None;
-            self.any_piece(
+            let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+            self.any_pair(
                 k,
                 self.margin,
-                true,
                 |bx| bx.min.cmple(cell.min).all() && cell.max.cmple(bx.max).all(),
-                |piece, i, j| {
-                    if piece.contains_box(cell) {
+                |i, j| {
+                    if pair_contains_box(&ta[i], &tb[j], self.margin, cell) {
                         hit = Some(Witness::Piece { k, i, j });
                     }
                     hit.is_some()
@@ -557,7 +557,11 @@ impl ExactSource {
         self.fbvh.for_each_overlapping(cell, |i| {
             touched = touched || self.facets[i].overlaps_box(cell, self.margin);
         });
-        touched = touched || self.piece_pairs.iter().any(|&k| self.any_piece(k, self.margin, true, |bx| bx.overlaps(cell), |piece, _, _| piece.overlaps_box(cell)));
+        touched = touched
+            || self.piece_pairs.iter().any(|&k| {
+                let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
+                self.any_pair(k, self.margin, |bx| bx.overlaps(cell), |i, j| pair_box_relation(&ta[i], &tb[j], self.margin, cell) != BoxRelation::Apart)
+            });
         if touched || self.walls.is_some_and(|w| !(w.min.cmplt(cell.min).all() && cell.max.cmplt(w.max).all())) {
             return None;
         }
@@ -598,8 +602,10 @@ impl ExactSource {
     /// is much larger than the cell, then kept as one record (a leaf pair, or a small
     /// inner pair) when one piece below them meets the cell, tested exactly and stopping
     /// at the first; so a cell's list stays about as long as the pairs of its size, not
-    /// all pieces. Whether one piece contains the whole cell (then it is FULL).
-    fn refine_pair(&self, k: usize, start: [u32; 2], cell: &Aabb, out: &mut Vec<u32>) -> bool {
+    /// all pieces. Whether one piece contains the whole cell (then it is FULL); `unchecked`
+    /// is set when some piece that meets the cell may not have been asked (a record kept
+    /// above the leaves).
+    fn refine_pair(&self, k: usize, start: [u32; 2], cell: &Aabb, out: &mut Vec<u32>, unchecked: &mut bool) -> bool {
         let m = self.margin;
         let big = 2.0 * cell.extent().max_element();
         let (ta, tb) = (&self.obstacles[k].tris, &self.b.tris);
@@ -620,10 +626,13 @@ impl ExactSource {
                 [a, b],
                 m,
                 |q| q.overlaps(cell),
-                |i, j| {
-                    let piece = Piece::new(&ta[i], &tb[j], m, true);
-                    full = piece.contains_box(cell);
-                    full || piece.overlaps_box(cell)
+                |i, j| match pair_box_relation(&ta[i], &tb[j], m, cell) {
+                    BoxRelation::Apart => false,
+                    BoxRelation::Meets => true,
+                    BoxRelation::Inside => {
+                        full = true;
+                        true
+                    }
                 },
             );
             if full {
@@ -631,6 +640,7 @@ impl ExactSource {
             }
             if meets {
                 out.extend([PAIR, k as u32, a, b]);
+                *unchecked |= !leaf;
             }
         }
         false
@@ -698,6 +708,10 @@ impl CellSource for ExactSource {
     }
 
     fn classify_near(&self, cell: &Aabb, cand: &[u32], finest: bool, known: Option<(Vec3, bool)>, out: &mut Vec<u32>) -> Label {
+        // whether a piece that contains the cell may not have been asked yet: the pieces of
+        // solid pairs are no records, and a pair record kept above the leaves was asked
+        // only up to its first piece that meets the cell
+        let mut unchecked = self.piece_pairs.len() < self.obstacles.len();
         for rec in records(cand) {
             match rec {
                 Rec::Wall(side) => {
@@ -716,7 +730,7 @@ impl CellSource for ExactSource {
                     }
                 }
                 Rec::Pair(k, a, b) => {
-                    if self.refine_pair(k, [a, b], cell, out) {
+                    if self.refine_pair(k, [a, b], cell, out, &mut unchecked) {
                         out.clear();
                         return Label::Full;
                     }
@@ -733,7 +747,7 @@ impl CellSource for ExactSource {
         // interior culling: a cell inside the solid is FULL and never split; the surface
         // needs that only above the finest level, the planner's certificates everywhere
         let witness = self.full_witness || !finest;
-        if witness && cell.extent().max_element() <= self.max_piece && self.piece_contains_box(cell).is_some() {
+        if witness && unchecked && cell.extent().max_element() <= self.max_piece && self.piece_contains_box(cell).is_some() {
             out.clear();
             return Label::Full;
         }

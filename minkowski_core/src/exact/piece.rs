@@ -21,48 +21,107 @@ pub struct Piece<'a> {
     n: usize,
 }
 
-/// Whether `p` lies in the closed `t ⊕ s` grown by the cube of half-width `m`: the same
-/// directions as [`Piece`], computed one at a time and unnormalised (every test is
-/// homogeneous in the direction), so a far point costs a few dot products and no piece is
-/// built.
+/// How a piece lies against a closed box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BoxRelation {
+    /// They do not meet.
+    Apart,
+    /// They meet; the box is not inside the piece.
+    Meets,
+    /// The box lies inside the piece.
+    Inside,
+}
+
+/// Visit the directions of [`Piece`] for `t ⊕ s` (with the axes and edge × axis products
+/// when `with_axes`), one at a time and unnormalised, until `f` returns false; whether
+/// every direction passed. Every test the pieces make is homogeneous in the direction, so
+/// no normalisation is needed, and a test that fails early costs a few dot products.
 #[inline]
-pub fn pair_contains_point(t: &Tri, s: &Tri, m: f64, p: Vec3) -> bool {
-    let outside = |d: Vec3| {
-        let g = m * (d.x.abs() + d.y.abs() + d.z.abs());
-        let x = p.dot(d);
-        x > t.support(d) + s.support(d) + g || -x > t.support(-d) + s.support(-d) + g
-    };
-    if outside(t.n) || outside(s.n) {
+fn all_dirs(t: &Tri, s: &Tri, with_axes: bool, mut f: impl FnMut(Vec3) -> bool) -> bool {
+    // the axes first: the cheapest tests, and the box tests' commonest rejections
+    if with_axes && ![Vec3::X, Vec3::Y, Vec3::Z].into_iter().all(&mut f) {
         return false;
     }
-    for k in 0..3 {
-        if outside(t.m[k]) || outside(s.m[k]) {
-            return false;
-        }
+    let nonzero = |d: Vec3| d != Vec3::ZERO;
+    if !(std::iter::once(t.n).chain(std::iter::once(s.n)).chain(t.m).chain(s.m).filter(|&d| nonzero(d)).all(&mut f)) {
+        return false;
     }
     for et in &t.e {
         for es in &s.e {
             let d = et.cross(*es);
             // the same cut-off as `unit(…, 1e3 |et| |es|)`
-            if d.length_squared() > 1e-18 * et.length_squared() * es.length_squared() && outside(d) {
+            if d.length_squared() > 1e-18 * et.length_squared() * es.length_squared() && !f(d) {
                 return false;
             }
         }
     }
-    if m > 0.0 {
+    if with_axes {
         for a in [Vec3::X, Vec3::Y, Vec3::Z] {
-            if outside(a) {
-                return false;
-            }
             for e in t.e.iter().chain(&s.e) {
                 let d = e.cross(a);
-                if d.length_squared() > 1e-18 * e.length_squared() && outside(d) {
+                if d.length_squared() > 1e-18 * e.length_squared() && !f(d) {
                     return false;
                 }
             }
         }
     }
     true
+}
+
+/// `(min, max)` of `x · d` over `t ⊕ s ⊕ [-m, m]^3`: minus the support of `-d`, and the
+/// support of `d`, from the six corner products.
+#[inline]
+fn pair_range(t: &Tri, s: &Tri, m: f64, d: Vec3) -> (f64, f64) {
+    let (a0, a1, a2) = (t.p[0].dot(d), t.p[1].dot(d), t.p[2].dot(d));
+    let (b0, b1, b2) = (s.p[0].dot(d), s.p[1].dot(d), s.p[2].dot(d));
+    let g = m * (d.x.abs() + d.y.abs() + d.z.abs());
+    (a0.min(a1).min(a2) + b0.min(b1).min(b2) - g, a0.max(a1).max(a2) + b0.max(b1).max(b2) + g)
+}
+
+/// Whether `p` lies in the closed `t ⊕ s` grown by the cube of half-width `m`: the
+/// directions of [`Piece`], one at a time (see [`all_dirs`]), so a far point costs a few
+/// dot products and no piece is built.
+#[inline]
+pub fn pair_contains_point(t: &Tri, s: &Tri, m: f64, p: Vec3) -> bool {
+    all_dirs(t, s, m > 0.0, |d| {
+        let x = p.dot(d);
+        let (lo, hi) = pair_range(t, s, m, d);
+        lo <= x && x <= hi
+    })
+}
+
+/// How the closed `t ⊕ s` grown by the cube of half-width `m` lies against the closed box
+/// `b` (separating axes for meeting, every facet direction for inside; exact), as
+/// [`Piece::overlaps_box`] and [`Piece::contains_box`] would say, stopping at the first
+/// separating direction.
+#[inline]
+pub fn pair_box_relation(t: &Tri, s: &Tri, m: f64, b: &Aabb) -> BoxRelation {
+    let (c, h) = (b.center(), b.half());
+    let mut inside = true;
+    let meets = all_dirs(t, s, true, |d| {
+        let (x, r) = (c.dot(d), h.dot(d.abs()));
+        let (lo, hi) = pair_range(t, s, m, d);
+        inside &= x + r <= hi && lo <= x - r;
+        hi >= x - r && lo <= x + r
+    });
+    match (meets, inside) {
+        (false, _) => BoxRelation::Apart,
+        (true, false) => BoxRelation::Meets,
+        (true, true) => BoxRelation::Inside,
+    }
+}
+
+/// Whether the closed `t ⊕ s` grown by the cube of half-width `m` contains the closed box
+/// `b`, as [`Piece::contains_box`] would say, stopping at the first direction that shows a
+/// corner outside.
+#[inline]
+pub fn pair_contains_box(t: &Tri, s: &Tri, m: f64, b: &Aabb) -> bool {
+    let (c, h) = (b.center(), b.half());
+    all_dirs(t, s, true, |d| {
+        let (x, r) = (c.dot(d), h.dot(d.abs()));
+        let (lo, hi) = pair_range(t, s, m, d);
+        x + r <= hi && lo <= x - r
+    })
 }
 
 impl<'a> Piece<'a> {

@@ -127,3 +127,50 @@ fn solid_pairs_over_the_facet_budget_are_taken_piece_by_piece_exactly() {
     assert!(pieces.contains_point(Vec3::new(1.5, 0.0, 0.0)));
     assert!(!pieces.contains_point(Vec3::ZERO), "the hole");
 }
+
+/// The lazy pair tests (one unnormalised direction at a time, stopping at the first that
+/// decides) say what a built [`Piece`] says, on random triangles (some flat, some with an
+/// edge collapsed), margins and boxes around, across and inside the pieces.
+#[test]
+fn lazy_pair_tests_agree_with_the_built_piece() {
+    let mut rng = Lcg(11);
+    let unit = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+    let (mut inside, mut meets, mut apart) = (0, 0, 0);
+    for case in 0..4000 {
+        let mut corners = || [rng.point(&unit), rng.point(&unit), rng.point(&unit)];
+        let (mut p, mut q) = (corners(), corners());
+        match case % 5 {
+            0 => p[2] = p[0] + (p[1] - p[0]) * 0.5, // collinear: a flat, degenerate triangle
+            1 => q[1] = q[0],                       // an edge collapsed
+            2 => p.iter_mut().for_each(|v| v.z = 0.25), // parallel to an axis plane
+            _ => {}
+        }
+        let (t, s) = (Tri::new(p), Tri::new(q));
+        let m = if case % 3 == 0 { 0.05 } else { 0.0 };
+        let piece = Piece::new(&t, &s, m, true);
+        // a point of the piece, moved a little or a lot
+        let mut bary = |x: [Vec3; 3]| {
+            let (u, v) = (rng.next(), rng.next());
+            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+            x[0] + (x[1] - x[0]) * u + (x[2] - x[0]) * v
+        };
+        let on = bary(p) + bary(q);
+        let c = on + rng.point(&unit) * if case % 4 < 2 { 0.1 } else { 1.0 };
+        let h = Vec3::new(rng.next(), rng.next(), rng.next()) * if case % 2 == 0 { 0.02 } else { 0.4 };
+        let bx = Aabb::new(c - h, c + h);
+        let want = match (piece.overlaps_box(&bx), piece.contains_box(&bx)) {
+            (false, _) => BoxRelation::Apart,
+            (true, false) => BoxRelation::Meets,
+            (true, true) => BoxRelation::Inside,
+        };
+        assert_eq!(pair_box_relation(&t, &s, m, &bx), want, "case {case}");
+        assert_eq!(pair_contains_box(&t, &s, m, &bx), want == BoxRelation::Inside, "case {case}");
+        assert_eq!(pair_contains_point(&t, &s, m, c), piece.contains_point(c), "case {case}");
+        match want {
+            BoxRelation::Inside => inside += 1,
+            BoxRelation::Meets => meets += 1,
+            BoxRelation::Apart => apart += 1,
+        }
+    }
+    assert!(inside > 100 && meets > 500 && apart > 500, "{inside} inside, {meets} meet, {apart} apart");
+}
