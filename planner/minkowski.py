@@ -205,7 +205,12 @@ def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bo
         dec_b = source.decomposition(parts[1])  # type: ignore[attr-defined]
         box = _result_box(parts[0].mesh, parts[1].mesh, mirror_b)
         diag = float(np.linalg.norm(box[1] - box[0]))
-        eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory, names=names)
+        if len(dec_a.pieces) == 1 and len(dec_b.pieces) == 1:
+            # one convex sum: the core gives its hull, exact, with no grid to budget
+            eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
+        else:
+            eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory,
+                                  names=names)
         line.show(f"{what}: pairwise sums of the pieces")
         t0 = time.perf_counter()
         pair = source.pair(*parts, mirror_b=mirror_b)

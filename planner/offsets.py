@@ -7,7 +7,10 @@ sources of the native octree (:mod:`minkowski_core::offset`): cells classified b
 distances to ``P``'s triangles (never a sum with a polyhedral ball), the surface extracted
 with the grid's two-sided error bound. Flat parts (the prisms over faces; all of an
 eroded box) are exact: cells in the column over one face are cut by its offset plane at
-their size (``stats["planar_pieces"]``), only the round parts are sampled.
+their size (``stats["planar_pieces"]``), only the round parts are sampled. One convex
+body needs no grid (:mod:`.offsets_convex`): grown, the hull of its vertices' balls
+tessellated within ``eps`` (its flat faces exact); eroded, its face planes moved inward
+(exact); ``stats["convex"]`` says so.
 ``opening(P, r)`` erodes then grows (removing features thinner than ``2 r``),
 ``closing(P, r)`` grows then erodes (filling gaps narrower than ``2 r``). Their
 ``error_bound`` is ``inf``: an erosion is not continuous in its input (a neck a hair
@@ -34,6 +37,7 @@ from planner.errors import GeometryError, InvalidParameterError, ResourceLimitEr
 from .meshes import load_mesh
 from .meshes.kinds import classify
 from .minkowski import bound_by_region
+from .offsets_convex import convex_offset
 from .progress import StatusLine
 from .tolerances import tol
 
@@ -83,7 +87,8 @@ def _radius(r: float) -> float:
 
 
 def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
-           name: str = "mesh", progress: bool | None = None) -> OffsetResult:
+           name: str = "mesh", progress: bool | None = None,
+           convex: bool = True) -> OffsetResult:
     """The offset of the closed solid ``mesh`` (a trimesh, ``(V, F)`` or a mesh file) by
     ``r``: grown for ``r > 0``, eroded for ``r < 0``.
 
@@ -94,6 +99,8 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
             limit: :mod:`planner.budget`).
         progress: a status line on stderr while the surface is built
             (:mod:`planner.progress`; ``None``: only when stderr is a terminal).
+        convex: offset one convex body without a grid (:mod:`planner.offsets_convex`);
+            ``False``: the cell source for every solid.
 
     Raises:
         InvalidMeshError: ``mesh`` is not a closed solid.
@@ -112,12 +119,22 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     step = tol.eps_rel * diagonal if eps is None else float(eps)
     if not (math.isfinite(step) and step > 0):
         raise InvalidParameterError(f"eps = {eps!r}: must be a positive finite number")
+    verb = "growing" if radius > 0 else "eroding"
+    with StatusLine(progress) as line:
+        line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
+        hull = convex_offset(solid, radius, step) if convex else None
+    if hull is not None:
+        grown_or_eroded, bound, stats = hull
+        if len(grown_or_eroded.faces) == 0:
+            raise GeometryError(f"{name}: nothing is left of it eroded by {-radius:g} (its "
+                                f"thickest part is thinner than {2 * -radius:g})")
+        stats["seconds"] = time.perf_counter() - t0
+        return OffsetResult(grown_or_eroded, radius, bound, step, stats)
     checked = CheckedMesh(np.asarray(solid.vertices, dtype=np.float64),
                           np.asarray(solid.faces, dtype=np.int64), name=name)
     from . import budget  # noqa: PLC0415
 
     cells, _ = budget.surface_cells(max_cells)
-    verb = "growing" if radius > 0 else "eroding"
     with StatusLine(progress) as line:
         line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
         try:

@@ -106,12 +106,15 @@ def test_a_small_limit_refuses_the_exact_sum_that_the_default_computes():
 
 
 def test_a_small_limit_refuses_the_grid_an_explicit_budget_names_max_cells():
-    box = trimesh.creation.box((1, 1, 1))
+    from shapes import l_bracket
+
+    # not convex: the sum needs a grid (one convex sum is its hull, with none)
+    bracket, box = l_bracket(), trimesh.creation.box((1, 1, 1))
     with planner.memory_limit(0.002), pytest.raises(ResourceLimitError,
                                                     match="--memory-limit is 0.002 GiB"):
-        planner.minkowski_sum(box, box, eps=0.01)
+        planner.minkowski_sum(bracket, box, eps=0.01)
     with pytest.raises(ResourceLimitError, match="raise max_cells"):
-        planner.minkowski_sum(box, box, eps=0.01, max_cells=1000)
+        planner.minkowski_sum(bracket, box, eps=0.01, max_cells=1000)
 
 
 def test_a_small_limit_refuses_the_planners_cspace():

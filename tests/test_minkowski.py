@@ -201,6 +201,35 @@ def test_convex_volume_within_bound(convex_case):
     assert abs(r.mesh.volume - exact.volume) <= allowed
 
 
+def test_one_convex_sum_is_its_hull_with_no_grid(convex_case):
+    """Two convex bodies make one convex sum: the surface is its hull (no grid, ``h`` 0),
+    whatever eps, and the bound is the hull's plane tolerance (1e-9 of the diagonal).
+    Checked against the vertex sums themselves: none lies farther than the bound outside
+    any face plane of the (convex) output, and every output vertex is one of them."""
+    _, a, b, _, r = convex_case
+    diag = sum_diagonal(a, b)
+    assert r.stats["h"] == 0.0 and r.stats["band_cells"] == 0
+    assert 0.0 < r.error_bound <= 1.001e-9 * diag
+    sums = (a.vertices[:, None, :] + b.vertices[None, :, :]).reshape(-1, 3)
+    normals, origins = r.mesh.face_normals, r.mesh.triangles[:, 0]
+    outside = (sums @ normals.T - np.einsum("ij,ij->i", origins, normals)[None, :]).max()
+    assert outside <= r.error_bound
+    nearest = np.min(np.linalg.norm(r.mesh.vertices[:, None, :] - sums[None, :, :], axis=2),
+                     axis=1)
+    assert nearest.max() <= 1e-12 * diag
+
+
+def test_box_plus_box_is_six_faces_and_twelve_triangles(cache_dir):
+    """A box ⊕ a box (default source: convex bodies, one sum): the exact box, 8 vertices
+    and 12 triangles, its corners at the sums of the corners to rounding."""
+    a, b = shapes.box((1.0, 2.0, 3.0)), shapes.box((0.5, 0.25, 1.0), center=(2.0, 0.0, -1.0))
+    r = planner.minkowski_sum(a, b, eps=1e-6, cache_dir=cache_dir)
+    assert len(r.mesh.faces) == 12 and len(r.mesh.vertices) == 8
+    expected = np.array([[1.25, -1.125, -3.0], [2.75, 1.125, 1.0]])
+    assert np.allclose(r.mesh.bounds, expected, rtol=0, atol=1e-12)
+    assert r.mesh.volume == pytest.approx(1.5 * 2.25 * 4.0, rel=1e-12)
+
+
 def test_convex_far_operand_is_translated(cache_dir):
     """{a + b}: the sum of a unit box at 0 and a box at (10, 0, 0) sits at (10, 0, 0)."""
     a, b = CONVEX_PAIRS["box+far box"]()
@@ -602,7 +631,7 @@ def test_bad_eps(eps, cache_dir):
 
 
 def test_eps_too_small_for_the_grid(cache_dir):
-    a, b = shapes.box(), shapes.icosphere(1, 0.5)
+    a, b = shapes.l_bracket(), shapes.icosphere(1, 0.5)  # not convex: a grid is needed
     with pytest.raises(errors.ResourceLimitError, match=r"(?i)eps|grid|cells|memory"):
         planner.minkowski_sum(a, b, eps=1e-9, cache_dir=cache_dir)
 

@@ -107,8 +107,11 @@ def test_errors_map_to_planner_errors():
     s = core.Primitives.from_pieces([cube([0, 0, 0], [1, 1, 1])])
     with pytest.raises(InvalidParameterError, match="eps"):
         core.union_surface(s, -1.0)
+    # two overlapping balls: a grid is needed (one primitive, or apart ones, are their
+    # hulls without one)
     with pytest.raises(ResourceLimitError, match="cells"):
-        core.union_surface(core.Primitives.from_pieces([ball([0, 0, 0], 1.0)]), 1e-4,
+        core.union_surface(core.Primitives.from_pieces([ball([0, 0, 0], 1.0),
+                                                        ball([0.5, 0, 0], 1.0)]), 1e-4,
                            max_cells=1000)
 
 

@@ -32,17 +32,18 @@ def _volume_slack(result, area: float) -> float:
     return area * result.error_bound * 1.05
 
 
+@pytest.mark.parametrize("convex", [True, False])
 @pytest.mark.parametrize("shape", ["box", "tetrahedron"])
-def test_a_grown_convex_solid_has_steiners_volume(shape):
+def test_a_grown_convex_solid_has_steiners_volume(shape, convex):
     if shape == "box":
         solid = trimesh.creation.box([2.0, 1.0, 0.5])
     else:
         solid = trimesh.Trimesh([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]],
                                 [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
     r = 0.3
-    result = planner.offset(solid, r, eps=0.03)
+    result = planner.offset(solid, r, eps=0.03, convex=convex)
     exact = _steiner(solid, r)
-    grown_area = float(planner.offset(solid, r, eps=0.03).mesh.area)
+    grown_area = float(result.mesh.area)
     assert result.mesh.is_watertight and result.mesh.volume > 0
     assert abs(result.mesh.volume - exact) <= _volume_slack(result, grown_area), (
         result.mesh.volume, exact, result.error_bound)
@@ -59,7 +60,7 @@ def test_an_eroded_box_is_the_shrunken_box():
 def test_an_eroded_box_is_resolved_by_its_face_planes_exactly():
     # every cell of the shrunken box's boundary lies in the column over one to three faces:
     # cut by their offset planes at its size, nothing sampled
-    result = planner.offset(trimesh.creation.box([2.0, 1.0, 1.0]), -0.2)
+    result = planner.offset(trimesh.creation.box([2.0, 1.0, 1.0]), -0.2, convex=False)
     assert result.stats["planar_pieces"] > 0 and result.stats["band_cells"] == 0
     assert len(result.mesh.faces) == 12
     corners = np.abs(result.mesh.vertices)
@@ -67,10 +68,17 @@ def test_an_eroded_box_is_resolved_by_its_face_planes_exactly():
     assert abs(result.mesh.volume - 1.6 * 0.6 * 0.6) < 1e-12
 
 
-def test_a_grown_box_has_exact_flat_faces_joined_to_its_round_edges():
+@pytest.mark.parametrize("convex", [True, False])
+def test_a_grown_box_has_exact_flat_faces_joined_to_its_round_edges(convex):
+    # the cell source (its face columns cut by their offset planes) and the convex path
+    # (the hull of the corners' balls, with a ball point along every face normal)
     half, r = 0.5, 0.25
-    result = planner.offset(trimesh.creation.box([1.0, 1.0, 1.0]), r, eps=0.02)
-    assert result.stats["planar_pieces"] > 0 and result.mesh.is_watertight
+    result = planner.offset(trimesh.creation.box([1.0, 1.0, 1.0]), r, eps=0.02, convex=convex)
+    assert result.mesh.is_watertight
+    if convex:
+        assert result.stats["convex"] and result.stats["band_cells"] == 0
+    else:
+        assert result.stats["planar_pieces"] > 0
     tris = result.mesh.triangles
     centroids = tris.mean(axis=1)
     # the triangles over the middle of a face (in its column by more than the bound) lie
@@ -83,15 +91,49 @@ def test_a_grown_box_has_exact_flat_faces_joined_to_its_round_edges():
         np.testing.assert_allclose(np.abs(tris[over][:, :, axis]), half + r, rtol=0, atol=1e-12)
 
 
-def test_every_output_point_is_within_the_bound_of_the_true_offset_surface():
+@pytest.mark.parametrize("convex", [True, False])
+def test_every_output_point_is_within_the_bound_of_the_true_offset_surface(convex):
     solid = trimesh.creation.box([1.0, 1.0, 1.0])
     r = 0.25
-    result = planner.offset(solid, r, eps=0.03)
+    result = planner.offset(solid, r, eps=0.03, convex=convex)
     points, _ = trimesh.sample.sample_surface(result.mesh, 4000, seed=0)
     # the exact distance to the box (a solid: 0 inside)
     outside = np.maximum(np.abs(points) - 0.5, 0.0)
     distance = np.linalg.norm(outside, axis=1)
     assert np.all(np.abs(distance - r) <= result.error_bound + 1e-12)
+
+
+def test_a_convex_offset_needs_no_grid_and_its_bound_holds_both_ways():
+    """One convex body (a random hull of 40 points): grown, the hull of its corners'
+    tessellated balls — every output vertex at most r from the solid and at least
+    r - bound, the flat faces' points exactly r away, the bound within eps; eroded, the
+    face planes moved inward — every output vertex exactly |r| inside. Against exact
+    distances to the solid (trimesh's closest points) and the solid's own face planes."""
+    from shapes import random_convex
+
+    solid = random_convex(40, (1.0, 0.8, 0.6), seed=3)
+    r, eps = 0.15, 0.004
+    grown = planner.offset(solid, r, eps=eps)
+    assert grown.stats["convex"] and grown.stats["h"] == 0.0
+    assert grown.mesh.is_watertight and grown.mesh.is_winding_consistent
+    assert 0.0 < grown.error_bound <= eps
+    points = np.vstack([grown.mesh.vertices,
+                        trimesh.sample.sample_surface(grown.mesh, 4000, seed=2)[0]])
+    _, distance, _ = trimesh.proximity.closest_point(solid, points)
+    assert np.all(distance <= r + 1e-9) and np.all(distance >= r - grown.error_bound)
+    eroded = planner.offset(solid, -0.05, eps=eps)
+    normals = solid.face_normals
+    offsets = np.einsum("ij,ij->i", normals, solid.triangles[:, 0])
+    depth = (offsets[None, :] - eroded.mesh.vertices @ normals.T).min(axis=1)
+    np.testing.assert_allclose(depth, 0.05, rtol=0, atol=1e-9)
+    assert eroded.error_bound < 1e-8
+
+
+def test_a_non_convex_solid_is_offset_by_the_cell_source():
+    from shapes import l_bracket
+
+    result = planner.offset(l_bracket(), 0.1, eps=0.05)
+    assert "convex" not in result.stats and result.stats["band_cells"] > 0
 
 
 def test_a_non_convex_offset_is_within_its_bound_of_the_exact_distance():

@@ -5,6 +5,7 @@ use crate::error::{CoreError, CoreResult};
 use crate::math::Aabb;
 use crate::minkowski::PolytopeSet;
 use crate::octree::{CellSource, Label, LevelCounts, Octree};
+use crate::polytope::PLANE_TOL_REL;
 use crate::surface::{extract, loose_reach, merge_coplanar, ResolvedCells, Surface, EDGE_CLAMP, MAX_OPEN_REPORTED};
 use std::time::Instant;
 
@@ -118,7 +119,66 @@ pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<
     if set.is_empty() {
         return Err(CoreError::Empty { what: "primitive set".into() });
     }
-    approximate_solid(set, &set.aabb, params)
+    if params.eps <= 0.0 || !params.eps.is_finite() {
+        return approximate_solid(set, &set.aabb, params); // its error names the eps
+    }
+    match apart_hulls(set) {
+        Some(surface) => Ok(exact_hulls(surface, set, params)),
+        None => approximate_solid(set, &set.aabb, params),
+    }
+}
+
+/// The boundary of the union when no two primitives' boxes meet: their hulls' triangles
+/// (outward, closed, one shell each), with the vertices they use; `None` otherwise.
+fn apart_hulls(set: &PolytopeSet) -> Option<Surface> {
+    for (i, p) in set.polys.iter().enumerate() {
+        let mut other = false;
+        set.bvh.for_each_overlapping(&p.aabb, |j| other |= j != i);
+        if other {
+            return None;
+        }
+    }
+    let mut surface = Surface::default();
+    for p in &set.polys {
+        let mut index = vec![u32::MAX; p.vertices.len()];
+        for t in &p.triangles {
+            let face = t.map(|v| {
+                if index[v as usize] == u32::MAX {
+                    index[v as usize] = surface.vertices.len() as u32;
+                    surface.vertices.push(p.vertices[v as usize]);
+                }
+                index[v as usize]
+            });
+            surface.faces.push(face);
+        }
+    }
+    Some(surface)
+}
+
+/// The union of apart hulls as a result: exact up to the hulls' plane tolerance
+/// ([`PLANE_TOL_REL`] of the union's diagonal: no grid, no cells, `h` 0); simplified as
+/// any surface (coplanar hull triangles share their facet's plane).
+fn exact_hulls(surface: Surface, set: &PolytopeSet, params: &UnionParams) -> UnionResult {
+    let scale = set.aabb.diagonal();
+    let mut r = UnionResult {
+        triangles_extracted: surface.faces.len(),
+        surface,
+        h: 0.0,
+        error_bound: PLANE_TOL_REL * scale,
+        missed_reach: 0.0,
+        refinements: 0,
+        level_counts: Vec::new(),
+        seconds_octree: 0.0,
+        seconds_surface: 0.0,
+        seconds_simplify: 0.0,
+        planes_fallback_edges: 0,
+    };
+    if params.simplify {
+        let t = Instant::now();
+        merge_coplanar(&mut r.surface, 1e-10 * scale, 1e-18 * scale * scale);
+        r.seconds_simplify = t.elapsed().as_secs_f64();
+    }
+    r
 }
 
 /// [`approximate_union`] for any [`CellSource`] whose solid lies in `region`.

@@ -15,7 +15,8 @@ Inputs (every tool gets the same closed solid, as planner reads it):
 * a CAD part with sharp features: the Factory round hole (a 25 x 25 x 9 mm plate with an
   8 mm bore; ../shared/assets, skipped saying so when absent), offset by 1 mm.
 
-Tools, each at a few resolutions: ours (``planner.offset`` at ``eps``), libigl
+Tools, each at a few resolutions: ours (``planner.offset`` at ``eps``: the box, one
+convex body, takes the hull path of :mod:`planner.offsets_convex`), libigl
 (``igl.offset_surface``: signed distance on a grid of ``s`` cells along the longest side,
 pseudonormal sign, marching cubes), manifold3d (``Manifold.minkowski_sum`` with an
 icosphere of radius ``r`` and ``k`` subdivisions, vertices on the sphere). Every run is a
@@ -96,14 +97,15 @@ def bunny_like():
     return shapes.from_manifold(union, "bunny-like")
 
 
-def inputs(quick: bool) -> list[dict]:
-    """(name, solid, radius, each tool's resolutions) per input; the CAD part only when
-    ../shared/assets is there."""
+def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
+    """(name, solid, radius, each tool's resolutions) per input (``only``: those whose
+    name starts with one of these words); the CAD part only when ../shared/assets is
+    there."""
     import trimesh
 
     from planner.meshes.kinds import classify
     cases = [{"name": "box 1x0.6x0.4", "mesh": trimesh.creation.box((1.0, 0.6, 0.4)),
-              "r": 0.1, "ours": [0.04, 0.02, 0.01], "libigl": [50, 100, 200, 300],
+              "r": 0.1, "ours": [0.02, 0.005, 0.001, 0.0002], "libigl": [50, 100, 200, 300],
               "manifold": [1, 2, 3, 4, 5]},
              {"name": "bunny-like 2k", "mesh": bunny_like(), "r": 0.03,
               "ours": [0.024, 0.012, 0.006], "libigl": [50, 100, 200, 300],
@@ -116,6 +118,8 @@ def inputs(quick: bool) -> list[dict]:
                       "manifold": [1, 2, 3]})
     else:
         log(f"skipping the CAD part: {HOLE} is absent (../shared/assets not laid out)")
+    if only:
+        cases = [c for c in cases if c["name"].split()[0].lower() in only]
     if quick:
         for c in cases:
             c["ours"], c["libigl"], c["manifold"] = c["ours"][:1], c["libigl"][:2], \
@@ -440,6 +444,9 @@ def main(argv=None) -> int:
                    help="points sampled on each output (and a quarter as many candidates of "
                         "the exact boundary, per kind of feature)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--inputs", default="",
+                   help="comma-separated first words of the inputs to run (box, bunny-like, "
+                        "factory); default: all")
     p.add_argument("--out", type=Path, default=RESULTS,
                    help="write PREFIX.md and PREFIX.json (default: results/<date>-offsets)")
     args = p.parse_args(argv)
@@ -450,7 +457,8 @@ def main(argv=None) -> int:
             "platform": platform.platform(), "versions": versions(),
             "samples": args.samples, "seed": args.seed, "quick": args.quick}
     rows: list[dict] = []
-    for case in inputs(args.quick):
+    only = {w.strip().lower() for w in args.inputs.split(",") if w.strip()} or None
+    for case in inputs(args.quick, only):
         rows += run_case(case, args.samples, args.seed)
         args.out.with_suffix(".json").write_text(
             json.dumps(jsonable({"meta": meta, "rows": rows}), indent=2, allow_nan=True))

@@ -4,6 +4,11 @@
 //! directions that contains every facet normal of the (grown) piece — the two triangle
 //! normals, the in-plane edge normals (for flat pieces), the nine edge × edge cross
 //! products, the axes and the edge × axis cross products — so each test is exact.
+//!
+//! The octree's hot tests take those directions one at a time, unnormalised, and stop at
+//! the first that decides ([`pair_contains_point`], [`pair_box_relation`],
+//! [`pair_contains_box`]); a built [`Piece`] serves segment clips and distances, and is
+//! their reference in the tests.
 
 use super::mesh::{unit, Tri};
 use crate::math::{Aabb, Vec3};
@@ -79,7 +84,7 @@ fn pair_range(t: &Tri, s: &Tri, m: f64, d: Vec3) -> (f64, f64) {
 }
 
 /// Whether `p` lies in the closed `t ⊕ s` grown by the cube of half-width `m`: the
-/// directions of [`Piece`], one at a time (see [`all_dirs`]), so a far point costs a few
+/// directions of [`Piece`], one at a time and unnormalised, so a far point costs a few
 /// dot products and no piece is built.
 #[inline]
 pub fn pair_contains_point(t: &Tri, s: &Tri, m: f64, p: Vec3) -> bool {

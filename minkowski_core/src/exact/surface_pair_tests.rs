@@ -140,8 +140,8 @@ fn lazy_pair_tests_agree_with_the_built_piece() {
         let mut corners = || [rng.point(&unit), rng.point(&unit), rng.point(&unit)];
         let (mut p, mut q) = (corners(), corners());
         match case % 5 {
-            0 => p[2] = p[0] + (p[1] - p[0]) * 0.5, // collinear: a flat, degenerate triangle
-            1 => q[1] = q[0],                       // an edge collapsed
+            0 => p[2] = p[0] + (p[1] - p[0]) * 0.5,     // collinear: a flat, degenerate triangle
+            1 => q[1] = q[0],                           // an edge collapsed
             2 => p.iter_mut().for_each(|v| v.z = 0.25), // parallel to an axis plane
             _ => {}
         }

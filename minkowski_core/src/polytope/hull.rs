@@ -5,6 +5,10 @@ use crate::math::{Aabb, Vec3};
 use crate::util::UnionFind;
 use std::collections::HashMap;
 
+/// Points this close to a facet's plane, relative to the hull's diagonal, count as on it
+/// (coplanar triangles are merged into one facet within it).
+pub const PLANE_TOL_REL: f64 = 1e-9;
+
 /// A closed convex polytope `{x : n_k · x <= d_k for all k}`.
 ///
 /// Facet planes have unit outward normals; coplanar hull triangles are merged into one
@@ -87,7 +91,7 @@ impl ConvexPolytope {
             return Err(degenerate("zero volume (all points in a plane)"));
         }
         // Merge coplanar neighbouring triangles into facets (union–find over shared edges).
-        let plane_tol = 1e-9 * scale;
+        let plane_tol = PLANE_TOL_REL * scale;
         let unit: Vec<Vec3> = tri_n.iter().map(|n| n.normalize_or_zero()).collect();
         let off: Vec<f64> = tris.iter().zip(&unit).map(|(t, n)| n.dot(vertices[t[0] as usize])).collect();
         let mut facets = UnionFind::new(tris.len());

@@ -10,5 +10,5 @@ mod hull;
 mod polytope_tests;
 mod queries;
 
-pub use hull::ConvexPolytope;
+pub use hull::{ConvexPolytope, PLANE_TOL_REL};
 pub use queries::{clip_planes, point_triangle_distance2};
