@@ -285,7 +285,9 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
         )
     complex_cells = int(surf["complex_cells"])
     grid_bound = _GRID_BOUND_PER_H * float(surf["h"])
-    if warn_complex and float(surf["error_bound"]) > 2.0 * grid_bound * (1 + 1e-9):
+    # no grid (h 0: apart hulls, exact to their plane tolerance) misses nothing
+    if warn_complex and grid_bound > 0 and float(surf["error_bound"]) > 2.0 * grid_bound * (
+            1 + 1e-9):
         log.warning(
             "%s ⊕ %s: the lattice may miss boundary in %d cells after %d refinements (a "
             "feature thinner than %.3g: %d complex, %d silent ones no piece covers), so the "

@@ -20,6 +20,7 @@ CoACD decompositions are cached in pytest's cache directory (``.pytest_cache``),
 the first run pays for them (about 40 s here).
 """
 
+import logging
 import math
 
 import numpy as np
@@ -217,6 +218,13 @@ def test_one_convex_sum_is_its_hull_with_no_grid(convex_case):
     nearest = np.min(np.linalg.norm(r.mesh.vertices[:, None, :] - sums[None, :, :], axis=2),
                      axis=1)
     assert nearest.max() <= 1e-12 * diag
+
+
+def test_one_convex_sum_warns_of_nothing(cache_dir, caplog):
+    a, b = CONVEX_PAIRS["random hulls"]()
+    with caplog.at_level(logging.WARNING):
+        planner.minkowski_sum(a, b, cache_dir=cache_dir)
+    assert not [r for r in caplog.records if r.levelno >= logging.WARNING], caplog.text
 
 
 def test_box_plus_box_is_six_faces_and_twelve_triangles(cache_dir):

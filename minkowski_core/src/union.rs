@@ -110,7 +110,9 @@ pub fn surface_error_bound(surface: &Surface, h: f64) -> (f64, f64) {
 /// boundary; cells where the lattice may have missed boundary widen it by their reach
 /// ([`surface_error_bound`]). While that is above twice the grid's, the grid is halved, at
 /// most `max_refinements` times and only while the next grid (about four times the band
-/// cells) is expected to fit the budget.
+/// cells) is expected to fit the budget. With `params.planes`, primitives whose boxes do
+/// not meet (one primitive: two convex operands) need no grid: the surface is their hulls,
+/// bound by the hulls' plane tolerance ([`PLANE_TOL_REL`] of the diagonal), `h` 0.
 ///
 /// # Errors
 /// [`CoreError::InvalidParameter`] for a bad eps, [`CoreError::ResourceLimit`] when even
@@ -119,8 +121,9 @@ pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<
     if set.is_empty() {
         return Err(CoreError::Empty { what: "primitive set".into() });
     }
-    if params.eps <= 0.0 || !params.eps.is_finite() {
-        return approximate_solid(set, &set.aabb, params); // its error names the eps
+    if params.eps <= 0.0 || !params.eps.is_finite() || !params.planes {
+        // a bad eps: its error names it; no planes: sampled everywhere, as asked
+        return approximate_solid(set, &set.aabb, params);
     }
     match apart_hulls(set) {
         Some(surface) => Ok(exact_hulls(surface, set, params)),
@@ -133,7 +136,8 @@ pub fn approximate_union(set: &PolytopeSet, params: &UnionParams) -> CoreResult<
 fn apart_hulls(set: &PolytopeSet) -> Option<Surface> {
     for (i, p) in set.polys.iter().enumerate() {
         let mut other = false;
-        set.bvh.for_each_overlapping(&p.aabb, |j| other |= j != i);
+        // the BVH's leaves may hold several primitives: each box is asked itself
+        set.bvh.for_each_overlapping(&p.aabb, |j| other |= j != i && set.polys[j].aabb.overlaps(&p.aabb));
         if other {
             return None;
         }

@@ -169,3 +169,14 @@ fn simplification_keeps_the_surface_and_drops_flat_interiors() {
         assert!(l.signed_distance(*v).abs() <= simple.error_bound);
     }
 }
+
+#[test]
+fn apart_primitives_are_their_hulls_and_overlapping_ones_need_a_grid() {
+    let params = UnionParams { eps: 0.05, max_cells: 1_000_000, max_refinements: 0, simplify: true, planes: true };
+    let apart = approximate_union(&set_of(&[([0.0; 3], [1.0; 3]), ([2.0, 0.0, 0.0], [3.0, 1.0, 1.0])]), &params).unwrap();
+    assert_eq!((apart.h, apart.surface.band_cells, apart.surface.faces.len()), (0.0, 0, 24), "two boxes, twelve triangles each");
+    assert!(apart.error_bound > 0.0 && apart.error_bound < 1e-8);
+    let meeting = approximate_union(&set_of(&[([0.0; 3], [1.0; 3]), ([0.5, 0.0, 0.0], [1.5, 1.0, 1.0])]), &params).unwrap();
+    assert!(meeting.h > 0.0, "overlapping boxes: the grid's union");
+    assert_eq!(meeting.surface.faces.len(), 12, "one box 1.5 x 1 x 1");
+}
