@@ -92,6 +92,12 @@ impl Bvh {
         }
     }
 
+    /// Calls `f(i)` for every primitive under the nodes whose boxes pass `test` (tested
+    /// again before each node is opened, so a bound that `f` tightens prunes the rest).
+    pub fn for_each_where(&self, test: impl Fn(&Aabb) -> bool, f: impl FnMut(usize)) {
+        self.visit(test, f)
+    }
+
     /// Calls `f(i)` for every primitive whose box contains `p` (a superset of those
     /// containing the point).
     pub fn for_each_at_point(&self, p: Vec3, f: impl FnMut(usize)) {

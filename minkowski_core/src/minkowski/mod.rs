@@ -3,6 +3,7 @@
 //! Entry points: [`pairwise_sums`] (all `M_ij = conv{p ± q}`), [`PolytopeSet`] (the union
 //! of convex primitives with a BVH: point, distance and segment queries).
 
+mod cones;
 mod set;
 pub use set::{merge_intervals, PolytopeSet};
 
@@ -48,13 +49,20 @@ pub fn pairwise_sums(a: &[Vec<Vec3>], b: &[Vec<Vec3>], kind: SumKind) -> CoreRes
         .into_par_iter()
         .map(|k| {
             let (i, j) = (k / b.len(), k % b.len());
+            let what = format!("sum of A piece {i} and B piece {j}");
+            // the sums whose normal cones meet hold every vertex of the sum's hull
+            if let Some(pts) = cones::candidate_sums(&a[i], &b[j], s) {
+                if let Ok(hull) = ConvexPolytope::try_from_points(&pts, &what) {
+                    return Ok(hull);
+                }
+            }
             let mut pts = Vec::with_capacity(a[i].len() * b[j].len());
             for p in &a[i] {
                 for q in &b[j] {
                     pts.push(*p + *q * s);
                 }
             }
-            ConvexPolytope::try_from_points(&pts, &format!("sum of A piece {i} and B piece {j}"))
+            ConvexPolytope::try_from_points(&pts, &what)
         })
         .collect()
 }

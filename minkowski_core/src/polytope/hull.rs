@@ -164,7 +164,7 @@ impl ConvexPolytope {
         // Offsets: the support over all hull vertices, so every plane is a supporting plane
         // even when rounding in the hull left a tilted sliver facet (then the polytope is a
         // hair larger than the hull, never smaller).
-        let offsets: Vec<f64> = normals.iter().map(|n| vertices.iter().map(|v| n.dot(*v)).fold(f64::NEG_INFINITY, f64::max)).collect();
+        let offsets = supports(&vertices, &normals, &tris, &triangle_facet);
         let aabb = Aabb::from_points(&vertices);
         Ok(ConvexPolytope { vertices, normals, offsets, triangles: tris, triangle_facet, aabb })
     }
@@ -180,4 +180,26 @@ impl ConvexPolytope {
             })
             .sum()
     }
+}
+
+/// Per facet normal `n`, `max_v n · v` over all `vertices`: the same value as a scan over
+/// every vertex, found by a branch and bound over a BVH of the vertices from the facet's
+/// own vertices (a box's bound, `Σ_k max(n_k lo_k, n_k hi_k)` summed in the dot product's
+/// order, is never below the rounded `n · v` of a point in it: rounding is monotone).
+fn supports(vertices: &[Vec3], normals: &[Vec3], tris: &[[u32; 3]], triangle_facet: &[u32]) -> Vec<f64> {
+    let mut best = vec![f64::NEG_INFINITY; normals.len()];
+    for (t, &f) in tris.iter().zip(triangle_facet) {
+        for &v in t {
+            best[f as usize] = best[f as usize].max(normals[f as usize].dot(vertices[v as usize]));
+        }
+    }
+    let boxes: Vec<Aabb> = vertices.iter().map(|&v| Aabb::new(v, v)).collect();
+    let bvh = crate::bvh::Bvh::build(&boxes);
+    for (n, b) in normals.iter().zip(best.iter_mut()) {
+        let bound = |bx: &Aabb| (n.x * bx.min.x).max(n.x * bx.max.x) + (n.y * bx.min.y).max(n.y * bx.max.y) + (n.z * bx.min.z).max(n.z * bx.max.z);
+        let top = std::cell::Cell::new(*b);
+        bvh.for_each_where(|bx| bound(bx) > top.get(), |i| top.set(top.get().max(n.dot(vertices[i]))));
+        *b = top.get();
+    }
+    best
 }
