@@ -17,7 +17,7 @@ For a convex ``P`` with face planes ``n_k · x <= d_k``:
 
 :func:`convex_offset` returns ``None`` for a solid that is not one convex body (by every
 face lying on its hull) or when the hull would take too many points; the caller then uses
-the cell source.
+the cell source, as it does when qhull cannot build a hull (a result too thin).
 """
 
 from __future__ import annotations
@@ -57,15 +57,20 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
     normals, offsets = planes
     diag = float(np.linalg.norm(np.ptp(np.asarray(solid.bounds), axis=0))) + 2 * abs(radius)
     rounding = PLANE_TOL_REL * diag
-    if radius < 0:
-        mesh = _eroded(normals, offsets, -radius, rounding)
-        bound, method, subdivisions = rounding, "face planes moved inward", None
-    else:
-        grown = _grown(np.asarray(solid.vertices), normals, radius, eps)
-        if grown is None:
-            return None
-        mesh, chord, subdivisions = grown
-        bound, method = chord + rounding, "hull of the vertices' tessellated balls"
+    from scipy.spatial import QhullError  # noqa: PLC0415
+
+    try:
+        if radius < 0:
+            mesh = _eroded(normals, offsets, -radius, rounding)
+            bound, method, subdivisions = rounding, "face planes moved inward", None
+        else:
+            grown = _grown(np.asarray(solid.vertices), normals, radius, eps)
+            if grown is None:
+                return None
+            mesh, chord, subdivisions = grown
+            bound, method = chord + rounding, "hull of the vertices' tessellated balls"
+    except QhullError:  # a hull too thin for qhull: the cell source decides
+        return None
     stats = {"triangles": len(mesh.faces), "band_cells": 0, "h": 0.0, "refinements": 0,
              "planar_cells": 0, "planar_pieces": 0, "planes_fallback_edges": 0,
              "bound_by_region": {"planes": rounding, "sampled": 0.0, "missed": 0.0,
