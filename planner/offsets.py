@@ -119,10 +119,20 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     step = tol.eps_rel * diagonal if eps is None else float(eps)
     if not (math.isfinite(step) and step > 0):
         raise InvalidParameterError(f"eps = {eps!r}: must be a positive finite number")
+    from . import budget  # noqa: PLC0415
+
+    cells, _ = budget.surface_cells(max_cells)
     verb = "growing" if radius > 0 else "eroding"
     with StatusLine(progress) as line:
         line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
         hull = convex_offset(solid, radius, step) if convex else None
+        if hull is None:
+            checked = CheckedMesh(np.asarray(solid.vertices, dtype=np.float64),
+                                  np.asarray(solid.faces, dtype=np.int64), name=name)
+            try:
+                raw = offset_surface(checked, radius, step, max_cells=cells)
+            except ResourceLimitError as exc:
+                raise budget.explain(exc, f"{name} offset by {radius:g}") from exc
     if hull is not None:
         grown_or_eroded, bound, stats = hull
         if len(grown_or_eroded.faces) == 0:
@@ -130,17 +140,6 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
                                 f"thickest part is thinner than {2 * -radius:g})")
         stats["seconds"] = time.perf_counter() - t0
         return OffsetResult(grown_or_eroded, radius, bound, step, stats)
-    checked = CheckedMesh(np.asarray(solid.vertices, dtype=np.float64),
-                          np.asarray(solid.faces, dtype=np.int64), name=name)
-    from . import budget  # noqa: PLC0415
-
-    cells, _ = budget.surface_cells(max_cells)
-    with StatusLine(progress) as line:
-        line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
-        try:
-            raw = offset_surface(checked, radius, step, max_cells=cells)
-        except ResourceLimitError as exc:
-            raise budget.explain(exc, f"{name} offset by {radius:g}") from exc
     if len(raw["faces"]) == 0:
         if not math.isfinite(raw["error_bound"]):
             raise GeometryError(f"{name}: nothing was resolved of it offset by {radius:g} at "

@@ -61,8 +61,11 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
 
     try:
         if radius < 0:
-            mesh = _eroded(normals, offsets, -radius, rounding)
-            bound, method, subdivisions = rounding, "face planes moved inward", None
+            eroded = _eroded(normals, offsets, -radius, rounding)
+            if eroded is None:
+                return None
+            mesh, bound, method, subdivisions = (eroded, rounding, "face planes moved inward",
+                                                 None)
         else:
             grown = _grown(np.asarray(solid.vertices), normals, radius, eps)
             if grown is None:
@@ -81,9 +84,11 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
 
 
 def _convex_planes(solid: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray] | None:
-    """The distinct face planes ``(normals, offsets)`` of the solid when it is one convex
-    body: every face's centroid on its hull's boundary and its volume the hull's (within
-    :data:`PLANE_TOL_REL`); else ``None``."""
+    """The facet planes ``(unit normals, offsets)`` of the solid when it is one convex body
+    (every face's centroid on its hull's boundary, its volume the hull's, within
+    :data:`PLANE_TOL_REL`), else ``None``. The planes are the hull's facets (not the
+    triangles': a zero-area or tilted sliver has no reliable normal), each offset the
+    largest ``n · v`` over the body's vertices, so every plane bounds the body."""
     if len(solid.faces) > MAX_FACES or len(solid.faces) < 4:
         return None
     vertices = np.asarray(solid.vertices, dtype=np.float64)
@@ -95,18 +100,18 @@ def _convex_planes(solid: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray] | No
     height = (centroids @ hull.equations[:, :3].T + hull.equations[None, :, 3]).max(axis=1)
     if np.any(height < -tol) or abs(float(solid.volume) - hull.volume) > tol * hull.area:
         return None
-    normals = np.asarray(solid.face_normals, dtype=np.float64)
-    offsets = np.einsum("ij,ij->i", normals, solid.triangles[:, 0])
-    keys = np.round(np.column_stack([normals, offsets / scale]) / 1e-9).astype(np.int64)
-    first = np.sort(np.unique(keys, axis=0, return_index=True)[1])
-    return normals[first], offsets[first]
+    normals = hull.equations[:, :3] / np.linalg.norm(hull.equations[:, :3], axis=1)[:, None]
+    normals = np.unique(np.round(normals, 12), axis=0)  # the triangulated facets' repeats
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    return normals, (vertices @ normals.T).max(axis=0)
 
 
 def _eroded(normals: np.ndarray, offsets: np.ndarray, depth: float,
-            rounding: float) -> trimesh.Trimesh:
+            rounding: float) -> trimesh.Trimesh | None:
     """``{x : n · x <= d - depth}``: the hull of its vertices, found by intersecting the
     moved half-spaces about their Chebyshev centre; empty when that centre is not deeper
-    than ``depth`` (plus rounding)."""
+    than ``depth`` (plus rounding) or none exists; ``None`` when the solver fails
+    otherwise."""
     from scipy.optimize import linprog  # noqa: PLC0415
     from scipy.spatial import HalfspaceIntersection  # noqa: PLC0415
 
@@ -114,8 +119,10 @@ def _eroded(normals: np.ndarray, offsets: np.ndarray, depth: float,
     # the deepest point x and its depth t: maximise t with n · x + t <= d - depth
     res = linprog(c=[0.0, 0.0, 0.0, -1.0], A_ub=np.column_stack([normals, np.ones(len(normals))]),
                   b_ub=moved, bounds=[(None, None)] * 3 + [(0.0, None)], method="highs")
-    if res.status != 0 or res.x[3] <= rounding:
+    if res.status == 2 or (res.status == 0 and res.x[3] <= rounding):  # 2: infeasible
         return trimesh.Trimesh()
+    if res.status != 0:
+        return None
     halfspaces = np.column_stack([normals, -moved])  # n · x - (d - depth) <= 0
     corners = HalfspaceIntersection(halfspaces, np.asarray(res.x[:3])).intersections
     return _mesh(_hull(corners))

@@ -129,6 +129,46 @@ def test_a_convex_offset_needs_no_grid_and_its_bound_holds_both_ways():
     assert eroded.error_bound < 1e-8
 
 
+def _cube_with_a_needle(side: float) -> trimesh.Trimesh:
+    """A cube whose face x = side/2 is split at the middle of its edge with the face
+    y = side/2, the gap closed by a zero-area triangle along that edge (a needle with no
+    normal of its own): still one closed, convex solid."""
+    m = trimesh.creation.box((side, side, side))
+    v, f = np.array(m.vertices), [list(x) for x in m.faces]
+    edges = {}
+    for i, tri in enumerate(f):
+        for e in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+            edges[e] = i
+    # an edge on the convex crease between two faces, not a face diagonal
+    (p, q), j = next((e, edges[(e[1], e[0])]) for e in edges if (e[1], e[0]) in edges
+                     and np.count_nonzero(v[e[0]] != v[e[1]]) == 1)
+    mid = len(v)
+    v = np.vstack([v, 0.5 * (v[p] + v[q])])
+    tri = f[j]
+    k = tri.index(q)
+    q_, p_, r_ = tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]
+    f[j] = [q_, mid, r_]
+    f.append([mid, p_, r_])
+    f.append([p, mid, q])
+    return trimesh.Trimesh(v, np.array(f), process=False)
+
+
+@pytest.mark.parametrize("side", [1.0, 1000.0])
+def test_a_convex_solid_with_a_zero_area_sliver_is_eroded_by_its_hulls_planes(side):
+    """A needle triangle has no reliable plane: the erosion takes the hull's facets, each
+    moved to bound every vertex, so the cube shrinks by 2 r on each axis."""
+    r = 0.1 * side
+    eroded = planner.offset(_cube_with_a_needle(side), -r, eps=0.01 * side)
+    assert eroded.stats.get("convex") == "face planes moved inward"
+    half = side / 2 - r
+    np.testing.assert_allclose(eroded.mesh.bounds, [[-half] * 3, [half] * 3], rtol=0,
+                               atol=1e-9 * side)
+    assert eroded.mesh.volume == pytest.approx((2 * half) ** 3, rel=1e-9)
+    grown = planner.offset(_cube_with_a_needle(side), r, eps=0.01 * side)
+    assert grown.stats.get("convex") and grown.mesh.is_watertight
+    assert grown.mesh.bounds[1][0] == pytest.approx(side / 2 + r, rel=1e-12)
+
+
 def test_a_non_convex_solid_is_offset_by_the_cell_source():
     from shapes import l_bracket
 

@@ -88,7 +88,9 @@ fn pair_range(t: &Tri, s: &Tri, m: f64, d: Vec3) -> (f64, f64) {
 /// dot products and no piece is built.
 #[inline]
 pub fn pair_contains_point(t: &Tri, s: &Tri, m: f64, p: Vec3) -> bool {
-    all_dirs(t, s, m > 0.0, |d| {
+    // the axes and edge × axis products always: two degenerate (segment) triangles on
+    // parallel lines have no normal and no edge × edge product to separate a point
+    all_dirs(t, s, true, |d| {
         let x = p.dot(d);
         let (lo, hi) = pair_range(t, s, m, d);
         lo <= x && x <= hi
@@ -97,10 +99,23 @@ pub fn pair_contains_point(t: &Tri, s: &Tri, m: f64, p: Vec3) -> bool {
 
 /// How the closed `t ⊕ s` grown by the cube of half-width `m` lies against the closed box
 /// `b` (separating axes for meeting, every facet direction for inside; exact), as
-/// [`Piece::overlaps_box`] and [`Piece::contains_box`] would say, stopping at the first
-/// separating direction.
+/// [`Piece::overlaps_box`] and [`Piece::contains_box`] would say (unnormalised directions
+/// may round otherwise only at exact ties), stopping at the first separating direction.
 #[inline]
 pub fn pair_box_relation(t: &Tri, s: &Tri, m: f64, b: &Aabb) -> BoxRelation {
+    // the axes against the box's own bounds first, as `Piece::overlaps_box` (centre ±
+    // half could round past them)
+    let lo_hi = |k: usize| {
+        let (tk, sk) = (t.p.map(|p| p[k]), s.p.map(|p| p[k]));
+        let lo = tk[0].min(tk[1]).min(tk[2]) + sk[0].min(sk[1]).min(sk[2]) - m;
+        (lo, tk[0].max(tk[1]).max(tk[2]) + sk[0].max(sk[1]).max(sk[2]) + m)
+    };
+    if (0..3).any(|k| {
+        let (lo, hi) = lo_hi(k);
+        hi < b.min[k] || lo > b.max[k]
+    }) {
+        return BoxRelation::Apart;
+    }
     let (c, h) = (b.center(), b.half());
     let mut inside = true;
     let meets = all_dirs(t, s, true, |d| {

@@ -143,6 +143,12 @@ fn lazy_pair_tests_agree_with_the_built_piece() {
             0 => p[2] = p[0] + (p[1] - p[0]) * 0.5,     // collinear: a flat, degenerate triangle
             1 => q[1] = q[0],                           // an edge collapsed
             2 => p.iter_mut().for_each(|v| v.z = 0.25), // parallel to an axis plane
+            3 if case % 10 == 3 => {
+                // both segments, on parallel lines: no normal, no edge × edge product
+                let d = p[1] - p[0];
+                p[2] = p[0] + d * 0.5;
+                q = [q[0], q[0] + d * 0.7, q[0] + d * 0.2];
+            }
             _ => {}
         }
         let (t, s) = (Tri::new(p), Tri::new(q));
