@@ -1,23 +1,32 @@
-"""Offsets of one convex solid, without a grid: grown, the hull of its vertices' balls
-(tessellated within the error asked for); eroded, its face planes moved inward (exact).
+"""Offsets of a convex solid (or one convex up to its file's rounding), without a grid:
+grown, the hull of its vertices' balls (tessellated within the error asked for); eroded,
+its hull's facet planes moved inward.
 
-For a convex ``P`` with face planes ``n_k · x <= d_k``:
+For the hull ``H = {x : n_k · x <= d_k}`` of the solid ``P``'s vertices:
 
-* the erosion by ``r`` is ``{x : n_k · x <= d_k - r}`` (inside a convex solid the distance
-  to the boundary is the least distance to a face plane), a convex polytope with flat
-  faces only, exact up to the hull's rounding; empty when ``r`` reaches the inradius;
-* the growth by ``r`` is ``P ⊕ ball(r)``. A convex polytope ``B`` inside the ball with a
-  vertex ``r n_k`` for every face normal gives ``P ⊕ B``, the hull of the points
-  ``v + u`` (vertices ``v`` of ``P``, ``u`` of ``B``): its flat faces are ``P``'s moved out
-  by exactly ``r``, its round parts chords of the true cylinders and spheres. Minkowski sums
-  are 1-Lipschitz in the Hausdorff distance, so the result lies inside the true offset and
-  within ``r - c`` of it, ``c`` the least distance from the origin to a facet plane of
-  ``B``. ``B`` is an icosphere of radius ``r`` at the coarsest subdivision whose bound is
-  within ``eps``, plus those face-normal points.
+* ``H`` eroded by ``r`` is ``{x : n_k · x <= d_k - r}`` (inside a convex solid the
+  distance to the boundary is the least distance to a facet plane), flat faces only;
+  empty when ``r`` reaches the inradius;
+* ``H`` grown by ``r`` is ``H ⊕ ball(r)``. The hull of the points ``v + u`` (vertices
+  ``v`` of ``H``, ``u`` of an icosphere of radius ``r``) and of every facet's corners moved
+  ``r`` along its normal holds ``H ⊕ icosphere`` and lies inside the true offset: its flat
+  faces are ``H``'s moved out by exactly ``r``, its round parts chords of the true
+  cylinders and spheres. Minkowski sums are 1-Lipschitz in the Hausdorff distance, so it
+  lies within the chord ``r (1 - c)`` of the true offset, ``c`` the least distance from
+  the centre to a facet plane of the unit icosphere, the coarsest subdivision whose chord
+  is within ``eps``.
 
-:func:`convex_offset` returns ``None`` for a solid that is not one convex body (by every
-face lying on its hull) or when the hull would take too many points; the caller then uses
-the cell source, as it does when qhull cannot build a hull (a result too thin).
+``P`` need not be ``H`` exactly (CAD exports round their coordinates): with ``t`` the
+smallest depth such that every triangle of ``P`` has all its corners within ``t`` of one
+facet plane of ``H``, ``P``'s boundary misses the inside of ``H_t = {x : n_k · x <= d_k -
+t}``, so one winding number at a point inside ``H_t`` shows ``H_t ⊂ P ⊂ H``. Offsets are
+monotone, so ``P``'s lies between ``H_t``'s and ``H``'s, and the bound adds their distance:
+the largest distance from a vertex of the larger to the smaller (a convex function of the
+point, so its maximum over a polytope is at a vertex). The path is taken only when the
+bound is within ``eps``.
+
+:func:`convex_offset` returns ``None`` otherwise (not convex enough, too many faces or
+points, qhull unable to build a hull); the caller then uses the cell source.
 """
 
 from __future__ import annotations
@@ -32,120 +41,177 @@ import trimesh
 __all__ = ["MAX_FACES", "MAX_POINTS", "convex_offset"]
 
 MAX_FACES = 5000
-"""Solids with more triangles are not tested for convexity (the test is faces × hull
-facets); the cell source takes them."""
+"""Solids with more triangles are left to the cell source (the test is faces × hull
+facets)."""
 
 MAX_POINTS = 2_000_000
-"""Most points ``v + u`` one grown hull may take (vertices of ``P`` times those of ``B``)."""
+"""Most points ``v + u`` one grown hull may take (vertices of ``H`` times those of ``B``)."""
 
 PLANE_TOL_REL = 1e-9
-"""On a plane, relative to the solid's diagonal: the convexity test's tolerance and the
-rounding allowance of the hulls' bound."""
+"""Relative to the solid's diagonal: the rounding allowance added to every bound."""
 
 MAX_SUBDIVISIONS = 7
 
 
 def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
                   ) -> tuple[trimesh.Trimesh, float, dict[str, Any]] | None:
-    """``(mesh, error_bound, stats)`` of the closed solid's offset by ``radius`` when it is
-    one convex body (see the module documentation), else ``None``. An erosion that leaves
-    nothing gives an empty mesh."""
-    t0 = time.perf_counter()
-    planes = _convex_planes(solid)
-    if planes is None:
-        return None
-    normals, offsets = planes
-    diag = float(np.linalg.norm(np.ptp(np.asarray(solid.bounds), axis=0))) + 2 * abs(radius)
-    rounding = PLANE_TOL_REL * diag
+    """``(mesh, error_bound, stats)`` of the closed solid's offset by ``radius`` by its
+    hull (see the module documentation), or ``None``. An erosion that leaves nothing gives
+    an empty mesh."""
     from scipy.spatial import QhullError  # noqa: PLC0415
 
+    t0 = time.perf_counter()
+    diag = float(np.linalg.norm(np.ptp(np.asarray(solid.bounds), axis=0))) + 2 * abs(radius)
+    rounding = PLANE_TOL_REL * diag
     try:
+        hull = _hull_planes(solid, eps)
+        if hull is None:
+            return None
+        normals, offsets, depth, corners, _ = hull
         if radius < 0:
-            eroded = _eroded(normals, offsets, -radius, rounding)
-            if eroded is None:
-                return None
-            mesh, bound, method, subdivisions = (eroded, rounding, "face planes moved inward",
-                                                 None)
+            made = _eroded_between(solid, normals, offsets, depth, -radius, rounding)
+            method, subdivisions, chord = "hull's facet planes moved inward", None, 0.0
         else:
-            grown = _grown(np.asarray(solid.vertices), normals, radius, eps)
-            if grown is None:
-                return None
-            mesh, chord, subdivisions = grown
-            bound, method = chord + rounding, "hull of the vertices' tessellated balls"
+            made = _grown_between(solid, hull, radius, eps)
+            method = "hull of the vertices' tessellated balls"
+            subdivisions, chord = (made[2], made[3]) if made is not None else (None, 0.0)
     except QhullError:  # a hull too thin for qhull: the cell source decides
+        return None
+    if made is None:
+        return None
+    mesh, between = made[0], made[1]
+    bound = chord + between + rounding
+    if len(mesh.faces) and bound > eps:
         return None
     stats = {"triangles": len(mesh.faces), "band_cells": 0, "h": 0.0, "refinements": 0,
              "planar_cells": 0, "planar_pieces": 0, "planes_fallback_edges": 0,
-             "bound_by_region": {"planes": rounding, "sampled": 0.0, "missed": 0.0,
-                                 "round": bound - rounding if radius > 0 else 0.0},
+             "bound_by_region": {"planes": between + rounding, "sampled": 0.0, "missed": 0.0,
+                                 "round": chord},
              "holes_closed": 0, "sheets_unzipped": 0, "convex": method,
-             "ball_subdivisions": subdivisions, "seconds": time.perf_counter() - t0}
+             "hull_depth": depth, "ball_subdivisions": subdivisions,
+             "seconds": time.perf_counter() - t0}
     return mesh, bound, stats
 
 
-def _convex_planes(solid: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray] | None:
-    """The facet planes ``(unit normals, offsets)`` of the solid when it is one convex body
-    (every face's centroid on its hull's boundary, its volume the hull's, within
-    :data:`PLANE_TOL_REL`), else ``None``. The planes are the hull's facets (not the
-    triangles': a zero-area or tilted sliver has no reliable normal), each offset the
-    largest ``n · v`` over the body's vertices, so every plane bounds the body."""
+def _hull_planes(solid: trimesh.Trimesh, eps: float):
+    """The facet planes ``(unit normals, offsets)`` of the hull ``H`` of the solid's
+    vertices (each offset the largest ``n · v`` over them, so every plane bounds them), the
+    depth ``t`` within which every triangle has its corners on one of them, ``H``'s
+    vertices, and its triangles' corners with their unit normals; ``None`` when ``t``
+    exceeds ``eps`` or there are too many faces."""
     if len(solid.faces) > MAX_FACES or len(solid.faces) < 4:
         return None
     vertices = np.asarray(solid.vertices, dtype=np.float64)
     hull = _hull(vertices)
-    scale = float(np.linalg.norm(np.ptp(vertices, axis=0)))
-    tol = PLANE_TOL_REL * scale
-    centroids = np.asarray(solid.triangles_center)
-    # the largest plane value over the hull's facets: 0 on its boundary, negative inside
-    height = (centroids @ hull.equations[:, :3].T + hull.equations[None, :, 3]).max(axis=1)
-    if np.any(height < -tol) or abs(float(solid.volume) - hull.volume) > tol * hull.area:
-        return None
     normals = hull.equations[:, :3] / np.linalg.norm(hull.equations[:, :3], axis=1)[:, None]
     normals = np.unique(np.round(normals, 12), axis=0)  # the triangulated facets' repeats
     normals /= np.linalg.norm(normals, axis=1)[:, None]
-    return normals, (vertices @ normals.T).max(axis=0)
+    offsets = (vertices @ normals.T).max(axis=0)
+    if len(solid.faces) * len(normals) > 4 * MAX_FACES * 200:
+        return None
+    # per triangle and plane, the deepest corner's depth; per triangle, its best plane
+    below = offsets[None, :] - vertices @ normals.T              # (vertices, planes) >= 0
+    corners = np.asarray(solid.faces)
+    deepest = np.maximum(np.maximum(below[corners[:, 0]], below[corners[:, 1]]),
+                         below[corners[:, 2]])
+    depth = float(deepest.min(axis=1).max())
+    if depth > eps:
+        return None
+    simplex_normals = hull.equations[:, :3] / np.linalg.norm(hull.equations[:, :3],
+                                                             axis=1)[:, None]
+    return (normals, offsets, depth, vertices[hull.vertices],
+            (vertices[hull.simplices], simplex_normals))
 
 
-def _eroded(normals: np.ndarray, offsets: np.ndarray, depth: float,
-            rounding: float) -> trimesh.Trimesh | None:
-    """``{x : n · x <= d - depth}``: the hull of its vertices, found by intersecting the
-    moved half-spaces about their Chebyshev centre; empty when that centre is not deeper
-    than ``depth`` (plus rounding) or none exists; ``None`` when the solver fails
-    otherwise."""
+def _inside_at(solid: trimesh.Trimesh, point: np.ndarray) -> bool:
+    """Whether ``point`` lies inside the closed solid (the core's exact winding number)."""
+    from ._minkowski_core import winding_numbers  # noqa: PLC0415
+
+    return int(winding_numbers(np.asarray(solid.vertices, dtype=np.float64),
+                               np.asarray(solid.faces, dtype=np.int64),
+                               point.reshape(1, 3))[0]) == 1
+
+
+def _gap(corners: np.ndarray, smaller: trimesh.Trimesh) -> float:
+    """The largest distance from the ``corners`` of a convex polytope to the convex
+    ``smaller`` inside it (their Hausdorff distance)."""
+    if len(corners) == 0:
+        return 0.0
+    _, distance, _ = trimesh.proximity.closest_point(smaller, corners)
+    return float(np.max(distance))
+
+
+def _grown_between(solid, hull, radius, eps):
+    """``(H grown by r, its distance to H_t grown by r, subdivisions, chord)``, or
+    ``None`` when ``H_t`` is not shown inside the solid or the growth would take too many
+    points. Growing is 1-Lipschitz: the grown sets are no farther apart than ``H`` and
+    ``H_t``."""
+    normals, offsets, depth, corners, faces = hull
+    inner = _planes_hull(normals, offsets - depth)
+    if inner is None or not _inside_at(solid, inner[1]):
+        return None
+    between = _gap(corners, inner[0]) if depth > 0 else 0.0
+    grown = _grown(corners, faces, radius, eps)
+    if grown is None:
+        return None
+    return grown[0], between, grown[2], grown[1]
+
+
+def _eroded_between(solid, normals, offsets, depth, r, rounding):
+    """``(H eroded by r, its distance to H_t eroded by r)`` (an empty mesh when nothing is
+    left), or ``None`` when ``H_t`` is not shown inside the solid."""
+    inner_hull = _planes_hull(normals, offsets - depth)
+    if inner_hull is None or not _inside_at(solid, inner_hull[1]):
+        return None
+    outer = _planes_hull(normals, offsets - r, rounding)
+    if outer is None:
+        return trimesh.Trimesh(), 0.0
+    inner = _planes_hull(normals, offsets - r - depth, rounding)
+    if depth == 0:
+        return outer[0], 0.0
+    if inner is None:  # H_t eroded is empty, H eroded is not: the whole of it is between
+        return outer[0], float(np.ptp(outer[0].vertices, axis=0).max())
+    return outer[0], _gap(np.asarray(outer[0].vertices), inner[0])
+
+
+def _planes_hull(normals: np.ndarray, offsets: np.ndarray, thinnest: float = 0.0
+                 ) -> tuple[trimesh.Trimesh, np.ndarray] | None:
+    """``({x : n · x <= d}, its Chebyshev centre)``: the hull of the half-spaces' corners,
+    found about the deepest point; ``None`` when that point is no deeper than ``thinnest``
+    (nothing, or a sheet, is left) or the solver fails."""
     from scipy.optimize import linprog  # noqa: PLC0415
     from scipy.spatial import HalfspaceIntersection  # noqa: PLC0415
 
-    moved = offsets - depth
-    # the deepest point x and its depth t: maximise t with n · x + t <= d - depth
+    # the deepest point x and its depth t: maximise t with n · x + t <= d
     res = linprog(c=[0.0, 0.0, 0.0, -1.0], A_ub=np.column_stack([normals, np.ones(len(normals))]),
-                  b_ub=moved, bounds=[(None, None)] * 3 + [(0.0, None)], method="highs")
-    if res.status == 2 or (res.status == 0 and res.x[3] <= rounding):  # 2: infeasible
-        return trimesh.Trimesh()
-    if res.status != 0:
+                  b_ub=offsets, bounds=[(None, None)] * 3 + [(0.0, None)], method="highs")
+    if res.status != 0 or res.x[3] <= thinnest:
         return None
-    halfspaces = np.column_stack([normals, -moved])  # n · x - (d - depth) <= 0
-    corners = HalfspaceIntersection(halfspaces, np.asarray(res.x[:3])).intersections
-    return _mesh(_hull(corners))
+    centre = np.asarray(res.x[:3])
+    corners = HalfspaceIntersection(np.column_stack([normals, -offsets]), centre).intersections
+    return _mesh(_hull(corners)), centre
 
 
-def _grown(vertices: np.ndarray, normals: np.ndarray, radius: float,
+def _grown(corners: np.ndarray, faces: tuple[np.ndarray, np.ndarray], radius: float,
            eps: float) -> tuple[trimesh.Trimesh, float, int] | None:
-    """``(P ⊕ B, bound, subdivisions)`` for the coarsest icosphere whose chord bound
-    ``r (1 - c)`` is within ``eps`` (``c``: its least facet distance on the unit sphere; the
-    face-normal points added to it only make ``B`` larger, so the bound holds for ``B``);
-    ``None`` when that needs more than :data:`MAX_POINTS` points or
+    """``(hull, chord, subdivisions)``: the hull of ``H``'s corners each grown by the
+    coarsest icosphere whose chord ``r (1 - c)`` is within ``eps`` (``c``: its least facet
+    distance on the unit sphere), and of each triangle's corners moved ``r`` along its
+    normal. It holds ``H ⊕ icosphere`` (within the chord of the true offset) and lies
+    inside the true offset, so the chord bounds it; the moved corners make the flat faces
+    exactly ``r`` out. ``None`` when that needs more than :data:`MAX_POINTS` points or
     :data:`MAX_SUBDIVISIONS` subdivisions."""
-    corners = np.unique(vertices, axis=0)  # a convex solid's vertices: its hull's, or on it
+    triangle_corners, triangle_normals = faces
+    moved = (triangle_corners + radius * triangle_normals[:, None, :]).reshape(-1, 3)
     for subdivisions in range(MAX_SUBDIVISIONS + 1):
         unit, inner = _unit_ball(subdivisions)
         chord = radius * (1.0 - inner)
         if chord > eps:
             continue
-        ball = np.vstack([unit, normals]) * radius
-        if len(ball) * len(corners) > MAX_POINTS:
+        if len(unit) * len(corners) > MAX_POINTS:
             return None
-        points = (corners[:, None, :] + ball[None, :, :]).reshape(-1, 3)
-        return _mesh(_hull(points)), chord, subdivisions
+        points = (corners[:, None, :] + radius * unit[None, :, :]).reshape(-1, 3)
+        return _mesh(_hull(np.vstack([points, moved]))), chord, subdivisions
     return None
 
 

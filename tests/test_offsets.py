@@ -159,7 +159,7 @@ def test_a_convex_solid_with_a_zero_area_sliver_is_eroded_by_its_hulls_planes(si
     moved to bound every vertex, so the cube shrinks by 2 r on each axis."""
     r = 0.1 * side
     eroded = planner.offset(_cube_with_a_needle(side), -r, eps=0.01 * side)
-    assert eroded.stats.get("convex") == "face planes moved inward"
+    assert eroded.stats.get("convex") == "hull's facet planes moved inward"
     half = side / 2 - r
     np.testing.assert_allclose(eroded.mesh.bounds, [[-half] * 3, [half] * 3], rtol=0,
                                atol=1e-9 * side)
@@ -167,6 +167,40 @@ def test_a_convex_solid_with_a_zero_area_sliver_is_eroded_by_its_hulls_planes(si
     grown = planner.offset(_cube_with_a_needle(side), r, eps=0.01 * side)
     assert grown.stats.get("convex") and grown.mesh.is_watertight
     assert grown.mesh.bounds[1][0] == pytest.approx(side / 2 + r, rel=1e-12)
+
+
+def test_a_solid_convex_up_to_rounding_is_offset_by_its_hull_within_the_bound():
+    """Corners of a convex solid rounded to 1e-3 (as CAD exports round theirs): no longer
+    exactly convex, so the bound adds how far the hull lies from the largest polytope of its
+    planes that the solid is shown to contain; both ways against the exact distance to the
+    rounded solid itself, and a dent deeper than eps is left to the cell source."""
+    from shapes import random_convex
+
+    exact = random_convex(40, (10.0, 8.0, 6.0), seed=5)
+    rounded = trimesh.Trimesh(np.round(exact.vertices, 3), exact.faces, process=False)
+    r, eps = 0.5, 0.05
+    grown = planner.offset(rounded, r, eps=eps)
+    assert grown.stats["convex"] and 0 < grown.stats["hull_depth"] <= 2e-3
+    assert grown.error_bound <= eps
+    points = np.vstack([grown.mesh.vertices,
+                        trimesh.sample.sample_surface(grown.mesh, 4000, seed=4)[0]])
+    _, distance, _ = trimesh.proximity.closest_point(rounded, points)
+    assert np.all(np.abs(distance - r) <= grown.error_bound)
+    eroded = planner.offset(rounded, -r, eps=eps)
+    assert eroded.stats["convex"]
+    inside = eroded.mesh.vertices
+    _, depth, _ = trimesh.proximity.closest_point(rounded, inside)
+    assert np.all(rounded.contains(inside)) and np.all(np.abs(depth - r) <= eroded.error_bound)
+    # a dent of 0.3 in one face: deeper than eps (0.25 here, a coarse grid), so no hull path
+    dented = rounded.copy()
+    centre = dented.triangles_center[0]
+    dented.vertices = np.vstack([dented.vertices, centre - 0.3 * dented.face_normals[0]])
+    dented = trimesh.Trimesh(dented.vertices, np.vstack([
+        np.delete(dented.faces, 0, axis=0),
+        [[dented.faces[0][0], dented.faces[0][1], len(dented.vertices) - 1],
+         [dented.faces[0][1], dented.faces[0][2], len(dented.vertices) - 1],
+         [dented.faces[0][2], dented.faces[0][0], len(dented.vertices) - 1]]]), process=False)
+    assert "convex" not in planner.offset(dented, r, eps=0.25).stats
 
 
 def test_a_non_convex_solid_is_offset_by_the_cell_source():
