@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import functools
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -67,19 +68,23 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
         hull = _hull_planes(solid, eps)
         if hull is None:
             return None
-        normals, offsets, depth, corners, _ = hull
+        # H_t, the hull's planes moved in by the depth: inside the solid (one winding number)
+        inner = _planes_hull(hull.normals, hull.offsets - hull.depth)
+        if inner is None or not _inside_at(solid, inner[1]):
+            return None
         if radius < 0:
-            made = _eroded_between(solid, normals, offsets, depth, -radius, rounding)
+            mesh, between = _eroded(hull, -radius, rounding)
             method, subdivisions, chord = "hull's facet planes moved inward", None, 0.0
         else:
-            made = _grown_between(solid, hull, radius, eps)
+            grown = _grown(hull, radius, eps)
+            if grown is None:
+                return None
+            mesh, chord, subdivisions = grown
+            # growing is 1-Lipschitz: the grown H and H_t are no farther apart than H, H_t
+            between = _gap(hull.corners, inner[0]) if hull.depth > 0 else 0.0
             method = "hull of the vertices' tessellated balls"
-            subdivisions, chord = (made[2], made[3]) if made is not None else (None, 0.0)
     except QhullError:  # a hull too thin for qhull: the cell source decides
         return None
-    if made is None:
-        return None
-    mesh, between = made[0], made[1]
     bound = chord + between + rounding
     if len(mesh.faces) and bound > eps:
         return None
@@ -88,23 +93,37 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
              "bound_by_region": {"planes": between + rounding, "sampled": 0.0, "missed": 0.0,
                                  "round": chord},
              "holes_closed": 0, "sheets_unzipped": 0, "convex": method,
-             "hull_depth": depth, "ball_subdivisions": subdivisions,
+             "hull_depth": hull.depth, "ball_subdivisions": subdivisions,
              "seconds": time.perf_counter() - t0}
     return mesh, bound, stats
 
 
-def _hull_planes(solid: trimesh.Trimesh, eps: float):
-    """The facet planes ``(unit normals, offsets)`` of the hull ``H`` of the solid's
-    vertices (each offset the largest ``n · v`` over them, so every plane bounds them), the
-    depth ``t`` within which every triangle has its corners on one of them, ``H``'s
-    vertices, and its triangles' corners with their unit normals; ``None`` when ``t``
-    exceeds ``eps`` or there are too many faces."""
+@dataclass(frozen=True)
+class _Hull:
+    """The hull ``H`` of a solid's vertices: its distinct facet planes (unit ``normals``,
+    ``offsets`` each the largest ``n · v`` over the vertices, so every plane bounds them),
+    the ``depth`` ``t`` within which every triangle of the solid has its corners on one of
+    them, its ``corners`` (vertices), and its triangles' corners (``triangles``, (k, 3,
+    3)) with their unit normals (``triangle_normals``)."""
+
+    normals: np.ndarray
+    offsets: np.ndarray
+    depth: float
+    corners: np.ndarray
+    triangles: np.ndarray
+    triangle_normals: np.ndarray
+
+
+def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull | None:
+    """The solid's :class:`_Hull`; ``None`` when its depth exceeds ``eps`` or there are too
+    many faces."""
     if len(solid.faces) > MAX_FACES or len(solid.faces) < 4:
         return None
     vertices = np.asarray(solid.vertices, dtype=np.float64)
     hull = _hull(vertices)
-    normals = hull.equations[:, :3] / np.linalg.norm(hull.equations[:, :3], axis=1)[:, None]
-    normals = np.unique(np.round(normals, 12), axis=0)  # the triangulated facets' repeats
+    triangle_normals = hull.equations[:, :3] / np.linalg.norm(hull.equations[:, :3],
+                                                              axis=1)[:, None]
+    normals = np.unique(np.round(triangle_normals, 12), axis=0)  # coplanar triangles' repeats
     normals /= np.linalg.norm(normals, axis=1)[:, None]
     offsets = (vertices @ normals.T).max(axis=0)
     if len(solid.faces) * len(normals) > 4 * MAX_FACES * 200:
@@ -117,10 +136,8 @@ def _hull_planes(solid: trimesh.Trimesh, eps: float):
     depth = float(deepest.min(axis=1).max())
     if depth > eps:
         return None
-    simplex_normals = hull.equations[:, :3] / np.linalg.norm(hull.equations[:, :3],
-                                                             axis=1)[:, None]
-    return (normals, offsets, depth, vertices[hull.vertices],
-            (vertices[hull.simplices], simplex_normals))
+    return _Hull(normals, offsets, depth, vertices[hull.vertices], vertices[hull.simplices],
+                 triangle_normals)
 
 
 def _inside_at(solid: trimesh.Trimesh, point: np.ndarray) -> bool:
@@ -141,34 +158,15 @@ def _gap(corners: np.ndarray, smaller: trimesh.Trimesh) -> float:
     return float(np.max(distance))
 
 
-def _grown_between(solid, hull, radius, eps):
-    """``(H grown by r, its distance to H_t grown by r, subdivisions, chord)``, or
-    ``None`` when ``H_t`` is not shown inside the solid or the growth would take too many
-    points. Growing is 1-Lipschitz: the grown sets are no farther apart than ``H`` and
-    ``H_t``."""
-    normals, offsets, depth, corners, faces = hull
-    inner = _planes_hull(normals, offsets - depth)
-    if inner is None or not _inside_at(solid, inner[1]):
-        return None
-    between = _gap(corners, inner[0]) if depth > 0 else 0.0
-    grown = _grown(corners, faces, radius, eps)
-    if grown is None:
-        return None
-    return grown[0], between, grown[2], grown[1]
-
-
-def _eroded_between(solid, normals, offsets, depth, r, rounding):
-    """``(H eroded by r, its distance to H_t eroded by r)`` (an empty mesh when nothing is
-    left), or ``None`` when ``H_t`` is not shown inside the solid."""
-    inner_hull = _planes_hull(normals, offsets - depth)
-    if inner_hull is None or not _inside_at(solid, inner_hull[1]):
-        return None
-    outer = _planes_hull(normals, offsets - r, rounding)
+def _eroded(hull: _Hull, r: float, rounding: float) -> tuple[trimesh.Trimesh, float]:
+    """``(H eroded by r, its distance to H_t eroded by r)``; an empty mesh when nothing is
+    left."""
+    outer = _planes_hull(hull.normals, hull.offsets - r, rounding)
     if outer is None:
         return trimesh.Trimesh(), 0.0
-    inner = _planes_hull(normals, offsets - r - depth, rounding)
-    if depth == 0:
+    if hull.depth == 0:
         return outer[0], 0.0
+    inner = _planes_hull(hull.normals, hull.offsets - r - hull.depth, rounding)
     if inner is None:  # H_t eroded is empty, H eroded is not: the whole of it is between
         return outer[0], float(np.ptp(outer[0].vertices, axis=0).max())
     return outer[0], _gap(np.asarray(outer[0].vertices), inner[0])
@@ -192,25 +190,24 @@ def _planes_hull(normals: np.ndarray, offsets: np.ndarray, thinnest: float = 0.0
     return _mesh(_hull(corners)), centre
 
 
-def _grown(corners: np.ndarray, faces: tuple[np.ndarray, np.ndarray], radius: float,
-           eps: float) -> tuple[trimesh.Trimesh, float, int] | None:
-    """``(hull, chord, subdivisions)``: the hull of ``H``'s corners each grown by the
+def _grown(hull: _Hull, radius: float, eps: float
+           ) -> tuple[trimesh.Trimesh, float, int] | None:
+    """``(mesh, chord, subdivisions)``: the hull of ``H``'s corners each grown by the
     coarsest icosphere whose chord ``r (1 - c)`` is within ``eps`` (``c``: its least facet
     distance on the unit sphere), and of each triangle's corners moved ``r`` along its
     normal. It holds ``H ⊕ icosphere`` (within the chord of the true offset) and lies
     inside the true offset, so the chord bounds it; the moved corners make the flat faces
     exactly ``r`` out. ``None`` when that needs more than :data:`MAX_POINTS` points or
     :data:`MAX_SUBDIVISIONS` subdivisions."""
-    triangle_corners, triangle_normals = faces
-    moved = (triangle_corners + radius * triangle_normals[:, None, :]).reshape(-1, 3)
+    moved = (hull.triangles + radius * hull.triangle_normals[:, None, :]).reshape(-1, 3)
     for subdivisions in range(MAX_SUBDIVISIONS + 1):
         unit, inner = _unit_ball(subdivisions)
         chord = radius * (1.0 - inner)
         if chord > eps:
             continue
-        if len(unit) * len(corners) > MAX_POINTS:
+        if len(unit) * len(hull.corners) > MAX_POINTS:
             return None
-        points = (corners[:, None, :] + radius * unit[None, :, :]).reshape(-1, 3)
+        points = (hull.corners[:, None, :] + radius * unit[None, :, :]).reshape(-1, 3)
         return _mesh(_hull(np.vstack([points, moved]))), chord, subdivisions
     return None
 

@@ -178,11 +178,17 @@ fn exact_hulls(surface: Surface, set: &PolytopeSet, params: &UnionParams) -> Uni
         planes_fallback_edges: 0,
     };
     if params.simplify {
-        let t = Instant::now();
-        merge_coplanar(&mut r.surface, 1e-10 * scale, 1e-18 * scale * scale);
-        r.seconds_simplify = t.elapsed().as_secs_f64();
+        simplify(&mut r, scale, 1e-18 * scale * scale);
     }
     r
+}
+
+/// [`merge_coplanar`] on the result's surface (planes within `1e-10` of `scale`, no
+/// triangle below `min_area` made), timed.
+fn simplify(r: &mut UnionResult, scale: f64, min_area: f64) {
+    let t = Instant::now();
+    merge_coplanar(&mut r.surface, 1e-10 * scale, min_area);
+    r.seconds_simplify = t.elapsed().as_secs_f64();
 }
 
 /// [`approximate_union`] for any [`CellSource`] whose solid lies in `region`.
@@ -262,10 +268,8 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
     let mut r = best.expect("at least one round");
     r.triangles_extracted = r.surface.faces.len();
     if params.simplify {
-        let t = Instant::now();
-        let scale = region.diagonal();
-        merge_coplanar(&mut r.surface, 1e-10 * scale, 1e-12 * r.h * r.h);
-        r.seconds_simplify = t.elapsed().as_secs_f64();
+        let min_area = 1e-12 * r.h * r.h;
+        simplify(&mut r, region.diagonal(), min_area);
     }
     Ok(r)
 }

@@ -22,7 +22,7 @@ const SLACK: f64 = 1e-4;
 /// A cap of directions: unit axis and angular radius (below a quarter turn, [`SLACK`]
 /// included), kept as its cosine and sine; no axis: every direction.
 #[derive(Clone, Copy, Debug)]
-struct Cap {
+pub(super) struct Cap {
     axis: Vec3,
     cos: f64,
     sin: f64,
@@ -45,12 +45,12 @@ impl Cap {
 }
 
 /// The points `p + s q` (`s` = ±1) for `p` in `a` and `q` in `b` whose normal cones meet
-/// (see the module documentation); `None` when they would be all of them anyway.
-pub(super) fn candidate_sums(a: &[Vec3], b: &[Vec3], s: f64) -> Option<Vec<Vec3>> {
-    let (ca, cb) = (caps(a, 1.0), caps(b, s));
+/// (see the module documentation), given each point's cap ([`caps`]: `ca` of `a`, `cb` of
+/// `b` turned by `s`); `None` when they would be all of them anyway.
+pub(super) fn candidate_sums(a: &[Vec3], ca: &[Cap], b: &[Vec3], cb: &[Cap], s: f64) -> Option<Vec<Vec3>> {
     let mut out = Vec::new();
-    for (p, cp) in a.iter().zip(&ca) {
-        for (q, cq) in b.iter().zip(&cb) {
+    for (p, cp) in a.iter().zip(ca) {
+        for (q, cq) in b.iter().zip(cb) {
             if cp.meets(cq) {
                 out.push(*p + *q * s);
             }
@@ -60,7 +60,7 @@ pub(super) fn candidate_sums(a: &[Vec3], b: &[Vec3], s: f64) -> Option<Vec<Vec3>
 }
 
 /// Each point's cap, with its normals turned by `s` (−1: the cones of `−Q`).
-fn caps(points: &[Vec3], s: f64) -> Vec<Cap> {
+pub(super) fn caps(points: &[Vec3], s: f64) -> Vec<Cap> {
     let Ok(hull) = ConvexPolytope::try_from_points(points, "piece") else {
         return vec![EVERY; points.len()];
     };

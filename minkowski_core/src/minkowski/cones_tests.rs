@@ -53,7 +53,7 @@ fn the_kept_sums_have_the_hull_of_all_sums() {
     for (k, (a, b)) in cases.iter().enumerate() {
         for s in [1.0, -1.0] {
             let every = ConvexPolytope::from_points(&all_sums(a, b, s));
-            let kept = candidate_sums(a, b, s).unwrap_or_else(|| all_sums(a, b, s));
+            let kept = candidate_sums(a, &caps(a, 1.0), b, &caps(b, s), s).unwrap_or_else(|| all_sums(a, b, s));
             let hull = ConvexPolytope::from_points(&kept);
             assert_eq!(sorted_vertices(&hull), sorted_vertices(&every), "case {k}, sign {s}");
             assert!((hull.volume() - every.volume()).abs() <= 1e-12 * every.volume(), "case {k}, sign {s}");

@@ -45,13 +45,16 @@ pub fn pairwise_sums(a: &[Vec<Vec3>], b: &[Vec<Vec3>], kind: SumKind) -> CoreRes
         SumKind::Add => 1.0,
         SumKind::Subtract => -1.0,
     };
+    // each piece's normal-cone caps, once (not once per pair it is in)
+    let caps_a: Vec<_> = a.par_iter().map(|p| cones::caps(p, 1.0)).collect();
+    let caps_b: Vec<_> = b.par_iter().map(|q| cones::caps(q, s)).collect();
     (0..a.len() * b.len())
         .into_par_iter()
         .map(|k| {
             let (i, j) = (k / b.len(), k % b.len());
             let what = format!("sum of A piece {i} and B piece {j}");
             // the sums whose normal cones meet hold every vertex of the sum's hull
-            if let Some(pts) = cones::candidate_sums(&a[i], &b[j], s) {
+            if let Some(pts) = cones::candidate_sums(&a[i], &caps_a[i], &b[j], &caps_b[j], s) {
                 if let Ok(hull) = ConvexPolytope::try_from_points(&pts, &what) {
                     return Ok(hull);
                 }
