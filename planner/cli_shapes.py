@@ -49,6 +49,10 @@ def _add_offset_parser(sub, common) -> None:
     o.add_argument("-o", "--output", required=True, help="output mesh (.stl .obj .ply .off .glb)")
     o.add_argument("--eps", type=float, default=None,
                    help="resolution (default 0.5%% of the result's diagonal)")
+    o.add_argument("--method", choices=("auto", "hull", "ball", "cells"), default="auto",
+                   help="hull: a convex body by its hull; ball: the exact sum with a polytope "
+                   "inscribed in the ball; cells: exact distances cell by cell; auto (default): "
+                   "the first that applies")
     morph = o.add_mutually_exclusive_group()
     morph.add_argument("--opening", action="store_true", help="erode then grow by |r|")
     morph.add_argument("--closing", action="store_true", help="grow then erode by |r|")
@@ -69,11 +73,13 @@ def cmd_offset(args) -> int:
     how = planner.opening if args.opening else planner.closing if args.closing else \
         planner.offset
     result = how(planner.load_mesh(args.mesh, name=args.mesh), args.radius, eps=args.eps,
-                 name=args.mesh, progress=False if args.no_progress else None)
+                 name=args.mesh, progress=False if args.no_progress else None,
+                 method=args.method)
     atomic_write(out, lambda tmp: result.mesh.export(tmp,
                                                      file_type=out.suffix.lower().lstrip(".")))
+    method = result.stats.get("method") or result.stats["stages"][-1]["method"]
     sys.stdout.write(f"wrote {out}: {result.stats['triangles']} triangles, error bound "
-                     f"{result.error_bound:.4g}, {result.stats['seconds']:.2f} s\n")
+                     f"{result.error_bound:.4g} ({method}), {result.stats['seconds']:.2f} s\n")
     return 0
 
 

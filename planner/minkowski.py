@@ -151,6 +151,19 @@ def _grid_eps(box: np.ndarray, diag: float, eps, max_cells: int, *, from_memory:
     return eps_value
 
 
+def _refused(error: ResourceLimitError, what: str, from_memory: bool) -> ResourceLimitError:
+    """The core's refusal of a surface as a user reads it (:func:`planner.budget.explain`),
+    naming ``max_cells`` instead of the memory limit when that budget was given and the
+    leaves are what ran out (the candidate records stay the memory limit's)."""
+    message = str(error)
+    if from_memory or not message.startswith("the octree needs more than"):
+        return budget.explain(error, what)
+    message = message.replace("raise the memory limit", "raise max_cells")
+    refused = ResourceLimitError(f"{what}: {message}")
+    refused.__cause__ = error
+    return refused
+
+
 def bound_by_region(surf: dict) -> dict[str, float]:
     """The native surface ``surf``'s two-sided bound by the kind of region it holds for
     (``error_bound`` is the largest, and never below the grid's): ``planes``, cells
@@ -341,13 +354,16 @@ def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
         t_source = time.perf_counter() - t0
         box = np.asarray(pair.native.bounds)
         diag = float(np.linalg.norm(box[1] - box[0]))
-        eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory, names=names)
+        # no estimate from the box's area: cells resolved by the facets' planes end above
+        # eps (a polyhedral sum needs about as many cells at any eps), so the core's own
+        # leaf budget, counted before each allocation, is the one that refuses
+        eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
         line.show(f"minkplan: {what}: surface at eps {eps_value:.3g}")
         try:
             surf = pair.native.surface(eps_value, max_cells=max_cells,
                                        max_refinements=max_refinements, simplify=simplify)
         except ResourceLimitError as exc:
-            raise budget.explain(exc, what) from exc
+            raise _refused(exc, what, from_memory) from exc
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     stats = {
         "source": "exact",

@@ -2,15 +2,23 @@
 and the opening and closing that compose them (Varadhan and Manocha, section 5.2).
 
 The offset of a solid ``P`` by ``r > 0`` is ``{x : dist(x, P) <= r}``; by ``r < 0`` it is
-the erosion ``{x in P : dist(x, boundary of P) >= |r|}``. Both are computed as cell
-sources of the native octree (:mod:`minkowski_core::offset`): cells classified by exact
-distances to ``P``'s triangles (never a sum with a polyhedral ball), the surface extracted
-with the grid's two-sided error bound. Flat parts (the prisms over faces; all of an
-eroded box) are exact: cells in the column over one face are cut by its offset plane at
-their size (``stats["planar_pieces"]``), only the round parts are sampled. One convex
-body needs no grid (:mod:`.offsets_convex`): grown, the hull of its vertices' balls
-tessellated within ``eps`` (its flat faces exact); eroded, its face planes moved inward
-(exact); ``stats["convex"]`` says so.
+the erosion ``{x in P : dist(x, boundary of P) >= |r|}``. Three ways, each with a proved
+two-sided bound (``method``; ``"auto"`` takes the first that applies):
+
+* ``"hull"`` (:mod:`.offsets_convex`): one body convex up to its file's rounding, without
+  a grid — grown, the hull of its vertices' balls tessellated within ``eps`` (its flat
+  faces exact); eroded, its face planes moved inward (exact);
+* ``"ball"`` (:mod:`.offsets_ball`): the exact Minkowski sum (boundary convolution) of
+  ``P`` with a polytope inscribed in the ball, or of ``P``'s complement in a box for an
+  erosion; the bound is the polytope's gap to the sphere plus the sum's own. Cells the
+  facets' planes resolve end above ``eps``, so a non-convex solid with round parts costs
+  about what its sum with the polytope does, not a grid at ``eps``;
+* ``"cells"``: a cell source of the native octree (:mod:`minkowski_core::offset`): cells
+  classified by exact distances to ``P``'s triangles, the surface extracted with the
+  grid's bound. Flat parts (the prisms over faces; all of an eroded box) are exact: cells
+  in the column over one face are cut by its offset plane at their size
+  (``stats["planar_pieces"]``), only the round parts are sampled, at ``eps``.
+
 ``opening(P, r)`` erodes then grows (removing features thinner than ``2 r``),
 ``closing(P, r)`` grows then erodes (filling gaps narrower than ``2 r``). Their
 ``error_bound`` is ``inf``: an erosion is not continuous in its input (a neck a hair
@@ -37,11 +45,12 @@ from planner.errors import GeometryError, InvalidParameterError, ResourceLimitEr
 from .meshes import load_mesh
 from .meshes.kinds import classify
 from .minkowski import bound_by_region
+from .offsets_ball import ball_offset
 from .offsets_convex import convex_offset
 from .progress import StatusLine
 from .tolerances import tol
 
-__all__ = ["OffsetResult", "closing", "offset", "opening"]
+__all__ = ["METHODS", "OffsetResult", "closing", "offset", "opening"]
 
 
 @dataclass(frozen=True)
@@ -52,9 +61,13 @@ class OffsetResult:
         mesh: the closed, outward surface.
         radius: the offset radius (negative: an erosion); for an opening or closing, the
             radius of its two stages.
-        error_bound: every point of ``mesh`` lies within this distance of the true
-            offset's boundary, and every point of that boundary within it of ``mesh``
-            (``inf`` for an opening or closing: see the module documentation).
+        error_bound: every point ``x`` of ``mesh`` has ``|dist(x, P) - |r||`` within it
+            (``dist`` to the boundary of ``P`` for an erosion), and every point of the
+            true offset's boundary lies within it of ``mesh``; for ``"hull"`` (convex:
+            the distance between the two surfaces) and elsewhere except near a gap or
+            neck whose width is within twice it of ``2 |r|``, where one may be bridged
+            and the other not (:mod:`.offsets_ball`). ``inf`` for an opening or closing
+            (see the module documentation).
         eps: the resolution asked for.
         stats: triangles, cells, seconds (per stage for an opening or closing).
     """
@@ -86,9 +99,16 @@ def _radius(r: float) -> float:
     return value
 
 
+METHODS = ("auto", "hull", "ball", "cells")
+"""How :func:`offset` computes: ``"hull"``, a body convex up to its file's rounding by its
+hull (:mod:`.offsets_convex`); ``"ball"``, the exact sum with a polytope inscribed in the
+ball (:mod:`.offsets_ball`); ``"cells"``, exact distances cell by cell (the native cell
+source); ``"auto"``, the first of those that applies."""
+
+
 def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
            name: str = "mesh", progress: bool | None = None,
-           convex: bool = True) -> OffsetResult:
+           method: str = "auto") -> OffsetResult:
     """The offset of the closed solid ``mesh`` (a trimesh, ``(V, F)`` or a mesh file) by
     ``r``: grown for ``r > 0``, eroded for ``r < 0``.
 
@@ -99,53 +119,69 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
             limit: :mod:`planner.budget`).
         progress: a status line on stderr while the surface is built
             (:mod:`planner.progress`; ``None``: only when stderr is a terminal).
-        convex: offset one convex body without a grid (:mod:`planner.offsets_convex`);
-            ``False``: the cell source for every solid.
+        method: one of :data:`METHODS`; ``stats["method"]`` says which was used.
 
     Raises:
         InvalidMeshError: ``mesh`` is not a closed solid.
-        InvalidParameterError: ``r`` zero or not finite, ``eps`` not positive.
+        InvalidParameterError: ``r`` zero or not finite, ``eps`` not positive, an unknown
+            ``method``, or ``"hull"`` for a solid that is not convex within ``eps``.
         ResourceLimitError: the grid for ``eps`` would not fit the cell budget.
         GeometryError: an erosion that leaves nothing (``|r|`` past the solid's
             thickness).
     """
-    from ._minkowski_core import CheckedMesh, offset_surface
-
     t0 = time.perf_counter()
     radius = _radius(r)
+    if method not in METHODS:
+        raise InvalidParameterError(f"method = {method!r}: must be one of {', '.join(METHODS)}")
     solid = _solid(mesh, name)
     extent = np.ptp(np.asarray(solid.bounds), axis=0)
     diagonal = float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
     step = tol.eps_rel * diagonal if eps is None else float(eps)
     if not (math.isfinite(step) and step > 0):
         raise InvalidParameterError(f"eps = {eps!r}: must be a positive finite number")
-    from . import budget  # noqa: PLC0415
-
-    cells, _ = budget.surface_cells(max_cells)
     verb = "growing" if radius > 0 else "eroding"
     with StatusLine(progress) as line:
         line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
-        hull = convex_offset(solid, radius, step) if convex else None
-        if hull is None:
-            checked = CheckedMesh(np.asarray(solid.vertices, dtype=np.float64),
-                                  np.asarray(solid.faces, dtype=np.int64), name=name)
-            try:
-                raw = offset_surface(checked, radius, step, max_cells=cells)
-            except ResourceLimitError as exc:
-                raise budget.explain(exc, f"{name} offset by {radius:g}") from exc
-    if hull is not None:
-        grown_or_eroded, bound, stats = hull
-        if len(grown_or_eroded.faces) == 0:
-            raise GeometryError(f"{name}: nothing is left of it eroded by {-radius:g} (its "
-                                f"thickest part is thinner than {2 * -radius:g})")
-        stats["seconds"] = time.perf_counter() - t0
-        return OffsetResult(grown_or_eroded, radius, bound, step, stats)
-    if len(raw["faces"]) == 0:
-        if not math.isfinite(raw["error_bound"]):
+        done, used = None, method
+        if method in ("auto", "hull"):
+            done, used = convex_offset(solid, radius, step), "hull"
+            if done is None and method == "hull":
+                raise InvalidParameterError(f"method = 'hull': {name} is not convex within "
+                                            f"eps {step:.3g} (or its hull is too large or "
+                                            f"too thin for qhull)")
+        if done is None and method in ("auto", "ball"):
+            done, used = ball_offset(solid, radius, step, name=name, max_cells=max_cells,
+                                     progress=progress), "ball"
+            if done is None and method == "ball":
+                raise InvalidParameterError(f"method = 'ball': eps {step:.3g} is finer than "
+                                            f"the finest icosphere of radius {abs(radius):g}")
+        if done is None:
+            done, used = _cell_offset(solid, radius, step, max_cells, name), "cells"
+    surface, bound, stats = done
+    if len(surface.faces) == 0:
+        if not math.isfinite(bound):
             raise GeometryError(f"{name}: nothing was resolved of it offset by {radius:g} at "
                                 f"eps {step:g}; try a smaller eps")
         raise GeometryError(f"{name}: nothing is left of it eroded by {-radius:g} (its "
                             f"thickest part is thinner than {2 * -radius:g})")
+    stats["method"] = used
+    stats["seconds"] = time.perf_counter() - t0
+    return OffsetResult(surface, radius, bound, step, stats)
+
+
+def _cell_offset(solid: trimesh.Trimesh, radius: float, step: float, max_cells: int | None,
+                 name: str) -> tuple[trimesh.Trimesh, float, dict[str, Any]]:
+    """``(mesh, error_bound, stats)`` of the native cell source's offset."""
+    from . import budget  # noqa: PLC0415
+    from ._minkowski_core import CheckedMesh, offset_surface  # noqa: PLC0415
+
+    cells, _ = budget.surface_cells(max_cells)
+    checked = CheckedMesh(np.asarray(solid.vertices, dtype=np.float64),
+                          np.asarray(solid.faces, dtype=np.int64), name=name)
+    try:
+        raw = offset_surface(checked, radius, step, max_cells=cells)
+    except ResourceLimitError as exc:
+        raise budget.explain(exc, f"{name} offset by {radius:g}") from exc
     surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
     stats = {"triangles": len(surface.faces), "band_cells": int(raw["band_cells"]),
              "h": float(raw["h"]), "refinements": int(raw["refinements"]),
@@ -153,31 +189,34 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
              "planes_fallback_edges": int(raw["planes_fallback_edges"]),
              "bound_by_region": bound_by_region(raw),
              "holes_closed": int(raw["holes_closed"]),
-             "sheets_unzipped": int(raw["sheets_unzipped"]),
-             "seconds": time.perf_counter() - t0}
-    return OffsetResult(surface, radius, float(raw["error_bound"]), step, stats)
+             "sheets_unzipped": int(raw["sheets_unzipped"])}
+    return surface, float(raw["error_bound"]), stats
 
 
 def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
-              kind: str, progress: bool | None) -> OffsetResult:
-    one = offset(mesh, first, eps=eps, max_cells=max_cells, name=name, progress=progress)
+              kind: str, progress: bool | None, method: str) -> OffsetResult:
+    one = offset(mesh, first, eps=eps, max_cells=max_cells, name=name, progress=progress,
+                 method=method)
     two = offset(one.mesh, second, eps=eps, max_cells=max_cells, name=f"{name} ({kind})",
-                 progress=progress)
+                 progress=progress, method=method)
     stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
+             "method": f"{one.stats['method']} then {two.stats['method']}",
              "stage_bounds": [one.error_bound, two.error_bound],
              "seconds": one.stats["seconds"] + two.stats["seconds"]}
     return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
 
 
 def opening(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
-            name: str = "mesh", progress: bool | None = None) -> OffsetResult:
+            name: str = "mesh", progress: bool | None = None,
+            method: str = "auto") -> OffsetResult:
     """Erode by ``r`` then grow by ``r`` (``r > 0``): features thinner than ``2 r`` go."""
     radius = abs(_radius(r))
-    return _composed(mesh, -radius, radius, eps, max_cells, name, "eroded", progress)
+    return _composed(mesh, -radius, radius, eps, max_cells, name, "eroded", progress, method)
 
 
 def closing(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
-            name: str = "mesh", progress: bool | None = None) -> OffsetResult:
+            name: str = "mesh", progress: bool | None = None,
+            method: str = "auto") -> OffsetResult:
     """Grow by ``r`` then erode by ``r`` (``r > 0``): gaps narrower than ``2 r`` close."""
     radius = abs(_radius(r))
-    return _composed(mesh, radius, -radius, eps, max_cells, name, "grown", progress)
+    return _composed(mesh, radius, -radius, eps, max_cells, name, "grown", progress, method)

@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-__all__ = ["MAX_FACES", "MAX_POINTS", "convex_offset"]
+__all__ = ["MAX_FACES", "MAX_POINTS", "convex_hull", "convex_offset", "hull_mesh", "unit_ball"]
 
 MAX_FACES = 5000
 """Solids with more triangles are left to the cell source (the test is faces × hull
@@ -120,7 +120,7 @@ def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull | None:
     if len(solid.faces) > MAX_FACES or len(solid.faces) < 4:
         return None
     vertices = np.asarray(solid.vertices, dtype=np.float64)
-    hull = _hull(vertices)
+    hull = convex_hull(vertices)
     triangle_normals = hull.equations[:, :3] / np.linalg.norm(hull.equations[:, :3],
                                                               axis=1)[:, None]
     normals = np.unique(np.round(triangle_normals, 12), axis=0)  # coplanar triangles' repeats
@@ -187,7 +187,7 @@ def _planes_hull(normals: np.ndarray, offsets: np.ndarray, thinnest: float = 0.0
         return None
     centre = np.asarray(res.x[:3])
     corners = HalfspaceIntersection(np.column_stack([normals, -offsets]), centre).intersections
-    return _mesh(_hull(corners)), centre
+    return hull_mesh(convex_hull(corners)), centre
 
 
 def _grown(hull: _Hull, radius: float, eps: float
@@ -201,33 +201,33 @@ def _grown(hull: _Hull, radius: float, eps: float
     :data:`MAX_SUBDIVISIONS` subdivisions."""
     moved = (hull.triangles + radius * hull.triangle_normals[:, None, :]).reshape(-1, 3)
     for subdivisions in range(MAX_SUBDIVISIONS + 1):
-        unit, inner = _unit_ball(subdivisions)
+        unit, inner = unit_ball(subdivisions)
         chord = radius * (1.0 - inner)
         if chord > eps:
             continue
         if len(unit) * len(hull.corners) > MAX_POINTS:
             return None
         points = (hull.corners[:, None, :] + radius * unit[None, :, :]).reshape(-1, 3)
-        return _mesh(_hull(np.vstack([points, moved]))), chord, subdivisions
+        return hull_mesh(convex_hull(np.vstack([points, moved]))), chord, subdivisions
     return None
 
 
 @functools.lru_cache(maxsize=None)
-def _unit_ball(subdivisions: int) -> tuple[np.ndarray, float]:
+def unit_ball(subdivisions: int) -> tuple[np.ndarray, float]:
     """The unit icosphere's vertices and the least distance from its centre to a facet
     plane."""
-    sphere = _hull(trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0).vertices)
+    sphere = convex_hull(trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0).vertices)
     return np.asarray(sphere.points[sphere.vertices]), float(-sphere.equations[:, 3].max())
 
 
-def _hull(points: np.ndarray):
+def convex_hull(points: np.ndarray):
     """Qhull's convex hull of ``points`` (triangulated facets, outward ``equations``)."""
     from scipy.spatial import ConvexHull  # noqa: PLC0415
 
     return ConvexHull(points, qhull_options="Qt")
 
 
-def _mesh(hull) -> trimesh.Trimesh:
+def hull_mesh(hull) -> trimesh.Trimesh:
     """A hull's triangles as a closed, outward mesh on the vertices they use."""
     faces = np.asarray(hull.simplices, dtype=np.int64)
     points = np.asarray(hull.points)

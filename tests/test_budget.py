@@ -106,15 +106,33 @@ def test_a_small_limit_refuses_the_exact_sum_that_the_default_computes():
 
 
 def test_a_small_limit_refuses_the_grid_an_explicit_budget_names_max_cells():
+    # curved and not convex: the sum is sampled on a grid, whose leaves the core counts
+    torus, bumps = _torus_and_bumps()
+    with planner.memory_limit(0.05), pytest.raises(ResourceLimitError) as refused:
+        planner.minkowski_sum(torus, bumps, exact=True, eps=0.003)
+    message = str(refused.value)
+    assert "octree needs more than" in message and "\n" not in message
+    assert "--memory-limit (now 0.05 GiB" in message
+    with pytest.raises(ResourceLimitError, match="raise max_cells") as named:
+        planner.minkowski_sum(torus, bumps, exact=True, eps=0.01, max_cells=1000)
+    assert "memory" not in str(named.value)
+
+
+def test_a_polyhedral_sum_at_a_fine_eps_needs_no_more_cells():
+    """Cells resolved by facet planes end above eps: an L-bracket ⊕ a cube at an eps
+    a thousand times finer takes about as many cells, within the small limit that a
+    grid over the box's area at that eps would be far past, and is the same solid."""
     from shapes import l_bracket
 
-    # not convex: the sum needs a grid (one convex sum is its hull, with none)
     bracket, box = l_bracket(), trimesh.creation.box((1, 1, 1))
-    with planner.memory_limit(0.002), pytest.raises(ResourceLimitError,
-                                                    match="--memory-limit is 0.002 GiB"):
-        planner.minkowski_sum(bracket, box, eps=0.01)
-    with pytest.raises(ResourceLimitError, match="raise max_cells"):
-        planner.minkowski_sum(bracket, box, eps=0.01, max_cells=1000)
+    coarse = planner.minkowski_sum(bracket, box, eps=0.01)
+    with planner.memory_limit(0.002):
+        fine = planner.minkowski_sum(bracket, box, eps=1e-5)
+    assert fine.stats["bound_by_region"] == {"planes": 0.0, "sampled": 0.0, "missed": 0.0}
+    leaves = sum(fine.stats["cells"].values())
+    assert leaves <= 2 * sum(coarse.stats["cells"].values())
+    assert fine.mesh.is_watertight
+    assert abs(fine.mesh.volume - coarse.mesh.volume) <= 1e-9 * coarse.mesh.volume
 
 
 def test_a_small_limit_refuses_the_planners_cspace():
@@ -143,8 +161,8 @@ def _run(tmp_path: Path, *argv: str) -> subprocess.CompletedProcess:
 @pytest.mark.parametrize("command", [
     ("plan", str(ROOT / "scenarios" / "peg_in_hole.yaml"), "--out", "out", "--no-progress",
      "--memory-limit", "0.002"),
-    ("--memory-limit", "0.002", "minkowski", str(ROOT / "scenarios/peg_in_hole/peg.stl"),
-     str(ROOT / "scenarios/peg_in_hole/block.stl"), "-o", "out/sum.stl", "--stats",
+    ("--memory-limit", "0.002", "minkowski", str(ROOT / "scenarios/assemblies/meshes/ring_a.stl"),
+     str(ROOT / "scenarios/assemblies/meshes/ring_b.stl"), "-o", "out/sum.stl", "--stats",
      "out/stats.json", "--no-progress"),
     ("assemble", str(ROOT / "scenarios/assemblies/linked_rings.yaml"), "--out", "out",
      "--memory-limit", "0.002", "--no-progress", "--html"),

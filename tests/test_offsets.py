@@ -32,16 +32,17 @@ def _volume_slack(result, area: float) -> float:
     return area * result.error_bound * 1.05
 
 
-@pytest.mark.parametrize("convex", [True, False])
+@pytest.mark.parametrize("method", ["hull", "ball", "cells"])
 @pytest.mark.parametrize("shape", ["box", "tetrahedron"])
-def test_a_grown_convex_solid_has_steiners_volume(shape, convex):
+def test_a_grown_convex_solid_has_steiners_volume(shape, method):
     if shape == "box":
         solid = trimesh.creation.box([2.0, 1.0, 0.5])
     else:
         solid = trimesh.Trimesh([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]],
                                 [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]])
     r = 0.3
-    result = planner.offset(solid, r, eps=0.03, convex=convex)
+    result = planner.offset(solid, r, eps=0.03, method=method)
+    assert result.stats["method"] == method
     exact = _steiner(solid, r)
     grown_area = float(result.mesh.area)
     assert result.mesh.is_watertight and result.mesh.volume > 0
@@ -60,7 +61,7 @@ def test_an_eroded_box_is_the_shrunken_box():
 def test_an_eroded_box_is_resolved_by_its_face_planes_exactly():
     # every cell of the shrunken box's boundary lies in the column over one to three faces:
     # cut by their offset planes at its size, nothing sampled
-    result = planner.offset(trimesh.creation.box([2.0, 1.0, 1.0]), -0.2, convex=False)
+    result = planner.offset(trimesh.creation.box([2.0, 1.0, 1.0]), -0.2, method="cells")
     assert result.stats["planar_pieces"] > 0 and result.stats["band_cells"] == 0
     assert len(result.mesh.faces) == 12
     corners = np.abs(result.mesh.vertices)
@@ -68,15 +69,18 @@ def test_an_eroded_box_is_resolved_by_its_face_planes_exactly():
     assert abs(result.mesh.volume - 1.6 * 0.6 * 0.6) < 1e-12
 
 
-@pytest.mark.parametrize("convex", [True, False])
-def test_a_grown_box_has_exact_flat_faces_joined_to_its_round_edges(convex):
-    # the cell source (its face columns cut by their offset planes) and the convex path
-    # (the hull of the corners' balls, with a ball point along every face normal)
+@pytest.mark.parametrize("method", ["hull", "ball", "cells"])
+def test_a_grown_box_has_exact_flat_faces_joined_to_its_round_edges(method):
+    # the cell source (its face columns cut by their offset planes), the convex path
+    # (the hull of the corners' balls, with a ball point along every face normal) and
+    # the sum with the inscribed ball (the face normals among its vertices)
     half, r = 0.5, 0.25
-    result = planner.offset(trimesh.creation.box([1.0, 1.0, 1.0]), r, eps=0.02, convex=convex)
+    result = planner.offset(trimesh.creation.box([1.0, 1.0, 1.0]), r, eps=0.02, method=method)
     assert result.mesh.is_watertight
-    if convex:
+    if method == "hull":
         assert result.stats["convex"] and result.stats["band_cells"] == 0
+    elif method == "ball":
+        assert result.stats["ball"]["with_face_normals"]
     else:
         assert result.stats["planar_pieces"] > 0
     tris = result.mesh.triangles
@@ -91,11 +95,11 @@ def test_a_grown_box_has_exact_flat_faces_joined_to_its_round_edges(convex):
         np.testing.assert_allclose(np.abs(tris[over][:, :, axis]), half + r, rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize("convex", [True, False])
-def test_every_output_point_is_within_the_bound_of_the_true_offset_surface(convex):
+@pytest.mark.parametrize("method", ["hull", "ball", "cells"])
+def test_every_output_point_is_within_the_bound_of_the_true_offset_surface(method):
     solid = trimesh.creation.box([1.0, 1.0, 1.0])
     r = 0.25
-    result = planner.offset(solid, r, eps=0.03, convex=convex)
+    result = planner.offset(solid, r, eps=0.03, method=method)
     points, _ = trimesh.sample.sample_surface(result.mesh, 4000, seed=0)
     # the exact distance to the box (a solid: 0 inside)
     outside = np.maximum(np.abs(points) - 0.5, 0.0)
@@ -203,38 +207,84 @@ def test_a_solid_convex_up_to_rounding_is_offset_by_its_hull_within_the_bound():
     assert "convex" not in planner.offset(dented, r, eps=0.25).stats
 
 
-def test_a_non_convex_solid_is_offset_by_the_cell_source():
+def test_a_non_convex_solid_is_offset_by_the_sum_with_an_inscribed_ball():
     from shapes import l_bracket
 
     result = planner.offset(l_bracket(), 0.1, eps=0.05)
-    assert "convex" not in result.stats and result.stats["band_cells"] > 0
+    assert "convex" not in result.stats and result.stats["method"] == "ball"
+    ball = result.stats["ball"]
+    assert 0 < ball["delta"] <= 0.5 * 0.05 and ball["with_face_normals"]
+    assert result.stats["bound_by_region"]["round"] == ball["delta"]
+    cells = planner.offset(l_bracket(), 0.1, eps=0.05, method="cells")
+    assert cells.stats["method"] == "cells" and cells.stats["band_cells"] > 0
 
 
-def test_a_non_convex_offset_is_within_its_bound_of_the_exact_distance():
+@pytest.mark.parametrize("method", ["ball", "cells"])
+@pytest.mark.parametrize("r", [0.2, -0.15])
+def test_a_non_convex_offset_is_within_its_bound_of_the_exact_distance(method, r):
     # concave edges and corners: the boundary's crossings there come from several
-    # triangles' neighbourhoods at once (their closed-form intervals, merged)
+    # triangles' neighbourhoods at once (their closed-form intervals, merged); eroded,
+    # every point inside the bracket at |r| from its boundary, within the bound
     from shapes import l_bracket
 
     bracket = l_bracket(length=2.0, height=1.5, thickness=0.5, depth=1.0)
-    r = 0.2
-    result = planner.offset(bracket, r, eps=0.04)
-    assert result.mesh.is_watertight and math.isfinite(result.error_bound)
-    points, _ = trimesh.sample.sample_surface(result.mesh, 4000, seed=1)
+    result = planner.offset(bracket, r, eps=0.04, method=method)
+    assert result.stats["method"] == method
+    assert result.mesh.is_watertight and result.mesh.is_winding_consistent
+    assert result.mesh.volume > 0 and math.isfinite(result.error_bound)
+    points = np.vstack([result.mesh.vertices,
+                        trimesh.sample.sample_surface(result.mesh, 4000, seed=1)[0]])
     _, distance, _ = trimesh.proximity.closest_point(bracket, points)
-    distance = np.where(bracket.contains(points), 0.0, distance)
+    inside = bracket.contains(points)
+    if r > 0:
+        distance = np.where(inside, 0.0, distance)
+    else:
+        assert np.all(inside | (distance <= 1e-9))
+    assert np.max(np.abs(distance - abs(r))) <= result.error_bound
+    # the other way: points at exactly |r| from the bracket, near its faces, edges and
+    # corners, lie within the bound of the output surface
+    probes = _on_the_offset(bracket, r, 3000, seed=4)
+    assert len(probes) > 200
+    _, to_output, _ = trimesh.proximity.closest_point(result.mesh, probes)
+    assert np.max(to_output) <= result.error_bound
+
+
+def test_two_corners_nearly_touching_keep_the_bound_as_stated():
+    """Two cubes corner to corner along (1, 1, 1), their grown corners' balls overlapping
+    by less than the ball's chord: the true offset is one body, the sum with the
+    inscribed ball may leave them apart. What the bound states still holds: every
+    output point's distance to the solid within it of r, every point at distance r
+    within it of the output."""
+    a = trimesh.creation.box([1.0, 1.0, 1.0])
+    b = a.copy()
+    b.apply_translation(np.full(3, 1.0 + 2 * 0.296 / math.sqrt(3.0)))
+    pair = trimesh.util.concatenate([a, b])
+    r = 0.3
+    result = planner.offset(pair, r, eps=0.03, method="ball")
+    points = np.vstack([result.mesh.vertices,
+                        trimesh.sample.sample_surface(result.mesh, 4000, seed=2)[0]])
+    _, distance, _ = trimesh.proximity.closest_point(pair, points)
+    distance = np.where(pair.contains(points), 0.0, distance)
     assert np.max(np.abs(distance - r)) <= result.error_bound
+    probes = _on_the_offset(pair, r, 3000, seed=5)
+    _, to_output, _ = trimesh.proximity.closest_point(result.mesh, probes)
+    assert np.max(to_output) <= result.error_bound
 
 
+@pytest.mark.parametrize("method", ["ball", "cells"])
 @pytest.mark.parametrize("r, genus", [(0.15, 1), (0.9, 0)])
-def test_a_torus_keeps_its_hole_until_the_radius_fills_it(r, genus):
+def test_a_torus_keeps_its_hole_until_the_radius_fills_it(r, genus, method):
     torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.3,
                                    major_sections=24, minor_sections=12)
-    result = planner.offset(torus, r, eps=0.05)  # the hole's radius is about 0.7
+    # the hole's radius is about 0.7
+    result = planner.offset(torus, r, eps=0.05, method=method)
     euler = result.mesh.euler_number
     assert result.mesh.is_watertight and euler == 2 - 2 * genus, euler
-    # the bound by region kind: round parts sampled at the grid's, none above the total
+    # the bound by region kind, none above the total: the cell source's round parts
+    # sampled at the grid's, the ball's its chord
     by_region = result.stats["bound_by_region"]
-    assert 0.0 < by_region["sampled"] and max(by_region.values()) <= result.error_bound
+    kind = "sampled" if method == "cells" else "round"
+    assert 0.0 < by_region[kind] and max(by_region.values()) <= result.error_bound
 
 
 def test_an_opening_removes_a_fin_thinner_than_twice_the_radius():
@@ -262,6 +312,77 @@ def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors():
         planner.offset(box, math.nan)
     with pytest.raises(GeometryError, match="nothing is left"):
         planner.offset(box, -0.6, eps=0.05)
+    from shapes import l_bracket  # not convex: the sum with the ball's complement
+
+    with pytest.raises(GeometryError, match="nothing is left"):
+        planner.offset(l_bracket(), -0.6, eps=0.05, method="ball")
+    with pytest.raises(InvalidParameterError, match="method"):
+        planner.offset(box, 0.1, method="sample")
+    with pytest.raises(InvalidParameterError, match="not convex"):
+        planner.offset(l_bracket(), 0.1, method="hull")
+
+
+@pytest.mark.parametrize("subdivisions_max", [0, 2])
+def test_the_inscribed_ball_lies_between_the_spheres_it_states(subdivisions_max):
+    """Every vertex of the polytope on the sphere of radius r (so it lies inside the
+    ball), every facet plane at least r - delta from the centre and one exactly there
+    (so the ball of radius r - delta lies inside it); the solid's few face normals are
+    vertices, many are not taken."""
+    from planner.offsets_ball import inscribed_ball
+    from planner.offsets_convex import unit_ball
+
+    r = 0.7
+    delta_max = r * (1.0 - unit_ball(subdivisions_max)[1]) * 1.0001
+    few = trimesh.creation.box([1.0, 2.0, 3.0]).face_normals
+    ball = inscribed_ball(r, delta_max, few)
+    assert ball is not None and ball.subdivisions == subdivisions_max and ball.with_normals
+    np.testing.assert_allclose(np.linalg.norm(ball.mesh.vertices, axis=1), r, rtol=1e-12)
+    assert all(np.any(np.all(np.isclose(ball.mesh.vertices, r * n, atol=1e-12), axis=1))
+               for n in few)
+    distances = np.einsum("ij,ij->i", ball.mesh.face_normals, ball.mesh.triangles[:, 0])
+    assert distances.min() == pytest.approx(r - ball.delta, abs=1e-12)
+    assert ball.mesh.is_watertight and ball.mesh.volume > 0 and 0 < ball.delta <= delta_max
+    many = trimesh.creation.icosphere(subdivisions=4).face_normals
+    assert not inscribed_ball(r, delta_max, many).with_normals
+
+
+def test_face_directions_merge_a_float32_files_copies_and_skip_zero_area_triangles(tmp_path):
+    """A rotated L-bracket written as STL (float32 corners): its 80 triangles have six
+    directions, each normal's copies a few 1e-7 apart; a zero-area triangle has none."""
+    from shapes import l_bracket
+
+    from planner.offsets_ball import face_directions
+
+    bracket = l_bracket()
+    bracket.apply_transform(trimesh.transformations.rotation_matrix(0.7, [1.0, 2.0, 3.0]))
+    bracket = bracket.subdivide().subdivide()
+    bracket.export(tmp_path / "bracket.stl")
+    read = planner.load_mesh(tmp_path / "bracket.stl")
+    assert len(np.unique(np.round(read.face_normals, 12), axis=0)) > 6  # the copies
+    directions = face_directions(read)
+    assert len(directions) == 6
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0, rtol=1e-12)
+    assert len(face_directions(_cube_with_a_needle(1.0))) == 6
+    grown = planner.offset(_cube_with_a_needle(1.0), 0.1, eps=0.01, method="ball")
+    assert grown.mesh.is_watertight and grown.stats["ball"]["with_face_normals"]
+
+
+def _on_the_offset(solid: trimesh.Trimesh, r: float, count: int, seed: int) -> np.ndarray:
+    """Points exactly at distance ``|r|`` from the solid's boundary (outside for ``r > 0``,
+    inside otherwise), near faces, edges and corners alike: random points moved along
+    the line from their nearest boundary point to that distance, kept where that point
+    stays the nearest."""
+    rng = np.random.default_rng(seed)
+    lo, hi = solid.bounds
+    points = rng.uniform(lo - 2 * abs(r), hi + 2 * abs(r), size=(count, 3))
+    inside = solid.contains(points)
+    points = points[inside if r < 0 else ~inside]
+    nearest, distance, _ = trimesh.proximity.closest_point(solid, points)
+    keep = distance > 1e-6
+    away = (points[keep] - nearest[keep]) / distance[keep, None]
+    moved = nearest[keep] + abs(r) * away
+    _, check, _ = trimesh.proximity.closest_point(solid, moved)
+    return moved[np.abs(check - abs(r)) < 1e-9]
 
 
 def test_the_offset_command_writes_the_mesh_and_says_its_bound(tmp_path, capsys):
@@ -272,8 +393,14 @@ def test_the_offset_command_writes_the_mesh_and_says_its_bound(tmp_path, capsys)
     line = capsys.readouterr().out.strip()
     assert line.startswith(f"wrote {grown}") and "error bound" in line
     assert trimesh.load(grown).is_watertight
+    assert "(hull)" in line  # a box: by its hull
     assert main(["offset", str(part), "-r", "-0.1", "-o", str(tmp_path / "shrunk.stl"),
-                 "--eps", "0.04"]) == 0
+                 "--eps", "0.04", "--method", "ball"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert "(ball)" in line
+    shrunk = trimesh.load(tmp_path / "shrunk.stl")
+    assert shrunk.is_watertight and len(shrunk.faces) == 12  # the shrunken box exactly
+    assert shrunk.volume == pytest.approx(0.8 ** 3, rel=1e-6)  # (STL: float32)
     assert main(["offset", str(part), "-r", "0", "-o", str(tmp_path / "x.stl")]) == 2
     assert "radius" in capsys.readouterr().err
 

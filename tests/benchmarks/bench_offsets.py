@@ -17,8 +17,10 @@ Inputs (every tool gets the same closed solid, as planner reads it):
 * the Factory round peg (8 mm, 1,152 triangles, convex up to its OBJ's rounding: ours takes
   the hull path), offset by 1 mm.
 
-Tools, each at a few resolutions: ours (``planner.offset`` at ``eps``: the box, one
-convex body, takes the hull path of :mod:`planner.offsets_convex`), libigl
+Tools, each at a few resolutions: ours (``planner.offset`` at ``eps``: the box and the peg,
+convex bodies, take the hull path of :mod:`planner.offsets_convex`, the others the sum with
+an inscribed ball of :mod:`planner.offsets_ball`), ours-cells (``method="cells"``: the
+native cell source, exact distances cell by cell, on the non-convex inputs), libigl
 (``igl.offset_surface``: signed distance on a grid of ``s`` cells along the longest side,
 pseudonormal sign, marching cubes), manifold3d (``Manifold.minkowski_sum`` with an
 icosphere of radius ``r`` and ``k`` subdivisions, vertices on the sphere). Every run is a
@@ -111,14 +113,14 @@ def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
               "r": 0.1, "ours": [0.02, 0.005, 0.001, 0.0002], "libigl": [50, 100, 200, 300],
               "manifold": [1, 2, 3, 4, 5]},
              {"name": "bunny-like 2k", "mesh": bunny_like(), "r": 0.03,
-              "ours": [0.024, 0.012, 0.006], "libigl": [50, 100, 200, 300],
-              "manifold": [1, 2, 3]}]
+              "ours": [0.004, 0.0011, 0.00028], "ours-cells": [0.024, 0.012],
+              "libigl": [50, 100, 200, 300], "manifold": [1, 2, 3]}]
     if HOLE.exists():
         import planner
         hole = classify(planner.load_mesh(HOLE), name="hole", kind="solid").mesh
         cases.append({"name": "Factory round hole (CAD)", "mesh": hole, "r": 0.001,
-                      "ours": [0.0004, 0.0002, 0.00015], "libigl": [50, 100, 200, 300],
-                      "manifold": [1, 2, 3]})
+                      "ours": [0.0004, 0.0001, 0.00002, 0.000005], "ours-cells": [0.0004],
+                      "libigl": [50, 100, 200, 300], "manifold": [1, 2, 3]})
         peg = classify(planner.load_mesh(PEG), name="peg", kind="solid").mesh
         cases.append({"name": "peg: Factory round peg (CAD, convex up to rounding)",
                       "mesh": peg, "r": 0.001, "ours": [0.0004, 0.0001, 0.00002],
@@ -131,6 +133,7 @@ def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
         for c in cases:
             c["ours"], c["libigl"], c["manifold"] = c["ours"][:1], c["libigl"][:2], \
                 c["manifold"][:2]
+            c["ours-cells"] = c.get("ours-cells", [])[:1]
     return cases
 
 
@@ -138,15 +141,19 @@ def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
 # one run, in a child process
 # --------------------------------------------------------------------------------------
 
-def _ours(V, F, r, eps):
+def _ours(V, F, r, eps, method="auto"):
     import planner
     offset = planner.offset  # planner.offsets imported here, not on the clock
 
     def run():
-        res = offset((V, F), r, eps=eps)
+        res = offset((V, F), r, eps=eps, method=method)
         return res.mesh.vertices, res.mesh.faces, {"bound": res.error_bound,
                                                    "stats": res.stats}
     return run
+
+
+def _ours_cells(V, F, r, eps):
+    return _ours(V, F, r, eps, method="cells")
 
 
 def _libigl(V, F, r, s):
@@ -177,7 +184,7 @@ def _manifold(V, F, r, k):
     return run
 
 
-TOOLS = {"ours": _ours, "libigl": _libigl, "manifold": _manifold}
+TOOLS = {"ours": _ours, "ours-cells": _ours_cells, "libigl": _libigl, "manifold": _manifold}
 
 
 def worker(spec_path: str) -> int:
@@ -336,8 +343,8 @@ def run_case(case: dict, samples: int, seed: int) -> list[dict]:
         tmp = Path(d)
         np.savez(tmp / "input.npz", V=np.asarray(solid.vertices, dtype=np.float64),
                  F=np.asarray(solid.faces, dtype=np.int64))
-        for tool in ("ours", "libigl", "manifold"):
-            for param in case[tool]:
+        for tool in TOOLS:
+            for param in case.get(tool, []):
                 res = run_child(tool, param, case, tmp)
                 row = {"input": case["name"], "r": r, "tool": tool, "param": param}
                 if "failed" in res:
@@ -346,7 +353,7 @@ def run_case(case: dict, samples: int, seed: int) -> list[dict]:
                     V, F = res.pop("V"), res.pop("F")
                     row.update(res, triangles=len(F))
                     row.update(measure_error(solid, faces, r, V, F, truth, samples, seed))
-                    if tool == "ours":
+                    if tool.startswith("ours"):
                         row["holds"] = row["err"] <= row["bound"]
                 rows.append(row)
                 log(f"  {tool} {param}: " + (row.get("failed") or
@@ -354,7 +361,7 @@ def run_case(case: dict, samples: int, seed: int) -> list[dict]:
     return rows
 
 
-PARAM = {"ours": "eps={}", "libigl": "s={}", "manifold": "ico sub {}"}
+PARAM = {"ours": "eps={}", "ours-cells": "eps={}", "libigl": "s={}", "manifold": "ico sub {}"}
 
 
 def _g(x, spec=".3g") -> str:

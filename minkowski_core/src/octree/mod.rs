@@ -311,9 +311,9 @@ impl Octree {
     /// (cells met there before take what they gave), so the extraction does not cut them again.
     ///
     /// # Errors
-    /// As [`Octree::build`].
+    /// As [`Octree::build`] (the candidate records within [`record_budget`] too).
     pub fn build_resolving_planes<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, sampled: &[Aabb], resolved: &ResolvedCells) -> CoreResult<Octree> {
-        Self::build_with(source, region, h, max_cells, MAX_RECORD_WORDS, Some((sampled, resolved)))
+        Self::build_with(source, region, h, max_cells, record_budget(), Some((sampled, resolved)))
     }
 
     fn build_with<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize, max_words: usize, planar: Option<(&[Aabb], &ResolvedCells)>) -> CoreResult<Octree> {
