@@ -284,11 +284,15 @@ def explain(error: ResourceLimitError, what: str | None = None,
         end = cells.end()
         message = (f"{message[:end]} (more than {gib(int(cells.group(1)) * cell_bytes)})"
                    f"{message[end:]}")
+    lattice = "the lattice addresses at most" in message  # too fine: no memory helps
+    if lattice:
+        message = message.replace("use a larger eps or raise the memory limit",
+                                  "use a larger eps (no memory limit makes this grid fit)")
     message = message.replace("use a larger eps", f"use a larger {knob}")
     setting = f"raise --memory-limit ({budget.now()})"
     if "raise the memory limit" in message:
         message = message.replace("raise the memory limit", setting, 1)
-    elif "--memory-limit" not in message:
+    elif "--memory-limit" not in message and not lattice:
         message = f"{message}; {budget.describe()}"
     if what and not message.startswith(what):
         message = f"{what}: {message}"

@@ -15,7 +15,8 @@ import sys
 from pathlib import Path
 from typing import NoReturn
 
-_MESH_SUFFIXES = {".stl", ".obj", ".ply", ".off", ".glb"}
+MESH_SUFFIXES = {".stl", ".obj", ".ply", ".off", ".glb"}
+"""Output mesh formats the commands write (trimesh's exporters)."""
 
 
 def _version() -> str:
@@ -257,10 +258,10 @@ def _unwritable_folder(out: Path) -> str | None:
 
 def _cmd_minkowski(args) -> int:
     out = Path(args.output)
-    if out.suffix.lower() not in _MESH_SUFFIXES:
+    if out.suffix.lower() not in MESH_SUFFIXES:
         return _fail(
             f"--output {out}: unknown mesh format {out.suffix!r}; "
-            f"use one of {sorted(_MESH_SUFFIXES)}"
+            f"use one of {sorted(MESH_SUFFIXES)}"
         )
     for label, f in (("a", args.a), ("b", args.b)):
         if Path(f).is_dir():

@@ -48,7 +48,8 @@ def _add_offset_parser(sub, common) -> None:
                    help="offset radius (negative: erode)")
     o.add_argument("-o", "--output", required=True, help="output mesh (.stl .obj .ply .off .glb)")
     o.add_argument("--eps", type=float, default=None,
-                   help="resolution (default 0.5%% of the result's diagonal)")
+                   help="resolution: the error bound is about this (default 0.5%% of the "
+                   "result's diagonal)")
     o.add_argument("--method", choices=("auto", "hull", "ball", "cells"), default="auto",
                    help="hull: a convex body by its hull; ball: the exact sum with a polytope "
                    "inscribed in the ball; cells: exact distances cell by cell; auto (default): "
@@ -66,6 +67,11 @@ def cmd_offset(args) -> int:
     problem = unwritable(out)
     if problem:
         return _fail(f"--output {out}: {problem}")
+    from planner.cli import MESH_SUFFIXES
+
+    if out.suffix.lower() not in MESH_SUFFIXES:
+        return _fail(f"--output {out}: unknown mesh format {out.suffix!r}; use one of "
+                     f"{sorted(MESH_SUFFIXES)}")
     if not Path(args.mesh).is_file():
         return _fail(f"mesh: file {args.mesh!r} not found")
     import planner

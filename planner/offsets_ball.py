@@ -43,7 +43,7 @@ import trimesh
 from planner.errors import ResourceLimitError
 from planner.problem import Part
 
-from .offsets_convex import MAX_SUBDIVISIONS, convex_hull, hull_mesh, unit_ball
+from .offsets_convex import MAX_SUBDIVISIONS, convex_hull, hull_mesh, representatives, unit_ball
 
 __all__ = ["BALL_SHARE", "Ball", "ball_offset", "face_directions", "inscribed_ball"]
 
@@ -92,16 +92,7 @@ def face_directions(solid: trimesh.Trimesh) -> np.ndarray:
         return normals
     normals = np.unique(np.round(normals, 12), axis=0)
     normals /= np.linalg.norm(normals, axis=1)[:, None]
-    from scipy.spatial import cKDTree  # noqa: PLC0415
-
-    taken = np.zeros(len(normals), dtype=bool)
-    kept = []
-    tree = cKDTree(normals)
-    for i in range(len(normals)):
-        if not taken[i]:
-            kept.append(i)
-            taken[tree.query_ball_point(normals[i], NORMAL_ANGLE)] = True
-    return normals[kept]
+    return normals[representatives(normals, NORMAL_ANGLE)]
 
 
 def ball_offset(solid: trimesh.Trimesh, radius: float, eps: float, *, name: str,

@@ -39,7 +39,8 @@ from typing import Any
 import numpy as np
 import trimesh
 
-__all__ = ["MAX_FACES", "MAX_POINTS", "convex_hull", "convex_offset", "hull_mesh", "unit_ball"]
+__all__ = ["MAX_FACES", "MAX_POINTS", "convex_hull", "convex_offset", "hull_mesh",
+           "representatives", "unit_ball"]
 
 MAX_FACES = 5000
 """Solids with more triangles are left to the cell source (the test is faces × hull
@@ -52,6 +53,10 @@ PLANE_TOL_REL = 1e-9
 """Relative to the solid's diagonal: the rounding allowance added to every bound."""
 
 MAX_SUBDIVISIONS = 7
+
+MERGE_REL = 1e-6
+"""Grown hulls' points closer than this, relative to their size and distance from the
+origin, are one (a float32 file keeps about 7 digits)."""
 
 
 def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
@@ -208,8 +213,31 @@ def _grown(hull: _Hull, radius: float, eps: float
         if len(unit) * len(hull.corners) > MAX_POINTS:
             return None
         points = (hull.corners[:, None, :] + radius * unit[None, :, :]).reshape(-1, 3)
-        return hull_mesh(convex_hull(np.vstack([points, moved]))), chord, subdivisions
+        points = np.vstack([points, moved])
+        # points closer than the merge distance are one (a file's coplanar triangles move
+        # their corners to points a few 1e-9 apart, which a reader's weld would join into
+        # edges of four triangles); that moves the hull by at most it
+        merge = MERGE_REL * float(np.max(np.abs(points)) + np.ptp(points, axis=0).max())
+        points = points[representatives(points, merge)]
+        return hull_mesh(convex_hull(points)), chord + merge, subdivisions
     return None
+
+
+def representatives(points: np.ndarray, radius: float) -> np.ndarray:
+    """Indices of one point per cluster: each point in order is kept unless a kept one
+    lies within ``radius`` of it."""
+    from scipy.spatial import cKDTree  # noqa: PLC0415
+
+    if len(points) == 0 or radius <= 0:
+        return np.arange(len(points))
+    tree = cKDTree(points)
+    covered = np.zeros(len(points), dtype=bool)
+    kept = []
+    for i in range(len(points)):
+        if not covered[i]:
+            kept.append(i)
+            covered[tree.query_ball_point(points[i], radius)] = True
+    return np.asarray(kept, dtype=np.int64)
 
 
 @functools.lru_cache(maxsize=None)

@@ -415,3 +415,29 @@ def test_a_real_cad_part_with_t_junctions_is_offset_as_the_assembly_reads_it():
     grown = planner.offset(hole, 0.0005, eps=0.0005, name="hole")
     assert shrunk.mesh.is_watertight and grown.mesh.is_watertight
     assert 0 < shrunk.mesh.volume < grown.mesh.volume
+
+
+def test_a_grown_cad_peg_reads_back_closed_from_stl(tmp_path):
+    """Factory's round peg grown by its hull: its coplanar triangles' corners move to
+    points a few 1e-9 apart, which a reader's weld joins; merged first, the STL (float32,
+    no connectivity) reads back closed."""
+    from conftest import asset
+
+    peg = planner.load_mesh(asset("assemblies/factory_round_peg_8mm/meshes/"
+                                  "factory_round_peg_8mm_loose.obj"))
+    grown = planner.offset(peg, 0.001, name="peg")
+    assert grown.stats["method"] == "hull"
+    grown.mesh.export(tmp_path / "grown.stl")
+    read = trimesh.load(tmp_path / "grown.stl")
+    assert read.is_watertight and read.is_winding_consistent
+
+
+def test_the_offset_command_refuses_an_unknown_format_before_the_work(tmp_path, capsys):
+    part = tmp_path / "part.stl"
+    trimesh.creation.box([1.0, 1.0, 1.0]).export(part)
+    for name in ("grown.xyz", "grown"):
+        assert main(["offset", str(part), "-r", "0.2", "-o", str(tmp_path / name)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("minkplan: error: --output") and "unknown mesh format" in err
+        assert "\n" not in err and not (tmp_path / name).exists()
+
