@@ -555,19 +555,56 @@ def _on_sigterm(signum, frame) -> NoReturn:
     raise _Terminated
 
 
+TERMINATE_GRACE = 5.0
+"""Seconds SIGTERM waits for the work to stop like Ctrl+C before the process ends anyway:
+Python runs the handler only between its own steps, never inside the native core."""
+
+
+def _watch_for_sigterm() -> int:
+    """A write end for :func:`signal.set_wakeup_fd`: the signal's number arrives there at
+    once, even while the core runs; a daemon thread reading it ends the process
+    (:data:`EXIT_TERMINATED`) when the work has not stopped within
+    :data:`TERMINATE_GRACE`. Closing the write end ends the thread."""
+    import os
+    import signal
+    import threading
+    import time
+
+    read_end, write_end = os.pipe()
+    os.set_blocking(write_end, False)
+
+    def watch() -> None:
+        with os.fdopen(read_end, "rb", buffering=0) as wakeups:
+            while chunk := wakeups.read(64):
+                if signal.SIGTERM in chunk:
+                    time.sleep(TERMINATE_GRACE)
+                    sys.stderr.write("minkplan: terminated\n")
+                    sys.stderr.flush()
+                    os._exit(EXIT_TERMINATED)
+
+    threading.Thread(target=watch, name="minkplan-sigterm", daemon=True).start()
+    return write_end
+
+
 def main(argv: list[str] | None = None) -> int:
+    import os
     import signal
     import threading
 
-    if threading.current_thread() is threading.main_thread():
+    watched = threading.current_thread() is threading.main_thread()
+    if watched:
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
+        write_end = _watch_for_sigterm()
+        previous_fd = signal.set_wakeup_fd(write_end, warn_on_full_buffer=False)
     try:
         return _main(argv)
     except _Terminated:
         sys.stderr.write("minkplan: terminated\n")
         return EXIT_TERMINATED
     finally:
-        if threading.current_thread() is threading.main_thread():
+        if watched:
+            signal.set_wakeup_fd(previous_fd)
+            os.close(write_end)
             signal.signal(signal.SIGTERM, previous)
 
 

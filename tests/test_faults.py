@@ -86,3 +86,42 @@ def test_sigterm_mid_plan_exits_143_with_whole_outputs_or_none(tmp_path):
     for name in written:
         if name.endswith(".json"):
             json.loads((out / name).read_text())  # whole, not cut short
+
+
+_STUCK_IN_NATIVE_CODE = """
+import sys
+import numpy as np
+import planner.cli as cli
+
+cli.TERMINATE_GRACE = 0.5
+
+
+def stuck(argv):
+    matrix = np.random.default_rng(0).random((4000, 4000))
+    print("ready", flush=True)
+    np.linalg.eigvals(matrix)  # one native call of many seconds, the GIL released
+    return 0
+
+
+cli._main = stuck
+sys.exit(cli.main([]))
+"""
+
+
+def test_sigterm_ends_a_command_stuck_in_native_code(tmp_path):
+    """Python runs a signal handler only between its own steps: SIGTERM during one long
+    native call (the core's, here LAPACK's) ends the process after the grace anyway,
+    with the same exit code and line."""
+    script = tmp_path / "stuck.py"
+    script.write_text(_STUCK_IN_NATIVE_CODE)
+    run = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    assert run.stdout is not None and run.stdout.readline().strip() == "ready"
+    time.sleep(0.5)  # inside the native call
+    start = time.perf_counter()
+    run.send_signal(signal.SIGTERM)
+    _, err = run.communicate(timeout=120)
+    assert run.returncode == 143, err
+    assert err.strip().splitlines()[-1] == "minkplan: terminated"
+    assert time.perf_counter() - start < 10.0  # the call alone takes far longer
+
