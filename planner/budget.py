@@ -265,11 +265,12 @@ def memory_limit(limit_gib: float | None) -> Iterator[MemoryBudget]:
 
 def explain(error: ResourceLimitError, what: str | None = None,
             obstacles: list[str] | None = None, *, cell_bytes: int = SURFACE_CELL_BYTES,
-            knob: str = "eps") -> ResourceLimitError:
+            knob: str = "eps", cells_given: bool = False) -> ResourceLimitError:
     """The core's refusal ``error`` as a user reads it: prefixed by the input ``what``,
     the core's ``obstacle K`` named (``obstacles``; dropped without them), cells weighed
     at ``cell_bytes``, the cell size called ``knob``, naming the memory limit in force
-    and the setting that raises it."""
+    and the setting that raises it — ``max_cells`` when the leaves ran out of a budget
+    the caller gave (``cells_given``; the candidate records stay the memory limit's)."""
     import re  # noqa: PLC0415
 
     budget = current()
@@ -290,9 +291,11 @@ def explain(error: ResourceLimitError, what: str | None = None,
                                   "use a larger eps (no memory limit makes this grid fit)")
     message = message.replace("use a larger eps", f"use a larger {knob}")
     setting = f"raise --memory-limit ({budget.now()})"
+    if cells_given and message.startswith("the octree needs more than"):
+        setting = "raise max_cells"
     if "raise the memory limit" in message:
         message = message.replace("raise the memory limit", setting, 1)
-    elif "--memory-limit" not in message and not lattice:
+    elif "--memory-limit" not in message and not lattice and not cells_given:
         message = f"{message}; {budget.describe()}"
     if what and not message.startswith(what):
         message = f"{what}: {message}"

@@ -15,9 +15,6 @@ import sys
 from pathlib import Path
 from typing import NoReturn
 
-MESH_SUFFIXES = {".stl", ".obj", ".ply", ".off", ".glb"}
-"""Output mesh formats the commands write (trimesh's exporters)."""
-
 
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
@@ -258,11 +255,11 @@ def _unwritable_folder(out: Path) -> str | None:
 
 def _cmd_minkowski(args) -> int:
     out = Path(args.output)
-    if out.suffix.lower() not in MESH_SUFFIXES:
-        return _fail(
-            f"--output {out}: unknown mesh format {out.suffix!r}; "
-            f"use one of {sorted(MESH_SUFFIXES)}"
-        )
+    from planner.output import unknown_mesh_format
+
+    problem = unknown_mesh_format(out)
+    if problem:
+        return _fail(f"--output {out}: {problem}")
     for label, f in (("a", args.a), ("b", args.b)):
         if Path(f).is_dir():
             return _fail(f"{label}: {f!r} is a directory, not a mesh file")

@@ -23,6 +23,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -138,30 +139,22 @@ def _estimate_cells(box: np.ndarray, eps: float) -> float:
     return float(_CELLS_PER_AREA * area / (h * h))
 
 
+def _eps_value(eps, diag: float) -> float:
+    """``eps`` checked, or by default ``tol.eps_rel`` of the diagonal ``diag``."""
+    return tol.eps_rel * diag if eps is None else _check_eps(eps)
+
+
 def _grid_eps(box: np.ndarray, diag: float, eps, max_cells: int, *, from_memory: bool = False,
               names: tuple[str, str] = ("a", "b")) -> float:
     """``eps`` (default ``tol.eps_rel`` of the diagonal), refused before any work when the
     grid would not fit the cell budget (``from_memory``: the memory limit's)."""
-    eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
+    eps_value = _eps_value(eps, diag)
     estimate = _estimate_cells(box, eps_value)
     if estimate > max_cells:
         floor = eps_value * math.sqrt(estimate / max_cells)
         raise budget.refuse_cells(f"{names[0]} ⊕ {names[1]} at eps = {eps_value:.3g}",
                                   estimate, max_cells, from_memory, f"use eps >= {floor:.3g}")
     return eps_value
-
-
-def _refused(error: ResourceLimitError, what: str, from_memory: bool) -> ResourceLimitError:
-    """The core's refusal of a surface as a user reads it (:func:`planner.budget.explain`),
-    naming ``max_cells`` instead of the memory limit when that budget was given and the
-    leaves are what ran out (the candidate records stay the memory limit's)."""
-    message = str(error)
-    if from_memory or not message.startswith("the octree needs more than"):
-        return budget.explain(error, what)
-    message = message.replace("raise the memory limit", "raise max_cells")
-    refused = ResourceLimitError(f"{what}: {message}")
-    refused.__cause__ = error
-    return refused
 
 
 def bound_by_region(surf: dict) -> dict[str, float]:
@@ -172,6 +165,18 @@ def bound_by_region(surf: dict) -> dict[str, float]:
     one); ``missed``, cells where the lattice may have missed boundary (their reach; 0
     without any)."""
     return {key: float(surf[f"bound_{key}"]) for key in ("planes", "sampled", "missed")}
+
+
+SURFACE_STATS = ("band_cells", "h", "refinements", "planar_cells", "planar_pieces",
+                 "planes_fallback_edges", "bound_by_region", "holes_closed", "sheets_unzipped")
+"""The statistics every extracted surface reports (sums, C-obstacles, offsets)."""
+
+
+def surface_stats(surf: dict) -> dict[str, Any]:
+    """:data:`SURFACE_STATS` of the native surface ``surf``."""
+    stats: dict[str, Any] = {key: int(surf[key]) for key in SURFACE_STATS
+                             if key not in ("h", "bound_by_region")}
+    return {**stats, "h": float(surf["h"]), "bound_by_region": bound_by_region(surf)}
 
 
 def _cell_totals(per_level) -> dict[str, int]:
@@ -220,7 +225,7 @@ def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bo
         diag = float(np.linalg.norm(box[1] - box[0]))
         if len(dec_a.pieces) == 1 and len(dec_b.pieces) == 1:
             # one convex sum: the core gives its hull, exact, with no grid to budget
-            eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
+            eps_value = _eps_value(eps, diag)
         else:
             eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory,
                                   names=names)
@@ -233,7 +238,8 @@ def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bo
             surf = core.union_surface(pair.native, eps_value, max_cells=max_cells,
                                       max_refinements=max_refinements, simplify=simplify)
         except ResourceLimitError as exc:
-            raise budget.explain(exc, f"{names[0]} ⊕ {names[1]}") from exc
+            raise budget.explain(exc, f"{names[0]} ⊕ {names[1]}",
+                                 cells_given=not from_memory) from exc
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     error_bound = float(surf["error_bound"]) + pair.excess
     stats = {
@@ -312,23 +318,15 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
     stats = {
         "cells": _cell_totals(per_level),
         "cells_per_level": [list(map(int, c)) for c in per_level],
-        "band_cells": int(surf["band_cells"]),
         "triangles": int(len(mesh.faces)),
         "triangles_extracted": int(surf["triangles_extracted"]),
         "vertices": int(len(mesh.vertices)),
-        "h": float(surf["h"]),
         "grid_error_bound": float(surf["error_bound"]),
         "complex_cells": complex_cells,
         "unresolved_cells": int(surf["unresolved_cells"]),
         "silent_cells": int(surf["silent_cells"]),
         "complex_edges": int(surf["complex_edges"]),
-        "refinements": int(surf["refinements"]),
-        "planar_cells": int(surf["planar_cells"]),
-        "planar_pieces": int(surf["planar_pieces"]),
-        "planes_fallback_edges": int(surf["planes_fallback_edges"]),
-        "bound_by_region": bound_by_region(surf),
-        "holes_closed": int(surf["holes_closed"]),
-        "sheets_unzipped": int(surf["sheets_unzipped"]),
+        **surface_stats(surf),
         "threads": core.num_threads(),
     }
     if stats["planes_fallback_edges"]:
@@ -357,13 +355,13 @@ def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
         # no estimate from the box's area: cells resolved by the facets' planes end above
         # eps (a polyhedral sum needs about as many cells at any eps), so the core's own
         # leaf budget, counted before each allocation, is the one that refuses
-        eps_value = tol.eps_rel * diag if eps is None else _check_eps(eps)
+        eps_value = _eps_value(eps, diag)
         line.show(f"minkplan: {what}: surface at eps {eps_value:.3g}")
         try:
             surf = pair.native.surface(eps_value, max_cells=max_cells,
                                        max_refinements=max_refinements, simplify=simplify)
         except ResourceLimitError as exc:
-            raise _refused(exc, what, from_memory) from exc
+            raise budget.explain(exc, what, cells_given=not from_memory) from exc
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     stats = {
         "source": "exact",

@@ -44,7 +44,7 @@ from planner.errors import GeometryError, InvalidParameterError, ResourceLimitEr
 
 from .meshes import load_mesh
 from .meshes.kinds import classify
-from .minkowski import bound_by_region
+from .minkowski import surface_stats
 from .offsets_ball import ball_offset
 from .offsets_convex import convex_offset
 from .progress import StatusLine
@@ -175,22 +175,17 @@ def _cell_offset(solid: trimesh.Trimesh, radius: float, step: float, max_cells: 
     from . import budget  # noqa: PLC0415
     from ._minkowski_core import CheckedMesh, offset_surface  # noqa: PLC0415
 
-    cells, _ = budget.surface_cells(max_cells)
+    cells, from_memory = budget.surface_cells(max_cells)
     checked = CheckedMesh(np.asarray(solid.vertices, dtype=np.float64),
                           np.asarray(solid.faces, dtype=np.int64), name=name)
     try:
         raw = offset_surface(checked, radius, step, max_cells=cells)
     except ResourceLimitError as exc:
-        raise budget.explain(exc, f"{name} offset by {radius:g}") from exc
+        raise budget.explain(exc, f"{name} offset by {radius:g}",
+                             cells_given=not from_memory) from exc
     surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
-    stats = {"triangles": len(surface.faces), "band_cells": int(raw["band_cells"]),
-             "h": float(raw["h"]), "refinements": int(raw["refinements"]),
-             "planar_cells": int(raw["planar_cells"]), "planar_pieces": int(raw["planar_pieces"]),
-             "planes_fallback_edges": int(raw["planes_fallback_edges"]),
-             "bound_by_region": bound_by_region(raw),
-             "holes_closed": int(raw["holes_closed"]),
-             "sheets_unzipped": int(raw["sheets_unzipped"])}
-    return surface, float(raw["error_bound"]), stats
+    return surface, float(raw["error_bound"]), {"triangles": len(surface.faces),
+                                                **surface_stats(raw)}
 
 
 def _composed(mesh, first: float, second: float, eps, max_cells, name: str,

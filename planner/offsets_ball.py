@@ -105,7 +105,7 @@ def ball_offset(solid: trimesh.Trimesh, radius: float, eps: float, *, name: str,
     Raises:
         ResourceLimitError: the sum would pass the memory limit or ``max_cells``.
     """
-    from .minkowski import minkowski_sum  # noqa: PLC0415
+    from .minkowski import SURFACE_STATS, minkowski_sum  # noqa: PLC0415
 
     t0 = time.perf_counter()
     r = abs(radius)
@@ -130,14 +130,9 @@ def ball_offset(solid: trimesh.Trimesh, radius: float, eps: float, *, name: str,
         raise ResourceLimitError(f"{what} (its sum with a ball of {len(polytope.vertices)} "
                                  f"vertices): {message}") from exc
     mesh = summed.mesh if radius > 0 else _inner_shells(summed.mesh)
-    stats = {"triangles": len(mesh.faces), "band_cells": summed.stats["band_cells"],
-             "h": summed.stats["h"], "refinements": summed.stats["refinements"],
-             "planar_cells": summed.stats["planar_cells"],
-             "planar_pieces": summed.stats["planar_pieces"],
-             "planes_fallback_edges": summed.stats["planes_fallback_edges"],
+    stats = {"triangles": len(mesh.faces),
+             **{key: summed.stats[key] for key in SURFACE_STATS},
              "bound_by_region": {**summed.stats["bound_by_region"], "round": ball.delta},
-             "holes_closed": summed.stats["holes_closed"],
-             "sheets_unzipped": summed.stats["sheets_unzipped"],
              "ball": {"subdivisions": ball.subdivisions, "vertices": len(ball.mesh.vertices),
                       "delta": ball.delta, "with_face_normals": ball.with_normals},
              "sum_seconds": summed.stats["seconds"],

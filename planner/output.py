@@ -54,6 +54,17 @@ def jsonable(value: Any) -> Any:
     return value
 
 
+MESH_SUFFIXES = (".glb", ".obj", ".off", ".ply", ".stl")
+"""Output mesh formats the commands write (trimesh's exporters)."""
+
+
+def unknown_mesh_format(path: Path) -> str | None:
+    """Why ``path`` names no mesh format the commands write, or ``None``."""
+    if path.suffix.lower() in MESH_SUFFIXES:
+        return None
+    return f"unknown mesh format {path.suffix!r}; use one of {list(MESH_SUFFIXES)}"
+
+
 def unwritable(path: Path) -> str | None:
     """Why a file cannot be written at ``path`` (its missing folders would be created), or
     ``None``: checked before the work, so a bad path costs nothing."""
