@@ -230,14 +230,19 @@ def representatives(points: np.ndarray, radius: float) -> np.ndarray:
 
     if len(points) == 0 or radius <= 0:
         return np.arange(len(points))
-    tree = cKDTree(points)
-    covered = np.zeros(len(points), dtype=bool)
-    kept = []
-    for i in range(len(points)):
-        if not covered[i]:
-            kept.append(i)
-            covered[tree.query_ball_point(points[i], radius)] = True
-    return np.asarray(kept, dtype=np.int64)
+    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
+    if len(pairs) == 0:
+        return np.arange(len(points))
+    # only points with a neighbour can be dropped: walk those in order
+    both = np.vstack([pairs, pairs[:, ::-1]])
+    both = both[np.lexsort((both[:, 1], both[:, 0]))]
+    starts = np.searchsorted(both[:, 0], np.arange(len(points) + 1))
+    dropped = np.zeros(len(points), dtype=bool)
+    for i in np.unique(both[:, 0]):
+        if not dropped[i]:
+            dropped[both[starts[i]:starts[i + 1], 1]] = True
+    # a kept point's neighbours are dropped; itself only by an earlier kept one
+    return np.flatnonzero(~dropped)
 
 
 @functools.lru_cache(maxsize=None)

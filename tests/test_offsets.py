@@ -367,6 +367,23 @@ def test_face_directions_merge_a_float32_files_copies_and_skip_zero_area_triangl
     assert grown.mesh.is_watertight and grown.stats["ball"]["with_face_normals"]
 
 
+
+@pytest.mark.parametrize("seed", range(5))
+def test_representatives_keep_each_point_unless_a_kept_earlier_one_is_near(seed):
+    """The clusters' representatives against their definition, walked point by point."""
+    from planner.offsets_convex import representatives
+
+    rng = np.random.default_rng(seed)
+    points = rng.random((300, 3))
+    radius = 0.05 + 0.05 * seed
+    kept: list[int] = []
+    for i, p in enumerate(points):
+        if all(np.linalg.norm(points[k] - p) > radius for k in kept):
+            kept.append(i)
+    assert representatives(points, radius).tolist() == kept
+    assert 1 < len(kept) < 300
+    assert representatives(points, 1e-9).tolist() == list(range(300))
+
 def _on_the_offset(solid: trimesh.Trimesh, r: float, count: int, seed: int) -> np.ndarray:
     """Points exactly at distance ``|r|`` from the solid's boundary (outside for ``r > 0``,
     inside otherwise), near faces, edges and corners alike: random points moved along
