@@ -14,14 +14,17 @@ For the hull ``H = {x : n_k · x <= d_k}`` of the solid ``P``'s vertices:
   cylinders and spheres. Minkowski sums are 1-Lipschitz in the Hausdorff distance, so it
   lies within the chord ``r (1 - c)`` of the true offset, ``c`` the least distance from
   the centre to a facet plane of the unit icosphere, the coarsest subdivision whose chord
-  is within ``eps``.
+  is within ``eps``. A point ``v + u`` is a vertex only where some direction finds both
+  ``v`` and ``u`` extreme: pairs whose normal cones lie apart are left out beforehand.
 
 ``P`` need not be ``H`` exactly (CAD exports round their coordinates): with ``t`` the
 smallest depth such that every triangle of ``P`` has all its corners within ``t`` of one
 facet plane of ``H``, ``P``'s boundary misses the inside of ``H_t = {x : n_k · x <= d_k -
 t}``, so one winding number at a point inside ``H_t`` shows ``H_t ⊂ P ⊂ H``. Offsets are
 monotone, so ``P``'s lies between ``H_t``'s and ``H``'s, and the bound adds their distance:
-the largest distance from a vertex of the larger to the smaller (a convex function of the
+at most ``t R / ρ`` (``ρ`` the depth of ``H``'s deepest point, ``R`` the farthest corner
+from it: ``H_t`` holds ``H`` shrunk about that point by ``1 - t/ρ``), else measured: the
+largest distance from a vertex of the larger to the smaller (a convex function of the
 point, so its maximum over a polytope is at a vertex). The path is taken only when the
 bound is within ``eps``.
 
@@ -32,6 +35,7 @@ points, qhull unable to build a hull); the caller then uses the cell source.
 from __future__ import annotations
 
 import functools
+import math
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -73,9 +77,10 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
         hull = _hull_planes(solid, eps)
         if hull is None:
             return None
-        # H_t, the hull's planes moved in by the depth: inside the solid (one winding number)
-        inner = _planes_hull(hull.normals, hull.offsets - hull.depth)
-        if inner is None or not _inside_at(solid, inner[1]):
+        # H's deepest point: inside H_t (H's planes moved in by the depth), so inside the
+        # solid by one winding number exactly when H_t is
+        deepest = _deepest_point(hull.normals, hull.offsets)
+        if deepest is None or deepest[1] <= hull.depth or not _inside_at(solid, deepest[0]):
             return None
         if radius < 0:
             mesh, between = _eroded(hull, -radius, rounding)
@@ -86,7 +91,9 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
                 return None
             mesh, chord, subdivisions = grown
             # growing is 1-Lipschitz: the grown H and H_t are no farther apart than H, H_t
-            between = _gap(hull.corners, inner[0]) if hull.depth > 0 else 0.0
+            between = _gap_bound(hull, *deepest)
+            if chord + between + rounding > eps:
+                between = min(between, _gap_exact(hull))
             method = "hull of the vertices' tessellated balls"
     except QhullError:  # a hull too thin for qhull: the cell source decides
         return None
@@ -109,7 +116,9 @@ class _Hull:
     ``offsets`` each the largest ``n · v`` over the vertices, so every plane bounds them),
     the ``depth`` ``t`` within which every triangle of the solid has its corners on one of
     them, its ``corners`` (vertices), and its triangles' corners (``triangles``, (k, 3,
-    3)) with their unit normals (``triangle_normals``)."""
+    3)) with their unit normals (``triangle_normals``); per corner, a circular cone
+    holding its normal cone (the directions in which it is extreme): unit ``cone_axes``
+    and half-angles ``cone_angles``."""
 
     normals: np.ndarray
     offsets: np.ndarray
@@ -117,6 +126,8 @@ class _Hull:
     corners: np.ndarray
     triangles: np.ndarray
     triangle_normals: np.ndarray
+    cone_axes: np.ndarray
+    cone_angles: np.ndarray
 
 
 def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull | None:
@@ -133,16 +144,49 @@ def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull | None:
     offsets = (vertices @ normals.T).max(axis=0)
     if len(solid.faces) * len(normals) > 4 * MAX_FACES * 200:
         return None
-    # per triangle and plane, the deepest corner's depth; per triangle, its best plane
-    below = offsets[None, :] - vertices @ normals.T              # (vertices, planes) >= 0
-    corners = np.asarray(solid.faces)
-    deepest = np.maximum(np.maximum(below[corners[:, 0]], below[corners[:, 1]]),
-                         below[corners[:, 2]])
-    depth = float(deepest.min(axis=1).max())
+    depth = _depth(vertices, np.asarray(solid.faces), normals, offsets, eps)
     if depth > eps:
         return None
-    return _Hull(normals, offsets, depth, vertices[hull.vertices], vertices[hull.simplices],
-                 triangle_normals)
+    used = np.sort(hull.vertices)
+    axes, angles = _normal_cones(np.searchsorted(used, hull.simplices), triangle_normals,
+                                 len(used))
+    return _Hull(normals, offsets, depth, vertices[used], vertices[hull.simplices],
+                 triangle_normals, axes, angles)
+
+
+def _depth(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray,
+           offsets: np.ndarray, eps: float) -> float:
+    """The least ``t`` such that every triangle has its corners within ``t`` below one of
+    the planes: each triangle tried first on the plane nearest its own normal, the planes
+    searched only for those farther than ``eps`` there."""
+    corners = vertices[faces]                                       # (faces, 3, 3)
+    own = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    nearest = np.argmax(own @ normals.T, axis=1)
+    depths = (offsets[nearest][:, None]
+              - np.einsum("fkj,fj->fk", corners, normals[nearest])).max(axis=1)
+    far = np.flatnonzero(depths > eps)
+    if len(far):
+        # per far triangle and plane, the deepest corner's depth; per triangle, its best
+        below = offsets[None, None, :] - corners[far] @ normals.T   # (far, 3, planes)
+        depths[far] = np.minimum(depths[far], below.max(axis=1).min(axis=1))
+    return float(depths.max())
+
+
+def _normal_cones(corners_of: np.ndarray, triangle_normals: np.ndarray, count: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Per corner of a convex polytope (``count`` of them; ``corners_of``: each triangle's
+    three), the axis (its triangles' mean normal) and the half-angle of a circular cone
+    around it that holds every normal of its triangles, so their conic hull when the
+    half-angle is below 90°."""
+    sums = np.zeros((count, 3))
+    for k in range(3):
+        np.add.at(sums, corners_of[:, k], triangle_normals)
+    axes = sums / np.linalg.norm(sums, axis=1)[:, None]
+    cosines = np.ones(count)
+    for k in range(3):
+        at = corners_of[:, k]
+        np.minimum.at(cosines, at, np.einsum("ij,ij->i", axes[at], triangle_normals))
+    return axes, np.arccos(np.clip(cosines, -1.0, 1.0))
 
 
 def _inside_at(solid: trimesh.Trimesh, point: np.ndarray) -> bool:
@@ -152,6 +196,22 @@ def _inside_at(solid: trimesh.Trimesh, point: np.ndarray) -> bool:
     return int(winding_numbers(np.asarray(solid.vertices, dtype=np.float64),
                                np.asarray(solid.faces, dtype=np.int64),
                                point.reshape(1, 3))[0]) == 1
+
+
+def _gap_bound(hull: _Hull, centre: np.ndarray, inradius: float) -> float:
+    """An upper bound on the distance from ``H`` to ``H_t``: ``H_t`` holds ``H`` scaled
+    about its deepest point ``c`` (depth ``ρ``) by ``1 - t/ρ`` (a plane ``ρ`` or more from
+    ``c`` moves in by at least ``t``), so no point of ``H`` is farther from ``H_t`` than
+    ``t/ρ`` times its distance from ``c``."""
+    if hull.depth == 0:
+        return 0.0
+    return hull.depth / inradius * float(np.linalg.norm(hull.corners - centre, axis=1).max())
+
+
+def _gap_exact(hull: _Hull) -> float:
+    """The distance from ``H`` to ``H_t`` (their Hausdorff distance), by ``H_t``'s mesh."""
+    inner = _planes_hull(hull.normals, hull.offsets - hull.depth)
+    return math.inf if inner is None else _gap(hull.corners, inner[0])
 
 
 def _gap(corners: np.ndarray, smaller: trimesh.Trimesh) -> float:
@@ -179,20 +239,29 @@ def _eroded(hull: _Hull, r: float, rounding: float) -> tuple[trimesh.Trimesh, fl
 
 def _planes_hull(normals: np.ndarray, offsets: np.ndarray, thinnest: float = 0.0
                  ) -> tuple[trimesh.Trimesh, np.ndarray] | None:
-    """``({x : n · x <= d}, its Chebyshev centre)``: the hull of the half-spaces' corners,
+    """``({x : n · x <= d}, its deepest point)``: the hull of the half-spaces' corners,
     found about the deepest point; ``None`` when that point is no deeper than ``thinnest``
     (nothing, or a sheet, is left) or the solver fails."""
-    from scipy.optimize import linprog  # noqa: PLC0415
     from scipy.spatial import HalfspaceIntersection  # noqa: PLC0415
 
-    # the deepest point x and its depth t: maximise t with n · x + t <= d
+    deepest = _deepest_point(normals, offsets)
+    if deepest is None or deepest[1] <= thinnest:
+        return None
+    corners = HalfspaceIntersection(np.column_stack([normals, -offsets]), deepest[0]).intersections
+    return hull_mesh(convex_hull(corners)), deepest[0]
+
+
+def _deepest_point(normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """``(x, t)`` maximising ``t`` with ``n · x + t <= d`` for the unit normals (the
+    Chebyshev centre of ``{x : n · x <= d}`` and its depth), ``t >= 0``; ``None`` when
+    the half-spaces leave nothing or the solver fails."""
+    from scipy.optimize import linprog  # noqa: PLC0415
+
     res = linprog(c=[0.0, 0.0, 0.0, -1.0], A_ub=np.column_stack([normals, np.ones(len(normals))]),
                   b_ub=offsets, bounds=[(None, None)] * 3 + [(0.0, None)], method="highs")
-    if res.status != 0 or res.x[3] <= thinnest:
+    if res.status != 0:
         return None
-    centre = np.asarray(res.x[:3])
-    corners = HalfspaceIntersection(np.column_stack([normals, -offsets]), centre).intersections
-    return hull_mesh(convex_hull(corners)), centre
+    return np.asarray(res.x[:3]), float(res.x[3])
 
 
 def _grown(hull: _Hull, radius: float, eps: float
@@ -212,8 +281,8 @@ def _grown(hull: _Hull, radius: float, eps: float
             continue
         if len(unit) * len(hull.corners) > MAX_POINTS:
             return None
-        points = (hull.corners[:, None, :] + radius * unit[None, :, :]).reshape(-1, 3)
-        points = np.vstack([points, moved])
+        corner, direction = _extreme_pairs(hull, unit, ball_cone_angle(subdivisions))
+        points = np.vstack([hull.corners[corner] + radius * unit[direction], moved])
         # points closer than the merge distance are one (a file's coplanar triangles move
         # their corners to points a few 1e-9 apart, which a reader's weld would join into
         # edges of four triangles); that moves the hull by at most it
@@ -221,6 +290,22 @@ def _grown(hull: _Hull, radius: float, eps: float
         points = points[representatives(points, merge)]
         return hull_mesh(convex_hull(points)), chord + merge, subdivisions
     return None
+
+
+def _extreme_pairs(hull: _Hull, unit: np.ndarray, ball_angle: float
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs (corner ``v`` of ``H``, vertex ``u`` of the unit icosphere) whose point
+    ``v + r u`` can be a vertex of ``H ⊕ icosphere``: some direction must find both
+    extreme, so their normal cones must meet. The icosphere's lie within ``ball_angle``
+    of ``u``, ``H``'s within the corner's circular cone; pairs whose cones are farther
+    apart than that are left out (a corner whose cone is 90° or wider keeps every ``u``).
+    The hull of the points is the same."""
+    margin = 1e-6
+    reach = hull.cone_angles + ball_angle + margin
+    cosines = hull.cone_axes @ unit.T                         # (corners, directions)
+    keep = (cosines >= np.cos(np.minimum(reach, np.pi))[:, None]) \
+        | (hull.cone_angles >= np.pi / 2)[:, None]
+    return np.nonzero(keep)
 
 
 def representatives(points: np.ndarray, radius: float) -> np.ndarray:
@@ -249,8 +334,22 @@ def representatives(points: np.ndarray, radius: float) -> np.ndarray:
 def unit_ball(subdivisions: int) -> tuple[np.ndarray, float]:
     """The unit icosphere's vertices and the least distance from its centre to a facet
     plane."""
-    sphere = convex_hull(trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0).vertices)
+    sphere = _unit_hull(subdivisions)
     return np.asarray(sphere.points[sphere.vertices]), float(-sphere.equations[:, 3].max())
+
+
+@functools.lru_cache(maxsize=None)
+def ball_cone_angle(subdivisions: int) -> float:
+    """The largest angle between a vertex of the unit icosphere and the normal of a facet
+    at it: each vertex's normal cone lies within that angle of the vertex."""
+    sphere = _unit_hull(subdivisions)
+    corners = sphere.points[sphere.simplices]                  # (facets, 3, 3), unit
+    cosines = np.einsum("fkj,fj->fk", corners, sphere.equations[:, :3])
+    return float(np.arccos(np.clip(cosines.min(), -1.0, 1.0)))
+
+
+def _unit_hull(subdivisions: int):
+    return convex_hull(trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0).vertices)
 
 
 def convex_hull(points: np.ndarray):

@@ -458,3 +458,49 @@ def test_the_offset_command_refuses_an_unknown_format_before_the_work(tmp_path, 
         assert err.startswith("minkplan: error: --output") and "unknown mesh format" in err
         assert "\n" not in err and not (tmp_path / name).exists()
 
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_ball_points_left_out_never_change_the_grown_hull(seed):
+    """Every corner-and-direction pair against the pairs whose normal cones meet: the
+    same hull (same vertices, same volume) on random convex solids, a box and a needle."""
+    from shapes import random_convex
+
+    import planner.offsets_convex as convex
+
+    solids = [random_convex(30, (1.0, 0.3, 2.0), seed=seed), trimesh.creation.box((1, 0.6, 0.4)),
+              trimesh.convex.convex_hull(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1],
+                                                   [40.0 + seed, 50, 50]]))]
+    for solid in solids:
+        hull = convex._hull_planes(solid, 1e-3)
+        for subdivisions in (1, 2):
+            unit, _ = convex.unit_ball(subdivisions)
+            angle = convex.ball_cone_angle(subdivisions)
+            corner, direction = convex._extreme_pairs(hull, unit, angle)
+            assert len(corner) < len(hull.corners) * len(unit)
+            left = convex.convex_hull(hull.corners[corner] + 0.2 * unit[direction])
+            full = convex.convex_hull((hull.corners[:, None] + 0.2 * unit[None]).reshape(-1, 3))
+            np.testing.assert_allclose(np.sort(left.points[left.vertices], axis=0),
+                                       np.sort(full.points[full.vertices], axis=0), atol=1e-12)
+            assert left.volume == pytest.approx(full.volume, rel=1e-12)
+
+
+def test_the_gap_bound_holds_the_measured_gap_of_a_dented_hull():
+    """A dent of up to 6e-3 in one face of a convex solid: the bound on the distance
+    between its hull and the hull's planes moved in by the depth holds the measured one,
+    within a small factor of the depth."""
+    from shapes import random_convex
+
+    import planner.offsets_convex as convex
+
+    for seed in range(6):
+        solid = random_convex(60, (10.0, 8.0, 6.0 - 0.8 * seed), seed=seed)
+        dent = solid.triangles_center[0] - 1e-3 * (seed + 1) * solid.face_normals[0]
+        a, b, c = solid.faces[0]
+        n = len(solid.vertices)
+        dented = trimesh.Trimesh(np.vstack([solid.vertices, dent]), np.vstack(
+            [solid.faces[1:], [[a, b, n], [b, c, n], [c, a, n]]]), process=False)
+        hull = convex._hull_planes(dented, 0.1)
+        centre, inradius = convex._deepest_point(hull.normals, hull.offsets)
+        bound = convex._gap_bound(hull, centre, inradius)
+        assert 1e-4 < hull.depth and convex._gap_exact(hull) <= bound < 20 * hull.depth
