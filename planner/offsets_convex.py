@@ -305,7 +305,8 @@ def _extreme_pairs(hull: _Hull, unit: np.ndarray, ball_angle: float
     cosines = hull.cone_axes @ unit.T                         # (corners, directions)
     keep = (cosines >= np.cos(np.minimum(reach, np.pi))[:, None]) \
         | (hull.cone_angles >= np.pi / 2)[:, None]
-    return np.nonzero(keep)
+    corner, direction = np.nonzero(keep)
+    return corner, direction
 
 
 def representatives(points: np.ndarray, radius: float) -> np.ndarray:
