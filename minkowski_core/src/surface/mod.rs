@@ -109,6 +109,9 @@ pub struct Surface {
     /// Copies of vertices made where sheets of the joined surface touch (along a hair-thin
     /// edge or at a point), one per sheet ([`stitch::unzip_touching_sheets`]).
     pub sheets_unzipped: usize,
+    /// How far those vertices moved apart into their own sheets (so that a reader welding
+    /// vertices by position keeps them apart); the bound adds it.
+    pub sheets_apart: f64,
     /// Closed slivers (two layers folded onto each other, under two cells across) removed
     /// after the join ([`stitch::drop_slivers`]).
     pub slivers_dropped: usize,
@@ -292,7 +295,7 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -
         let (mut open, mut pinched) = open_or_pinched(&s.faces);
         if !open.is_empty() || !pinched.is_empty() {
             let at = open.iter().flat_map(|&(a, b)| [a, b]).chain(pinched.iter().copied()).collect();
-            s.sheets_unzipped = stitch::unzip_touching_sheets(&mut s, at);
+            s.sheets_unzipped = stitch::unzip_touching_sheets(&mut s, at, oct.h);
         }
         // (a sheet unzipped from the rest may be a sliver: a triangle and its reverse)
         s.slivers_dropped = stitch::drop_slivers(&mut s, 2.0 * oct.h, 1e-4 * oct.h.powi(3));

@@ -15,6 +15,10 @@ use crate::bvh::Bvh;
 use crate::math::{Aabb, Vec3};
 use crate::util::{FastMap, FastSet};
 
+/// How far, in cells, the copies of a vertex where sheets touched move apart into their
+/// own sheets ([`unzip_touching_sheets`]).
+pub const SHEETS_APART: f64 = 1e-3;
+
 /// Add the convex polygons `polys` (each counter-clockwise about its outward normal) to
 /// `s`, welding corners within `tol` and splitting edges at T-junctions (see the module
 /// docs).
@@ -183,12 +187,16 @@ pub fn pinched_vertices(faces: &[[u32; 3]]) -> Vec<u32> {
 /// the sum meeting along a hair-thin edge or at a point (or coming within the weld
 /// tolerance there, so their corners welded), which leaves an edge used twice each way or
 /// a pinched vertex. About such a vertex the triangles fall into fans that each close
-/// (the simple cycles of its link); every fan but the first gets a copy of the vertex at
-/// the same place. `at`: the vertices to look at (the ends of open edges, or the pinched
-/// vertices when there are none).
-/// Nothing moves, so the surface is the same point set; edges left open (a real hole) are
-/// left to the caller. Returns how many copies were made.
-pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>) -> usize {
+/// (the simple cycles of its link); every fan but the first gets a copy of the vertex.
+/// Copies at one place would be welded into one again by any reader that joins vertices
+/// by position (STL has no others): each fan's vertex moves [`SHEETS_APART`] of `h` into
+/// its own fan (towards its triangles' centroids), at least 16 float32 steps of its
+/// coordinates, but less than half the height of any of its triangles (so none flips);
+/// `s.sheets_apart` records the largest move (the bound adds it). `at`:
+/// the vertices to look at (the ends of open edges, or the pinched vertices when there
+/// are none). Edges left open (a real hole) are left to the caller. Returns how many
+/// copies were made.
+pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>, h: f64) -> usize {
     at.sort_unstable();
     at.dedup();
     if at.is_empty() {
@@ -205,18 +213,47 @@ pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>) -> usize {
     }
     let mut copies = 0;
     for v in at {
-        for fan in fans(&s.faces, v, &star[&v]).into_iter().skip(1) {
-            let copy = s.vertices.len() as u32;
-            s.vertices.push(s.vertices[v as usize]);
+        let fans = fans(&s.faces, v, &star[&v]);
+        if fans.len() < 2 {
+            continue;
+        }
+        let place = s.vertices[v as usize];
+        let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element());
+        // no triangle flips: a corner moved less than half its height above the opposite
+        // edge keeps its triangle's normal within the same half-space
+        let lowest = star[&v].iter().map(|&t| height_over_opposite_edge(s, s.faces[t], v)).fold(f64::INFINITY, f64::min);
+        let step = wanted.min(0.5 * lowest);
+        for (k, fan) in fans.into_iter().enumerate() {
+            let into = fan.iter().map(|&t| s.faces[t].iter().fold(Vec3::ZERO, |acc, &c| acc + s.vertices[c as usize]) / 3.0 - place).fold(Vec3::ZERO, |acc, d| acc + d);
+            let moved = place + into.normalize_or_zero() * step;
+            let id = if k == 0 {
+                v
+            } else {
+                s.vertices.push(moved);
+                copies += 1;
+                s.vertices.len() as u32 - 1
+            };
+            s.vertices[id as usize] = moved;
             for t in fan {
                 for corner in s.faces[t].iter_mut().filter(|c| **c == v) {
-                    *corner = copy;
+                    *corner = id;
                 }
             }
-            copies += 1;
         }
+        s.sheets_apart = s.sheets_apart.max(step);
     }
     copies
+}
+
+/// The distance of corner `v` of triangle `f` from the line through the other two.
+fn height_over_opposite_edge(s: &Surface, f: [u32; 3], v: u32) -> f64 {
+    let i = f.iter().position(|&c| c == v).unwrap_or(0);
+    let [p, x, y] = [f[i], f[(i + 1) % 3], f[(i + 2) % 3]].map(|c| s.vertices[c as usize]);
+    let base = (y - x).length();
+    if base == 0.0 {
+        return 0.0;
+    }
+    (x - p).cross(y - p).length() / base
 }
 
 /// The triangles `tris` about vertex `v` as closed fans (each a simple cycle of `v`'s link,
@@ -650,17 +687,33 @@ mod tests {
             assert!(!open.is_empty() || !pinched.is_empty(), "the cubes touch: not a manifold");
             let at = open.iter().flat_map(|&(a, b)| [a, b]).chain(pinched).collect();
             let before = s.clone();
-            assert_eq!(unzip_touching_sheets(&mut s, at), copies);
+            let h = 0.5;
+            assert_eq!(unzip_touching_sheets(&mut s, at, h), copies);
             assert!(open_edges(&s.faces).is_empty() && pinched_vertices(&s.faces).is_empty());
-            // the same triangles, place for place
-            let at_places = |s: &Surface| s.faces.iter().map(|f| f.map(|v| s.vertices[v as usize].to_array())).collect::<Vec<_>>();
-            assert_eq!(at_places(&s), at_places(&before));
+            assert_eq!(s.sheets_apart, SHEETS_APART * h);
+            // the same triangles, each corner where it was or moved that far into its own
+            // cube: off the plane between the cubes (x + y = 2, or x + y + z = 3)
+            let step = SHEETS_APART * h;
+            let off_plane = |p: Vec3| if shared == 2 { p.x + p.y - 2.0 } else { p.x + p.y + p.z - 3.0 };
+            let mut moved = 0;
+            for (f, g) in s.faces.iter().zip(&before.faces) {
+                for (&c, &d) in f.iter().zip(g) {
+                    let (now, was) = (s.vertices[c as usize], before.vertices[d as usize]);
+                    assert!((now - was).length() <= step * (1.0 + 1e-12));
+                    if now != was {
+                        moved += 1;
+                        assert!(off_plane(now).abs() > 0.5 * step, "{now} stays between the cubes");
+                    }
+                }
+            }
+            assert!(moved > 0);
         }
         // a real hole is left as it is
         let mut s = two_cubes(Vec3::new(3.0, 0.0, 0.0));
         s.faces.pop();
         let at = open_edges(&s.faces).iter().flat_map(|&(a, b)| [a, b]).collect();
-        assert_eq!(unzip_touching_sheets(&mut s, at), 0);
+        assert_eq!(unzip_touching_sheets(&mut s, at, 0.5), 0);
+        assert_eq!(s.sheets_apart, 0.0);
     }
 
     #[test]
