@@ -161,9 +161,9 @@ def bound_by_region(surf: dict) -> dict[str, float]:
     """The native surface ``surf``'s two-sided bound by the kind of region it holds for
     (``error_bound`` is the largest, and never below the grid's): ``planes``, cells
     resolved by facet planes (0: exact; the gap of planes taken as one, or a small hole
-    closed, otherwise, and how far vertices moved apart where sheets touched); ``sampled``, the band sampled at eps (the grid's bound; 0 without
-    one); ``missed``, cells where the lattice may have missed boundary (their reach; 0
-    without any)."""
+    closed, otherwise, and how far vertices moved apart where sheets touched);
+    ``sampled``, the band sampled at eps (the grid's bound; 0 without one); ``missed``,
+    cells where the lattice may have missed boundary (their reach; 0 without any)."""
     return {key: float(surf[f"bound_{key}"]) for key in ("planes", "sampled", "missed")}
 
 

@@ -15,7 +15,9 @@ Inputs (every tool gets the same closed solid, as planner reads it):
 * a CAD part with sharp features: the Factory round hole (a 25 x 25 x 9 mm plate with an
   8 mm bore; ../shared/assets, skipped saying so when absent), offset by 1 mm;
 * the Factory round peg (8 mm, 1,152 triangles, convex up to its OBJ's rounding: ours takes
-  the hull path), offset by 1 mm.
+  the hull path), offset by 1 mm;
+* the IndustReal small gear (22 mm, 20,524 triangles after its repair, teeth finely
+  tessellated: many small facets in every cell, ours' hard case), offset by 1 mm.
 
 Tools, each at a few resolutions: ours (``planner.offset`` at ``eps``: the box and the peg,
 convex bodies, take the hull path of :mod:`planner.offsets_convex`, the others the sum with
@@ -66,6 +68,7 @@ from benchlib import jsonable, peak_mb  # noqa: E402
 ASSETS = HERE.parent.parent.parent / "shared" / "assets" / "assemblies"
 HOLE = ASSETS / "factory_round_peg_8mm" / "meshes" / "factory_round_hole_8mm_subdiv_3x.obj"
 PEG = ASSETS / "factory_round_peg_8mm" / "meshes" / "factory_round_peg_8mm_loose.obj"
+GEAR = ASSETS / "industreal_gears" / "meshes" / "industreal_gear_small.obj"
 RESULTS = HERE / "results" / f"{datetime.date.today().isoformat()}-offsets"
 TIMEOUT = 600.0
 
@@ -125,6 +128,10 @@ def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
         cases.append({"name": "peg: Factory round peg (CAD, convex up to rounding)",
                       "mesh": peg, "r": 0.001, "ours": [0.0004, 0.0001, 0.00002],
                       "libigl": [50, 100, 200, 300], "manifold": [1, 2, 3, 4]})
+        gear = classify(planner.load_mesh(GEAR), name="gear", kind="solid").mesh
+        cases.append({"name": "gear: IndustReal small gear (CAD, 20k triangles)",
+                      "mesh": gear, "r": 0.001, "ours": [0.001, 0.0005, 0.00025],
+                      "libigl": [100, 200, 300], "manifold": [1]})
     else:
         log(f"skipping the CAD part: {HOLE} is absent (../shared/assets not laid out)")
     if only:
@@ -463,7 +470,7 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--inputs", default="",
                    help="comma-separated first words of the inputs to run (box, bunny-like, "
-                        "factory, peg); default: all")
+                        "factory, peg, gear); default: all")
     p.add_argument("--out", type=Path, default=RESULTS,
                    help="write PREFIX.md and PREFIX.json (default: results/<date>-offsets)")
     args = p.parse_args(argv)

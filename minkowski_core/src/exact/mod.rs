@@ -702,8 +702,7 @@ impl CellSource for ExactSource {
         self.classify_near(cell, cand, finest, None, out)
     }
 
-    fn center_sign(&self, cell: &Aabb, cand: &[u32], own: &[u32], known: Option<(Vec3, bool)>) -> Option<bool> {
-        let c = cell.center();
+    fn center_sign(&self, c: Vec3, cand: &[u32], own: &[u32], known: Option<(Vec3, bool)>) -> Option<bool> {
         Some(known.and_then(|(q, s)| self.carry(cand, q, s, c)).unwrap_or_else(|| self.cell_contains(own, c)))
     }
 

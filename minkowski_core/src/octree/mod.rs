@@ -71,11 +71,12 @@ pub trait CellSource: Sync {
         let _ = known;
         self.classify(cell, cand, finest, out)
     }
-    /// For a MIXED cell that will be split: the membership of its centre, for its children's
-    /// [`CellSource::classify_near`] (`cand`: the parent's records, `own`: the cell's,
-    /// `known`: the parent's known point). Default: `None` (not worth computing).
-    fn center_sign(&self, cell: &Aabb, cand: &[u32], own: &[u32], known: Option<(Vec3, bool)>) -> Option<bool> {
-        let _ = (cell, cand, own, known);
+    /// For a MIXED cell that will be split: the membership of its `centre` (the lattice
+    /// point its children share), for its children's [`CellSource::classify_near`]
+    /// (`cand`: the parent's records, `own`: the cell's, `known`: the parent's known
+    /// point). Default: `None` (not worth computing).
+    fn center_sign(&self, centre: Vec3, cand: &[u32], own: &[u32], known: Option<(Vec3, bool)>) -> Option<bool> {
+        let _ = (centre, cand, own, known);
         None
     }
     /// Whether `p`, a point of a cell with records `cand`, lies in the (closed) solid.
@@ -227,6 +228,10 @@ pub struct Leaf {
     pub cand_start: u32,
     /// Length of that list (0 unless MIXED).
     pub cand_len: u32,
+    /// The source's answer at the corner of the leaf that its parent's centre is, when the
+    /// build knew it ([`Octree::known_corner`]): regions of the cell take it from there
+    /// when no candidate lies between.
+    pub corner_sign: Option<bool>,
 }
 
 /// The built octree: leaves in depth-first order and the candidate arena.
@@ -273,7 +278,7 @@ type Out = (Vec<Leaf>, Vec<u32>);
 /// `sampled` boxes, and its surface exact by the planes of its candidates
 /// ([`resolve_cell`], kept in `resolved` for the extraction, which then need not cut the
 /// cell again).
-pub fn resolvable<S: CellSource + ?Sized>(src: &S, (sampled, resolved): (&[Aabb], &ResolvedCells), cell: &Aabb, own: &[u32]) -> bool {
+pub fn resolvable<S: CellSource + ?Sized>(src: &S, (sampled, resolved): (&[Aabb], &ResolvedCells), cell: &Aabb, own: &[u32], known: Option<(Vec3, bool)>) -> bool {
     if sampled.iter().any(|b| b.overlaps(cell)) || src.plane_cut(own).is_none() {
         return false;
     }
@@ -281,7 +286,7 @@ pub fn resolvable<S: CellSource + ?Sized>(src: &S, (sampled, resolved): (&[Aabb]
     if let Some(known) = resolved.resolves(&key) {
         return known;
     }
-    let surface = resolve_cell(src, cell, own, 0);
+    let surface = resolve_cell(src, cell, own, 0, known);
     let found = surface.is_some();
     resolved.insert(key, surface);
     found
@@ -357,7 +362,7 @@ impl Octree {
     /// Position of lattice point `(i, j, k)`.
     #[inline]
     pub fn lattice_point(&self, i: u32, j: u32, k: u32) -> Vec3 {
-        self.origin + Vec3::new(i as f64, j as f64, k as f64) * self.h
+        lattice_at(self.origin, self.h, [i, j, k].map(u64::from))
     }
 
     /// The candidate records of a leaf of an octree over a [`PolytopeSet`]:
@@ -372,6 +377,15 @@ impl Octree {
     pub fn records<'a>(&'a self, leaf: &Leaf) -> &'a [u32] {
         let s = leaf.cand_start as usize;
         &self.cands[s..s + leaf.cand_len as usize]
+    }
+
+    /// The corner of `leaf` that its parent's centre is, and the source's answer there,
+    /// when the build knew it ([`Leaf::corner_sign`]).
+    pub fn known_corner(&self, leaf: &Leaf) -> Option<(Vec3, bool)> {
+        let inside = leaf.corner_sign?;
+        let size = 1u64 << leaf.level;
+        let centre = leaf.ijk.map(|i| (u64::from(i) & !(2 * size - 1)) + size);
+        Some((lattice_at(self.origin, self.h, centre), inside))
     }
 
     /// Leaves per level and label.
@@ -467,16 +481,29 @@ pub(crate) fn classify_cell(polys: &[ConvexPolytope], cell: &Aabb, cand: &[u32],
 
 /// The closed box of the cell with lower lattice corner `ijk` and size `2^level` finest
 /// cells, on the lattice with point `(0, 0, 0)` at `origin` and spacing `h`.
+/// Its corners are lattice points computed as [`lattice_at`] does, so a corner shared by
+/// cells of different sizes is one point.
 #[inline]
 pub(crate) fn lattice_cell(origin: Vec3, h: f64, ijk: [u32; 3], level: u8) -> Aabb {
-    let s = (1u64 << level) as f64 * h;
-    let min = origin + Vec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64) * h;
-    Aabb::new(min, min + Vec3::splat(s))
+    let size = 1u64 << level;
+    Aabb::new(lattice_at(origin, h, ijk.map(u64::from)), lattice_at(origin, h, ijk.map(|i| u64::from(i) + size)))
+}
+
+/// The position of lattice point `ijk` (every corner of every cell is computed this way).
+#[inline]
+pub(crate) fn lattice_at(origin: Vec3, h: f64, ijk: [u64; 3]) -> Vec3 {
+    origin + Vec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64) * h
 }
 
 impl Ctx<'_> {
     fn cell(&self, ijk: [u32; 3], level: u8) -> Aabb {
         lattice_cell(self.origin, self.h, ijk, level)
+    }
+
+    /// The centre of a cell above the finest level: the lattice point its children share.
+    fn centre(&self, ijk: [u32; 3], level: u8) -> Vec3 {
+        let half = 1u64 << (level - 1);
+        lattice_at(self.origin, self.h, ijk.map(|i| u64::from(i) + half))
     }
 
     /// Filter `cand` against `cell` into `out`; the cell's label.
@@ -486,15 +513,15 @@ impl Ctx<'_> {
     }
 
     /// Whether a MIXED cell above the finest level stays a leaf: resolved by planes.
-    fn resolved(&self, cell: &Aabb, own: &[u32]) -> bool {
-        self.planar.is_some_and(|planar| resolvable(self.src, planar, cell, own))
+    fn resolved(&self, cell: &Aabb, own: &[u32], known: Option<(Vec3, bool)>) -> bool {
+        self.planar.is_some_and(|planar| resolvable(self.src, planar, cell, own, known))
     }
 
     fn leaf(&self, ijk: [u32; 3], level: u8, label: Label, cand_len: usize) -> Leaf {
         if self.count.fetch_add(1, Ordering::Relaxed) >= self.budget {
             self.abort.store(true, Ordering::Relaxed);
         }
-        Leaf { ijk, level, label, cand_start: 0, cand_len: cand_len as u32 }
+        Leaf { ijk, level, label, cand_start: 0, cand_len: cand_len as u32, corner_sign: None }
     }
 
     fn node(&self, ijk: [u32; 3], level: u8, cand: &[u32], known: Option<(Vec3, bool)>) -> Out {
@@ -503,11 +530,12 @@ impl Ctx<'_> {
             let mut own = Vec::with_capacity(cand.len());
             let cell = self.cell(ijk, level);
             let label = self.classify(&cell, cand, level == 0, known, &mut own);
-            if label != Label::Mixed || level == 0 || self.resolved(&cell, &own) {
-                self.push_leaf(&mut out, ijk, level, label, &own);
+            if label != Label::Mixed || level == 0 || self.resolved(&cell, &own, known) {
+                self.push_leaf(&mut out, ijk, level, label, &own, known);
                 return out;
             }
-            let mine = self.src.center_sign(&cell, cand, &own, known).map(|s| (cell.center(), s));
+            let centre = self.centre(ijk, level);
+            let mine = self.src.center_sign(centre, cand, &own, known).map(|s| (centre, s));
             let parts: Vec<Out> = (0..8u32)
                 .into_par_iter()
                 .map(|c| {
@@ -538,20 +566,23 @@ impl Ctx<'_> {
         let mut own = Vec::with_capacity(cand.len());
         let cell = self.cell(ijk, level);
         let label = self.classify(&cell, cand, level == 0, known, &mut own);
-        if label != Label::Mixed || level == 0 || self.resolved(&cell, &own) {
-            self.push_leaf(out, ijk, level, label, &own);
+        if label != Label::Mixed || level == 0 || self.resolved(&cell, &own, known) {
+            self.push_leaf(out, ijk, level, label, &own, known);
             return;
         }
-        let mine = self.src.center_sign(&cell, cand, &own, known).map(|s| (cell.center(), s));
+        let centre = self.centre(ijk, level);
+        let mine = self.src.center_sign(centre, cand, &own, known).map(|s| (centre, s));
         for c in 0..8u32 {
             self.node_seq(child(ijk, level, c), level - 1, &own, mine, out);
         }
     }
 
-    fn push_leaf(&self, out: &mut Out, ijk: [u32; 3], level: u8, label: Label, own: &[u32]) {
+    /// `known`: the parent's centre and its answer (a corner of this leaf), if any.
+    fn push_leaf(&self, out: &mut Out, ijk: [u32; 3], level: u8, label: Label, own: &[u32], known: Option<(Vec3, bool)>) {
         let keep = if label == Label::Mixed { own.len() } else { 0 };
         let mut leaf = self.leaf(ijk, level, label, keep);
         leaf.cand_start = out.1.len() as u32;
+        leaf.corner_sign = known.map(|(_, inside)| inside);
         if keep > 0 {
             if self.words.fetch_add(keep, Ordering::Relaxed) + keep > self.max_words {
                 self.abort.store(true, Ordering::Relaxed);

@@ -87,10 +87,10 @@ impl CellSource for Obstacles {
             Obstacles::Exact(e) => e.classify_near(cell, cand, finest, known, out),
         }
     }
-    fn center_sign(&self, cell: &Aabb, cand: &[u32], own: &[u32], known: Option<(Vec3, bool)>) -> Option<bool> {
+    fn center_sign(&self, centre: Vec3, cand: &[u32], own: &[u32], known: Option<(Vec3, bool)>) -> Option<bool> {
         match self {
             Obstacles::Union(_) => None,
-            Obstacles::Exact(e) => e.center_sign(cell, cand, own, known),
+            Obstacles::Exact(e) => e.center_sign(centre, cand, own, known),
         }
     }
     fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {

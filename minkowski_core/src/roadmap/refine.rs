@@ -75,7 +75,7 @@ impl Classifier<'_> {
                 self.split(child, level - 1, &own, stop, out);
             } else {
                 let list = if label == Label::Mixed { own.clone() } else { Vec::new() };
-                out.push((Leaf { ijk: child, level: level - 1, label, cand_start: 0, cand_len: 0 }, list));
+                out.push((Leaf { ijk: child, level: level - 1, label, cand_start: 0, cand_len: 0, corner_sign: None }, list));
             }
         }
     }

@@ -358,7 +358,7 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCell
             let k = cell_key(&cell, recs, sub_levels);
             match resolved.get(&k) {
                 Some(known) => (li, k, known, false),
-                None => (li, k, resolve::resolve_cell(src, &cell, recs, sub_levels), true),
+                None => (li, k, resolve::resolve_cell(src, &cell, recs, sub_levels, oct.known_corner(leaf)), true),
             }
         })
         .collect();

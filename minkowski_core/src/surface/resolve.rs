@@ -40,14 +40,24 @@ pub struct CellSurface {
 }
 
 /// The surface in `cell` (records `recs`), splitting it up to `sub_levels` times where it
-/// is not resolvable by planes; `None` when some part of it is not.
-pub fn resolve_cell<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], sub_levels: u32) -> Option<CellSurface> {
-    if let Some(surface) = src.plane_cut(recs).and_then(|cut| Some((cut, cut.pieces(cell)?))).and_then(|(cut, pieces)| cut_surface(src, recs, &cut, pieces)) {
+/// is not resolvable by planes; `None` when some part of it is not. `known`: a point of
+/// the closed cell and the source's answer there (a corner the octree's build answered),
+/// which regions take when no candidate lies between.
+pub fn resolve_cell<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], sub_levels: u32, known: Option<(Vec3, bool)>) -> Option<CellSurface> {
+    // (the point serves only a cell it lies in: the records cover no more)
+    let known = known.filter(|(q, _)| cell.contains_point(*q));
+    if let Some(surface) = src.plane_cut(recs).and_then(|cut| Some((cut, cut.pieces(cell)?))).and_then(|(cut, pieces)| cut_surface(src, recs, &cut, pieces, known)) {
         return Some(surface);
     }
     if sub_levels == 0 {
         return None;
     }
+    // the octants' shared corner, for each of them: carried from the known point, else
+    // one query for the eight
+    let c = cell.center();
+    let mut scratch = Vec::new();
+    let inside = known.filter(|&(q, _)| !src.meets_boundary(recs, q, c, &mut scratch)).map_or_else(|| src.cell_contains(recs, c), |(_, s)| s);
+    let known = Some((c, inside));
     let mut out = CellSurface::default();
     let mut own = Vec::new();
     for child in octants(cell) {
@@ -55,7 +65,7 @@ pub fn resolve_cell<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], 
         if src.classify(&child, recs, true, &mut own) != Label::Mixed {
             continue;
         }
-        let part = resolve_cell(src, &child, &own, sub_levels - 1)?;
+        let part = resolve_cell(src, &child, &own, sub_levels - 1, known)?;
         out.deviation = out.deviation.max(part.deviation);
         out.polys.extend(part.polys);
     }
@@ -64,13 +74,14 @@ pub fn resolve_cell<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], 
 
 /// The pieces of `cut` whose sides differ, oriented outward; `None` when a sheet thinner
 /// than the planes taken as one lies between them ([`Piece::slab`]).
-fn cut_surface<S: CellSource + ?Sized>(src: &S, recs: &[u32], cut: &Cut, pieces: Vec<Piece>) -> Option<CellSurface> {
+fn cut_surface<S: CellSource + ?Sized>(src: &S, recs: &[u32], cut: &Cut, pieces: Vec<Piece>, known: Option<(Vec3, bool)>) -> Option<CellSurface> {
     // one answer per region of the cut (pieces share them): carried from a region answered
-    // before when the segment between their points meets no candidate (the boundary in
-    // the cell lies on candidates, so none lies between them), else one point query
-    let mut answered: Vec<(usize, bool, Vec3)> = Vec::new();
+    // before (or the known point, of no region) when the segment between their points
+    // meets no candidate (the boundary in the cell lies on candidates, so none lies
+    // between them), else one point query
+    let mut answered: Vec<(usize, bool, Vec3)> = known.map(|(q, inside)| (usize::MAX, inside, q)).into_iter().collect();
     let mut scratch = Vec::new();
-    let tries = CARRY_TRIES.min(CARRY_WORDS / recs.len().max(1));
+    let tries = CARRY_TRIES.min(CARRY_WORDS / recs.len().max(1)).max(1);
     let mut inside = |p: Vec3| {
         let region = cut.region(p);
         if let Some(&(_, known, _)) = answered.iter().find(|r| r.0 == region) {

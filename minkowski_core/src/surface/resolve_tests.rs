@@ -60,8 +60,8 @@ fn carried_region_answers_are_the_point_queries_answers() {
         let (mut cells, mut polygons) = (0, 0);
         for leaf in oct.leaves.iter().filter(|l| l.label == Label::Mixed) {
             let (cell, recs) = (oct.cell_box(leaf), oct.records(leaf));
-            let with = resolve_cell(&carried, &cell, recs, 1);
-            let without = resolve_cell(&queried, &cell, recs, 1);
+            let with = resolve_cell(&carried, &cell, recs, 1, None);
+            let without = resolve_cell(&queried, &cell, recs, 1, None);
             assert_eq!(with.is_some(), without.is_some(), "cell {cell:?}");
             if let (Some(a), Some(b)) = (with, without) {
                 assert_eq!(a.polys, b.polys, "cell {cell:?}");
@@ -118,4 +118,29 @@ fn the_extraction_takes_the_surfaces_the_octree_resolved() {
     let (q_with, q_without) = (shared_src.queries.into_inner(), fresh_src.queries.into_inner());
     assert!(built > 0 && above > 100, "{built} queries building, {above} cells resolved above the finest level");
     assert!(q_with + above <= q_without, "{q_with} queries with the build's cache, {q_without} without");
+}
+
+#[test]
+fn regions_take_the_answer_the_build_knew_at_a_corner_and_give_the_same_surface() {
+    let src = ExactSource::new(vec![torus_mesh(10.0, 3.0, 24, 12)], sphere_mesh(0.9, 12, 7), 0.0, None);
+    // (every MIXED leaf is a finest cell here: the sampled build)
+    let oct = Octree::build(&src, &src.aabb, 0.15, 4_000_000).unwrap();
+    let counted = || Counted { src: &src, carry: true, queries: AtomicUsize::new(0) };
+    let (told, untold) = (counted(), counted());
+    let mut cells = 0;
+    for leaf in oct.leaves.iter().filter(|l| l.label == Label::Mixed && l.level == 0) {
+        let (cell, recs) = (oct.cell_box(leaf), oct.records(leaf));
+        let known = oct.known_corner(leaf);
+        let (q, inside) = known.expect("every finest MIXED leaf has a parent that answered");
+        assert!(cell.contains_point(q), "{q} is a corner of {cell:?}");
+        assert_eq!(inside, src.cell_contains(&[], q), "the build's answer at {q}");
+        let with = resolve_cell(&told, &cell, recs, 1, known);
+        let without = resolve_cell(&untold, &cell, recs, 1, None);
+        assert_eq!(with.as_ref().map(|c| &c.polys), without.as_ref().map(|c| &c.polys), "cell {cell:?}");
+        cells += usize::from(with.is_some());
+    }
+    let (q_told, q_untold) = (told.queries.into_inner(), untold.queries.into_inner());
+    assert!(cells > 100, "{cells} cells resolved");
+    // (a cell's regions beyond the boundary from the corner still need one)
+    assert!(5 * q_told < 3 * q_untold, "{q_told} queries with the corners known, {q_untold} without");
 }
