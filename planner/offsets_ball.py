@@ -98,7 +98,7 @@ def face_directions(solid: trimesh.Trimesh) -> np.ndarray:
 def ball_offset(solid: trimesh.Trimesh, radius: float, eps: float, *, name: str,
                 max_cells: int | None, progress: bool | None
                 ) -> tuple[trimesh.Trimesh, float, dict[str, Any]] | None:
-    """``(mesh, error_bound, stats)`` of the closed solid grown (``radius > 0``) or eroded
+    """``(mesh, error_bound, stats)`` of the checked solid grown (``radius > 0``) or eroded
     by ``radius`` through the sum with an inscribed ball (see the module documentation);
     an empty mesh when an erosion leaves nothing; ``None`` when no icosphere is fine enough.
 
@@ -113,15 +113,19 @@ def ball_offset(solid: trimesh.Trimesh, radius: float, eps: float, *, name: str,
     if ball is None:
         return None
     rounding = 1e-9 * float(np.linalg.norm(np.ptp(np.asarray(solid.bounds), axis=0)) + 2 * r)
+    # (the solid was checked by the caller; the box around it and the hull are closed
+    # and outward as made, so nothing is checked again)
     if radius > 0:
-        operand = Part(name, solid, "offset operand")
+        operand = Part(name, solid, "offset operand", checked=True)
         polytope = ball.mesh
     else:  # the complement's sum with -K
-        operand = Part(f"{name} (complement)", _complement(solid, r), "offset operand")
+        operand = Part(f"{name} (complement)", _complement(solid, r), "offset operand",
+                       checked=True)
         polytope = trimesh.Trimesh(-ball.mesh.vertices, ball.mesh.faces[:, ::-1],
                                    process=False)
     try:
-        summed = minkowski_sum(operand, Part("ball", polytope, "inscribed ball"), exact=True,
+        summed = minkowski_sum(operand, Part("ball", polytope, "inscribed ball", checked=True),
+                               exact=True,
                                eps=max(eps - ball.delta, rounding), max_cells=max_cells,
                                progress=progress)
     except ResourceLimitError as exc:
