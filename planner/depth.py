@@ -34,12 +34,11 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
-import trimesh
 
 from .errors import InvalidMeshError, InvalidParameterError, ResourceLimitError
+from .operands import solid_part
 from .problem import Part
 from .progress import StatusLine
 from .sources import ExactSource, Source, SourceSettings
@@ -98,28 +97,6 @@ class PenetrationDepth:
                 "separated": self.separated, "distance": self.distance,
                 "tolerance": self.tolerance, "converged": self.converged,
                 "validated": self.validated, "stats": self.stats}
-
-
-def _as_part(obj, role: str) -> Part:
-    """An operand as a solid :class:`Part`: a part, a mesh, ``(vertices, faces)`` or a
-    mesh file."""
-    if isinstance(obj, Part):
-        return obj
-    if isinstance(obj, (str, Path)):
-        from .meshes import load_mesh  # noqa: PLC0415
-
-        obj = load_mesh(obj, name=role)
-    elif isinstance(obj, tuple) and len(obj) == 2:
-        try:
-            obj = trimesh.Trimesh(np.asarray(obj[0], dtype=np.float64),
-                                  np.asarray(obj[1], dtype=np.int64), process=False)
-        except (TypeError, ValueError) as error:
-            raise InvalidMeshError(f"{role}: not a (vertices, faces) pair: {error}") from None
-    if not isinstance(obj, trimesh.Trimesh):
-        raise InvalidMeshError(f"{role}: expected a trimesh.Trimesh, (vertices, faces) or a "
-                               f"mesh file, got {type(obj).__name__}")
-    name = obj.metadata.get("name")
-    return Part(f"{role} ({name})" if name else role, obj, f"operand {role}")
 
 
 def _tolerance(tolerance, size: float) -> float:
@@ -183,7 +160,7 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
         InvalidParameterError: ``tolerance`` or ``max_cells`` is out of range.
     """
     t0 = time.perf_counter()
-    part_a, part_b = _as_part(a, "a"), _as_part(b, "b")
+    part_a, part_b = solid_part(a, "a"), solid_part(b, "b")
     if not (part_a.solid and part_b.solid):
         raise InvalidMeshError("penetration depth: both parts must be solids (a surface has "
                                "no inside to penetrate)")

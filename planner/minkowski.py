@@ -22,7 +22,6 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -32,6 +31,7 @@ from . import _minkowski_core as core
 from . import budget
 from .decompose import check_threshold
 from .errors import GeometryError, InvalidMeshError, InvalidParameterError, ResourceLimitError
+from .operands import solid_part
 from .problem import Part
 from .progress import StatusLine
 from .sources import PairCObstacle, Source, SourceSettings, choose, parse_exact
@@ -85,33 +85,6 @@ class MinkowskiResult:
     pair: PairCObstacle | None = field(default=None, repr=False)
 
 
-def _as_mesh(obj, name: str) -> trimesh.Trimesh:
-    if isinstance(obj, (str, Path)):
-        from .meshes import load_mesh
-
-        return load_mesh(obj, name=name)
-    if not isinstance(obj, trimesh.Trimesh):
-        raise InvalidMeshError(
-            f"{name}: expected a trimesh.Trimesh or a mesh file path, got {type(obj).__name__}"
-        )
-    return obj
-
-
-def _label(mesh: trimesh.Trimesh, role: str) -> str:
-    """How errors and logs name an operand: its role, and the file it came from if any."""
-    path = mesh.metadata.get("file_path")
-    return f"{role} {Path(path).name}" if path else role
-
-
-def _as_part(obj, role: str) -> Part:
-    """An operand as a :class:`~planner.problem.Part`: a part as it is (a problem's, whose
-    kind and checks a source keeps), a mesh or a mesh file as a solid named by its role."""
-    if isinstance(obj, Part):
-        return obj
-    mesh = _as_mesh(obj, role)
-    return Part(_label(mesh, role), mesh, f"operand {role}")
-
-
 def _check_eps(eps) -> float:
     try:
         value = float(eps)
@@ -139,9 +112,23 @@ def _estimate_cells(box: np.ndarray, eps: float) -> float:
     return float(_CELLS_PER_AREA * area / (h * h))
 
 
+MAX_EPS_REL = 0.25
+"""The coarsest ``eps`` taken, relative to the result's diagonal: a grid coarser than
+that may miss the whole surface."""
+
+
 def _eps_value(eps, diag: float) -> float:
     """``eps`` checked, or by default ``tol.eps_rel`` of the diagonal ``diag``."""
-    return tol.eps_rel * diag if eps is None else _check_eps(eps)
+    return tol.eps_rel * diag if eps is None else check_eps_at_most(_check_eps(eps), diag)
+
+
+def check_eps_at_most(eps: float, diag: float) -> float:
+    """``eps``, refused when more than :data:`MAX_EPS_REL` of the result's diagonal."""
+    if eps > MAX_EPS_REL * diag:
+        raise InvalidParameterError(
+            f"eps = {eps:g}: more than {MAX_EPS_REL:g} of the result's size ({diag:.3g}), "
+            f"where the grid may miss the whole surface; use eps <= {MAX_EPS_REL * diag:.3g}")
+    return eps
 
 
 def _grid_eps(box: np.ndarray, diag: float, eps, max_cells: int, *, from_memory: bool = False,
@@ -196,7 +183,7 @@ def _sum(a, b, *, mirror_b: bool, eps, threshold: float, seed: int, cache_dir, p
     t_start = time.perf_counter()
     exact = parse_exact(exact, "exact")
     check_threshold(threshold)
-    parts = (_as_part(a, names[0]), _as_part(b, names[1]))
+    parts = (solid_part(a, names[0]), solid_part(b, names[1]))
     names = (parts[0].name, parts[1].name)
     max_cells, from_memory = budget.surface_cells(max_cells)
     if max_refinements < 0:

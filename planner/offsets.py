@@ -42,11 +42,11 @@ import trimesh
 
 from planner.errors import GeometryError, InvalidParameterError, ResourceLimitError
 
-from .meshes import load_mesh
 from .meshes.kinds import classify
-from .minkowski import surface_stats
+from .minkowski import check_eps_at_most, surface_stats
 from .offsets_ball import ball_offset
 from .offsets_convex import convex_offset
+from .operands import as_mesh
 from .progress import StatusLine
 from .tolerances import tol
 
@@ -82,14 +82,7 @@ class OffsetResult:
 def _solid(obj, name: str) -> trimesh.Trimesh:
     """The operand as a checked solid, made one as a part's mesh is (T-junctions split:
     :func:`planner.meshes.kinds.classify`), else the reason it is none."""
-    if isinstance(obj, trimesh.Trimesh):
-        mesh = obj
-    elif isinstance(obj, tuple) and len(obj) == 2:
-        mesh = trimesh.Trimesh(np.asarray(obj[0], dtype=np.float64),
-                               np.asarray(obj[1], dtype=np.int64), process=False)
-    else:
-        mesh = load_mesh(obj, name=name)
-    return classify(mesh, name=name, kind="solid").mesh
+    return classify(as_mesh(obj, name), name=name, kind="solid").mesh
 
 
 def _radius(r: float) -> float:
@@ -139,6 +132,7 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     step = tol.eps_rel * diagonal if eps is None else float(eps)
     if not (math.isfinite(step) and step > 0):
         raise InvalidParameterError(f"eps = {eps!r}: must be a positive finite number")
+    check_eps_at_most(step, diagonal)
     verb = "growing" if radius > 0 else "eroding"
     with StatusLine(progress) as line:
         line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")

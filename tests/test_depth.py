@@ -233,3 +233,29 @@ def test_assembled_pose_overlap_reports_the_depth():
     assert "along (-1, 0, 0)" in message
     depth = info.value.details["overlap"]["penetration_depth"]
     assert depth["lower"] <= 0.3 <= depth["upper"]
+
+
+def test_a_real_peg_pushed_into_its_cad_hole_is_read_as_the_assembly_reads_it():
+    """Factory's round hole has 36 T-junctions (open as the OBJ has it, a solid once they
+    are split, as offsets and assemblies read it): the depth reads it the same way, names
+    the file, and the peg pushed 1 mm sideways into the bore wall comes out along -x,
+    against sampled directions."""
+    from conftest import asset
+
+    folder = "assemblies/factory_round_peg_8mm/meshes/"
+    hole_path = asset(folder + "factory_round_hole_8mm_subdiv_3x.obj")
+    peg = planner.load_mesh(asset(folder + "factory_round_peg_8mm_loose.obj"))
+    peg.apply_translation([0.001, 0.0, 0.002])
+    assert not planner.load_mesh(hole_path).is_watertight
+    r = planner.penetration_depth(peg, hole_path)
+    assert r.direction @ np.array([-1.0, 0.0, 0.0]) > 0.999
+    hole = planner.meshes.kinds.classify(planner.load_mesh(hole_path), name="hole",
+                                         kind="solid").mesh
+    brute = directional_min(peg, hole, _unit(40, 0), step=2e-4, tol=1e-8)
+    assert r.lower <= brute + 1e-12 and r.upper <= brute + r.tolerance + 1e-12
+    assert 0.0009 < r.lower and r.upper < 0.001
+    assert_separating(peg, hole, r)
+    with pytest.raises(InvalidMeshError, match="b factory_round_hole_8mm_subdiv_3x.obj"):
+        broken = planner.load_mesh(hole_path)
+        broken.faces = broken.faces[:-40]
+        planner.penetration_depth(peg, broken)

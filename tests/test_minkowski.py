@@ -638,6 +638,17 @@ def test_bad_eps(eps, cache_dir):
         planner.c_obstacle(a, b, eps=eps, cache_dir=cache_dir)
 
 
+@pytest.mark.parametrize("exact", [True, False])
+def test_eps_past_a_quarter_of_the_size_is_refused_naming_the_largest(exact, cache_dir):
+    # (at eps 1 the Factory hole grown by 1 mm gave an empty surface and "please report")
+    a, b = shapes.l_bracket(), shapes.icosphere(1, 0.5)
+    diagonal = float(np.linalg.norm(a.extents + b.extents))
+    with pytest.raises(errors.InvalidParameterError, match=f"use eps <= {0.25 * diagonal:.3g}"):
+        planner.minkowski_sum(a, b, eps=0.26 * diagonal, exact=exact, cache_dir=cache_dir)
+    r = planner.minkowski_sum(a, b, eps=0.249 * diagonal, exact=exact, cache_dir=cache_dir)
+    assert len(r.mesh.faces) > 0 and r.mesh.is_watertight
+
+
 def test_eps_too_small_for_the_grid(cache_dir):
     a, b = shapes.l_bracket(), shapes.icosphere(1, 0.5)  # not convex: a grid is needed
     with pytest.raises(errors.ResourceLimitError, match=r"(?i)eps|grid|cells|memory"):

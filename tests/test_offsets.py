@@ -320,6 +320,14 @@ def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors():
         planner.offset(box, 0.1, method="sample")
     with pytest.raises(InvalidParameterError, match="not convex"):
         planner.offset(l_bracket(), 0.1, method="hull")
+    # an eps past a quarter of the result's size (the grid could miss all of it) is
+    # refused naming the largest taken; at that largest there is a surface
+    bracket = l_bracket()
+    diagonal = float(np.linalg.norm(bracket.extents + 0.2))
+    with pytest.raises(InvalidParameterError, match=f"use eps <= {0.25 * diagonal:.3g}"):
+        planner.offset(bracket, 0.1, eps=0.3 * diagonal)
+    coarse = planner.offset(bracket, 0.1, eps=0.249 * diagonal)
+    assert coarse.mesh.is_watertight and coarse.error_bound <= 0.5 * diagonal
 
 
 @pytest.mark.parametrize("subdivisions_max", [0, 2])
