@@ -512,3 +512,21 @@ def test_the_gap_bound_holds_the_measured_gap_of_a_dented_hull():
         centre, inradius = convex._deepest_point(hull.normals, hull.offsets)
         bound = convex._gap_bound(hull, centre, inradius)
         assert 1e-4 < hull.depth and convex._gap_exact(hull) <= bound < 20 * hull.depth
+
+
+def test_auto_takes_the_cells_for_a_solid_of_small_triangles():
+    """An L-bracket cut into 5,120 triangles: at an eps where it has 0.3 of them per eps²
+    of surface the sum with the ball would sample cells full of small facets, so ``auto``
+    takes the cells; where it has 0.1, the ball."""
+    from shapes import l_bracket
+
+    from planner.offsets import FINE_FACETS
+
+    bracket = l_bracket().subdivide().subdivide().subdivide()
+    per_eps2 = len(bracket.faces) / bracket.area
+    fine, coarse = (math.sqrt(share / per_eps2) for share in (1.5 * FINE_FACETS, 0.5 * FINE_FACETS))
+    cells = planner.offset(bracket, 0.1, eps=fine)
+    ball = planner.offset(bracket, 0.1, eps=coarse)
+    assert (cells.stats["method"], ball.stats["method"]) == ("cells", "ball")
+    for result in (cells, ball):
+        assert result.mesh.is_watertight and result.error_bound <= 2 * result.eps
