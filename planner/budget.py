@@ -265,12 +265,15 @@ def memory_limit(limit_gib: float | None) -> Iterator[MemoryBudget]:
 
 def explain(error: ResourceLimitError, what: str | None = None,
             obstacles: list[str] | None = None, *, cell_bytes: int = SURFACE_CELL_BYTES,
-            knob: str = "eps", cells_given: bool = False) -> ResourceLimitError:
+            knob: str = "eps", cells_given: bool = False,
+            decomposition: bool = True) -> ResourceLimitError:
     """The core's refusal ``error`` as a user reads it: prefixed by the input ``what``,
     the core's ``obstacle K`` named (``obstacles``; dropped without them), cells weighed
     at ``cell_bytes``, the cell size called ``knob``, naming the memory limit in force
     and the setting that raises it — ``max_cells`` when the leaves ran out of a budget
-    the caller gave (``cells_given``; the candidate records stay the memory limit's)."""
+    the caller gave (``cells_given``; the candidate records stay the memory limit's);
+    without ``decomposition`` the decomposition source is not offered (a command that
+    has none)."""
     import re  # noqa: PLC0415
 
     budget = current()
@@ -283,8 +286,12 @@ def explain(error: ResourceLimitError, what: str | None = None,
     cells = re.search(r"needs more than (\d+) cells", message)
     if cells:  # what those cells weigh
         end = cells.end()
-        message = (f"{message[:end]} (more than {gib(int(cells.group(1)) * cell_bytes)})"
-                   f"{message[end:]}")
+        share = "" if cells_given else ", the cells' share of the memory limit"
+        message = (f"{message[:end]} (more than {gib(int(cells.group(1)) * cell_bytes)}"
+                   f"{share}){message[end:]}")
+    if not decomposition:
+        message = message.replace(", or use the decomposition source (exact: false) or "
+                                  "simpler meshes", ", or use simpler meshes")
     lattice = "the lattice addresses at most" in message  # too fine: no memory helps
     if lattice:
         message = message.replace("use a larger eps or raise the memory limit",

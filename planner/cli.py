@@ -241,6 +241,15 @@ def _fail(message: str) -> int:
     return 2
 
 
+def _missing_mesh(label: str, path: str) -> str | None:
+    """Why the mesh file argument ``label`` cannot be read, if it cannot."""
+    if Path(path).is_dir():
+        return f"{label}: {path!r} is a directory, not a mesh file"
+    if not Path(path).is_file():
+        return f"{label}: file {path!r} not found"
+    return None
+
+
 def _unwritable_folder(out: Path) -> str | None:
     """Why the output folder ``out`` cannot be written (checked before the work)."""
     from planner.output import unwritable
@@ -260,12 +269,10 @@ def _cmd_minkowski(args) -> int:
     problem = unknown_mesh_format(out)
     if problem:
         return _fail(f"--output {out}: {problem}")
-    for label, f in (("a", args.a), ("b", args.b)):
-        if Path(f).is_dir():
-            return _fail(f"{label}: {f!r} is a directory, not a mesh file")
-        if not Path(f).is_file():
-            return _fail(f"{label}: file {f!r} not found")
-    from planner.output import atomic_write, unwritable
+    missing = _missing_mesh("a", args.a) or _missing_mesh("b", args.b)
+    if missing:
+        return _fail(missing)
+    from planner.output import unwritable, write_mesh
 
     targets = [("--output", out)] + ([("--stats", Path(args.stats))] if args.stats else [])
     for flag, target in targets:
@@ -289,9 +296,7 @@ def _cmd_minkowski(args) -> int:
         **kwargs,
     )
     try:
-        atomic_write(
-            out, lambda tmp: result.mesh.export(tmp, file_type=out.suffix.lower().lstrip("."))
-        )
+        write_mesh(result.mesh, out)
     except OSError as exc:
         return _fail(f"--output {out}: cannot write it ({exc.strerror or exc})")
     from planner.output import schema_id

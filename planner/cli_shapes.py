@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from planner.cli import _fail
+from planner.cli import _fail, _missing_mesh
 
 __all__ = ["add_parsers", "cmd_depth", "cmd_offset"]
 
@@ -62,13 +62,14 @@ def _add_offset_parser(sub, common) -> None:
 
 def cmd_offset(args) -> int:
     out = Path(args.output)
-    from planner.output import atomic_write, unknown_mesh_format, unwritable
+    from planner.output import unknown_mesh_format, unwritable, write_mesh
 
     problem = unwritable(out) or unknown_mesh_format(out)
     if problem:
         return _fail(f"--output {out}: {problem}")
-    if not Path(args.mesh).is_file():
-        return _fail(f"mesh: file {args.mesh!r} not found")
+    missing = _missing_mesh("mesh", args.mesh)
+    if missing:
+        return _fail(missing)
     import planner
 
     how = planner.opening if args.opening else planner.closing if args.closing else \
@@ -76,8 +77,7 @@ def cmd_offset(args) -> int:
     result = how(planner.load_mesh(args.mesh, name=args.mesh), args.radius, eps=args.eps,
                  name=args.mesh, progress=False if args.no_progress else None,
                  method=args.method)
-    atomic_write(out, lambda tmp: result.mesh.export(tmp,
-                                                     file_type=out.suffix.lower().lstrip(".")))
+    write_mesh(result.mesh, out)
     sys.stdout.write(f"wrote {out}: {result.stats['triangles']} triangles, error bound "
                      f"{result.error_bound:.4g} ({result.stats['method']}), "
                      f"{result.stats['seconds']:.2f} s\n")
@@ -85,11 +85,9 @@ def cmd_offset(args) -> int:
 
 
 def cmd_depth(args) -> int:
-    for label, f in (("a", args.a), ("b", args.b)):
-        if Path(f).is_dir():
-            return _fail(f"{label}: {f!r} is a directory, not a mesh file")
-        if not Path(f).is_file():
-            return _fail(f"{label}: file {f!r} not found")
+    missing = _missing_mesh("a", args.a) or _missing_mesh("b", args.b)
+    if missing:
+        return _fail(missing)
     import planner
 
     r = planner.penetration_depth(planner.load_mesh(args.a, name=args.a),

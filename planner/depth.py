@@ -187,7 +187,7 @@ def penetration_depth(a, b, *, tolerance: float | None = None,
             from . import budget  # noqa: PLC0415
 
             raise budget.explain(exc, f"penetration depth of {part_a.name} into "
-                                      f"{part_b.name}") from exc
+                                      f"{part_b.name}", decomposition=False) from exc
         bounds = np.vstack([part_a.mesh.bounds, part_b.mesh.bounds])
         size = float(np.linalg.norm(bounds.max(axis=0) - bounds.min(axis=0)))
         width = _tolerance(tolerance, size)

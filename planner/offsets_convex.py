@@ -211,7 +211,7 @@ def _gap_bound(hull: _Hull, centre: np.ndarray, inradius: float) -> float:
 def _gap_exact(hull: _Hull) -> float:
     """The distance from ``H`` to ``H_t`` (their Hausdorff distance), by ``H_t``'s mesh."""
     inner = _planes_hull(hull.normals, hull.offsets - hull.depth)
-    return math.inf if inner is None else _gap(hull.corners, inner[0])
+    return math.inf if inner is None else _gap(hull.corners, inner[0]) + inner[2]
 
 
 def _gap(corners: np.ndarray, smaller: trimesh.Trimesh) -> float:
@@ -229,26 +229,40 @@ def _eroded(hull: _Hull, r: float, rounding: float) -> tuple[trimesh.Trimesh, fl
     outer = _planes_hull(hull.normals, hull.offsets - r, rounding)
     if outer is None:
         return trimesh.Trimesh(), 0.0
+    mesh, _, merged = outer
     if hull.depth == 0:
-        return outer[0], 0.0
+        return mesh, merged
     inner = _planes_hull(hull.normals, hull.offsets - r - hull.depth, rounding)
     if inner is None:  # H_t eroded is empty, H eroded is not: the whole of it is between
-        return outer[0], float(np.ptp(outer[0].vertices, axis=0).max())
-    return outer[0], _gap(np.asarray(outer[0].vertices), inner[0])
+        return mesh, float(np.ptp(mesh.vertices, axis=0).max())
+    return mesh, _gap(np.asarray(mesh.vertices), inner[0]) + merged + inner[2]
 
 
 def _planes_hull(normals: np.ndarray, offsets: np.ndarray, thinnest: float = 0.0
-                 ) -> tuple[trimesh.Trimesh, np.ndarray] | None:
-    """``({x : n · x <= d}, its deepest point)``: the hull of the half-spaces' corners,
-    found about the deepest point; ``None`` when that point is no deeper than ``thinnest``
-    (nothing, or a sheet, is left) or the solver fails."""
+                 ) -> tuple[trimesh.Trimesh, np.ndarray, float] | None:
+    """``({x : n · x <= d}, its deepest point, how far its corners were merged)``: the
+    hull of the half-spaces' corners (:func:`_merged_hull`), found about the deepest point;
+    ``None`` when that point is no deeper than ``thinnest`` (nothing, or a sheet, is left)
+    or the solver fails."""
     from scipy.spatial import HalfspaceIntersection  # noqa: PLC0415
 
     deepest = _deepest_point(normals, offsets)
     if deepest is None or deepest[1] <= thinnest:
         return None
     corners = HalfspaceIntersection(np.column_stack([normals, -offsets]), deepest[0]).intersections
-    return hull_mesh(convex_hull(corners)), deepest[0]
+    mesh, merged = _merged_hull(corners)
+    return mesh, deepest[0], merged
+
+
+def _merged_hull(points: np.ndarray) -> tuple[trimesh.Trimesh, float]:
+    """``(the hull of the points, how far they moved)``: points closer than
+    :data:`MERGE_REL` of their size and distance from the origin are one first (a float32
+    file's nearly coplanar triangles give corners or planes a few 1e-10 apart, which a
+    reader's weld would join into edges of four triangles); that moves the hull by at most
+    that distance (none when none were merged)."""
+    merge = MERGE_REL * float(np.max(np.abs(points)) + np.ptp(points, axis=0).max())
+    kept = representatives(points, merge)
+    return hull_mesh(convex_hull(points[kept])), merge if len(kept) < len(points) else 0.0
 
 
 def _deepest_point(normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, float] | None:
@@ -282,13 +296,9 @@ def _grown(hull: _Hull, radius: float, eps: float
         if len(unit) * len(hull.corners) > MAX_POINTS:
             return None
         corner, direction = _extreme_pairs(hull, unit, ball_cone_angle(subdivisions))
-        points = np.vstack([hull.corners[corner] + radius * unit[direction], moved])
-        # points closer than the merge distance are one (a file's coplanar triangles move
-        # their corners to points a few 1e-9 apart, which a reader's weld would join into
-        # edges of four triangles); that moves the hull by at most it
-        merge = MERGE_REL * float(np.max(np.abs(points)) + np.ptp(points, axis=0).max())
-        points = points[representatives(points, merge)]
-        return hull_mesh(convex_hull(points)), chord + merge, subdivisions
+        mesh, merged = _merged_hull(np.vstack([hull.corners[corner] + radius * unit[direction],
+                                               moved]))
+        return mesh, chord + merged, subdivisions
     return None
 
 

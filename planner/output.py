@@ -3,8 +3,8 @@
 Every JSON file minkplan writes starts with ``"schema": "minkplan/NAME/1"``
 (:func:`schema_id`). Entry points: :func:`jsonable` (numpy scalars and arrays to Python
 ones, non-finite floats to ``None``), :func:`atomic_write` (a temporary file in the same
-folder, then a rename), :func:`write_json`, :func:`unwritable` (why a file could not be
-written there, checked before the work).
+folder, then a rename), :func:`write_json`, :func:`write_mesh`, :func:`unwritable` (why a
+file could not be written there, checked before the work).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["SCHEMA_VERSION", "atomic_write", "jsonable", "schema_id", "unwritable",
-           "write_json"]
+           "write_json", "write_mesh"]
 
 SCHEMA_VERSION = 1
 """The version of every output file's layout; it changes when a key changes meaning or
@@ -56,6 +56,31 @@ def jsonable(value: Any) -> Any:
 
 MESH_SUFFIXES = (".glb", ".obj", ".off", ".ply", ".stl")
 """Output mesh formats the commands write (trimesh's exporters)."""
+
+
+TEXT_DIGITS = 17
+"""Decimals of the text formats' coordinates (trimesh writes 8 for OBJ: 1e-8 m, coarser
+than an offset's bound on a part measured in metres)."""
+
+
+def write_mesh(mesh, path: Path) -> None:
+    """Write ``mesh`` at ``path`` in the format its suffix names, atomically, coordinates
+    in full (text formats with :data:`TEXT_DIGITS` decimals); warn when distinct vertices
+    share a position at float32 (STL and glTF store no more): a reader that joins
+    vertices by position then sees the surface pinched there."""
+    import logging  # noqa: PLC0415
+
+    kind = path.suffix.lower().lstrip(".")
+    options = {"digits": TEXT_DIGITS} if kind in ("obj", "off") else {}
+    atomic_write(path, lambda tmp: mesh.export(tmp, file_type=kind, **options))
+    if kind in ("stl", "glb"):
+        rounded = np.unique(np.asarray(mesh.vertices, dtype=np.float32), axis=0)
+        joined = len(mesh.vertices) - len(rounded)
+        if joined:
+            logging.getLogger(__name__).warning(
+                "%s: %d vertices fall on others at the format's float32 precision: a reader "
+                "joining vertices by position sees the surface pinched there (.ply and .obj "
+                "keep every digit)", path, joined)
 
 
 def unknown_mesh_format(path: Path) -> str | None:

@@ -112,10 +112,21 @@ def test_a_small_limit_refuses_the_grid_an_explicit_budget_names_max_cells():
         planner.minkowski_sum(torus, bumps, exact=True, eps=0.003)
     message = str(refused.value)
     assert "octree needs more than" in message and "\n" not in message
+    # (the cells weigh less than the limit: their share of it is what ran out)
+    assert "the cells' share of the memory limit" in message
     assert "--memory-limit (now 0.05 GiB" in message
     with pytest.raises(ResourceLimitError, match="raise max_cells") as named:
         planner.minkowski_sum(torus, bumps, exact=True, eps=0.01, max_cells=1000)
     assert "memory" not in str(named.value)
+
+
+def test_a_depth_over_the_limit_offers_no_decomposition_it_has_none():
+    torus, bumps = _torus_and_bumps()
+    with planner.memory_limit(0.002), pytest.raises(ResourceLimitError) as refused:
+        planner.penetration_depth(torus, bumps)
+    message = str(refused.value)
+    assert message.startswith("penetration depth of a into b: the boundary convolution")
+    assert "decomposition" not in message and "or use simpler meshes" in message
 
 
 def test_a_polyhedral_sum_at_a_fine_eps_needs_no_more_cells():

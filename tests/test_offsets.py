@@ -442,19 +442,28 @@ def test_a_real_cad_part_with_t_junctions_is_offset_as_the_assembly_reads_it():
     assert 0 < shrunk.mesh.volume < grown.mesh.volume
 
 
-def test_a_grown_cad_peg_reads_back_closed_from_stl(tmp_path):
-    """Factory's round peg grown by its hull: its coplanar triangles' corners move to
-    points a few 1e-9 apart, which a reader's weld joins; merged first, the STL (float32,
-    no connectivity) reads back closed."""
+@pytest.mark.parametrize("r", [0.001, -0.0005])
+@pytest.mark.parametrize("suffix", [".stl", ".obj"])
+def test_a_cad_peg_grown_or_eroded_reads_back_closed(tmp_path, r, suffix):
+    """Factory's round peg offset by its hull: grown, its coplanar triangles' corners move
+    to points a few 1e-9 apart; eroded, its nearly coplanar planes cross at corners 1e-10
+    apart. A reader's weld joins those (STL has no connectivity; trimesh welds OBJ's
+    within 1e-8): merged first, the files read back closed, and the command writes OBJ
+    with 17 decimals (trimesh's default, 8, is 1e-8 m)."""
     from conftest import asset
 
-    peg = planner.load_mesh(asset("assemblies/factory_round_peg_8mm/meshes/"
-                                  "factory_round_peg_8mm_loose.obj"))
-    grown = planner.offset(peg, 0.001, name="peg")
-    assert grown.stats["method"] == "hull"
-    grown.mesh.export(tmp_path / "grown.stl")
-    read = trimesh.load(tmp_path / "grown.stl")
-    assert read.is_watertight and read.is_winding_consistent
+    source = asset("assemblies/factory_round_peg_8mm/meshes/factory_round_peg_8mm_loose.obj")
+    out = tmp_path / f"offset{suffix}"
+    assert main(["offset", str(source), "-r", str(r), "-o", str(out)]) == 0
+    read = trimesh.load(out)
+    assert read.is_watertight and read.is_winding_consistent and read.volume > 0
+    offset = planner.offset(planner.load_mesh(source), r, name="peg")
+    assert offset.stats["method"] == "hull" and len(read.faces) == len(offset.mesh.faces)
+    if suffix == ".obj":  # (17 decimals: 1e-17 m)
+        from scipy.spatial import cKDTree
+
+        moved, _ = cKDTree(offset.mesh.vertices).query(read.vertices)
+        assert len(read.vertices) == len(offset.mesh.vertices) and moved.max() <= 1e-16
 
 
 def test_the_offset_command_refuses_an_unknown_format_before_the_work(tmp_path, capsys):
@@ -530,3 +539,17 @@ def test_auto_takes_the_cells_for_a_solid_of_small_triangles():
     assert (cells.stats["method"], ball.stats["method"]) == ("cells", "ball")
     for result in (cells, ball):
         assert result.mesh.is_watertight and result.error_bound <= 2 * result.eps
+
+
+def test_writing_stl_warns_when_vertices_fall_on_others_at_float32(tmp_path, caplog):
+    from planner.output import write_mesh
+
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    write_mesh(box, tmp_path / "box.stl")
+    assert not caplog.records
+    pinched = trimesh.Trimesh(np.vstack([box.vertices, box.vertices[0] + 1e-12]),
+                              np.vstack([box.faces, [[8, 1, 2]]]), process=False)
+    write_mesh(pinched, tmp_path / "pinched.stl")
+    assert "1 vertices fall on others at the format's float32 precision" in caplog.text
+    write_mesh(pinched, tmp_path / "pinched.ply")  # float64: no warning
+    assert len(caplog.records) == 1
