@@ -14,7 +14,7 @@ import trimesh
 
 import planner
 from planner.cli import main
-from planner.errors import GeometryError, InvalidParameterError
+from planner.errors import GeometryError, InvalidParameterError, ResourceLimitError
 
 
 def _steiner(mesh: trimesh.Trimesh, r: float) -> float:
@@ -553,3 +553,24 @@ def test_writing_stl_warns_when_vertices_fall_on_others_at_float32(tmp_path, cap
     assert "1 vertices fall on others at the format's float32 precision" in caplog.text
     write_mesh(pinched, tmp_path / "pinched.ply")  # float64: no warning
     assert len(caplog.records) == 1
+
+
+def test_an_eps_past_the_finest_ball_is_left_to_the_cells():
+    """The L-bracket grown by 0.1 at eps 2e-4: the ball would need an icosphere finer
+    than the finest taken (its convolution with the solid costs more than the cells:
+    Factory's hole at eps 1e-7 ran past 300 s before its sum was refused); ``ball`` says
+    why it cannot, ``auto`` leaves it to the cells, whose budget refuses that grid at once
+    naming eps."""
+    from shapes import l_bracket
+
+    from planner.offsets_ball import MAX_SUBDIVISIONS, inscribed_ball
+    from planner.offsets_convex import unit_ball
+
+    r = 0.1
+    finest = r * (1.0 - unit_ball(MAX_SUBDIVISIONS)[1])
+    assert inscribed_ball(r, 0.9 * finest, np.zeros((0, 3))) is None
+    eps = 1.8 * finest  # (the ball gets half of eps)
+    with pytest.raises(InvalidParameterError, match="finer than the finest icosphere"):
+        planner.offset(l_bracket(), r, eps=eps, method="ball")
+    with pytest.raises(ResourceLimitError, match="octree needs more than .* use a larger eps"):
+        planner.offset(l_bracket(), r, eps=eps)
