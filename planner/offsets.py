@@ -4,7 +4,7 @@ and the opening and closing that compose them (Varadhan and Manocha, section 5.2
 The offset of a solid ``P`` by ``r > 0`` is ``{x : dist(x, P) <= r}``; by ``r < 0`` it is
 the erosion ``{x in P : dist(x, boundary of P) >= |r|}``. Three ways, each with a proved
 two-sided bound (``method``; ``"auto"`` takes the first that applies, the cells before the
-ball when ``P``'s triangles are small for ``eps``: :data:`FINE_FACETS`):
+ball when ``P`` has many triangles, small for ``eps``: :data:`FINE_FACETS`):
 
 * ``"hull"`` (:mod:`.offsets_convex`): one body convex up to its file's rounding, without
   a grid — grown, the hull of its vertices' balls tessellated within ``eps`` (its flat
@@ -176,9 +176,15 @@ the cells for as many triangles; the IndustReal gear base (0.14), Factory's hole
 0.02) and the bunny-like solid (0.07) faster by the ball, the bunny 100 times."""
 
 
+FINE_FACETS_MIN = 5000
+"""Fewer triangles than this always go to the ball first (at a coarse eps every triangle
+is small, but a sum with few of them is cheap)."""
+
+
 def _fine_facets(solid: trimesh.Trimesh, eps: float) -> bool:
-    """Whether the solid's triangles are small for ``eps`` (:data:`FINE_FACETS`)."""
-    return len(solid.faces) * eps * eps > FINE_FACETS * float(solid.area)
+    """Whether the solid has many triangles, small for ``eps`` (:data:`FINE_FACETS`)."""
+    count = len(solid.faces)
+    return count >= FINE_FACETS_MIN and count * eps * eps > FINE_FACETS * float(solid.area)
 
 
 def _cell_offset(solid: trimesh.Trimesh, radius: float, step: float, max_cells: int | None,

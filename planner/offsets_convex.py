@@ -17,16 +17,16 @@ For the hull ``H = {x : n_k · x <= d_k}`` of the solid ``P``'s vertices:
   is within ``eps``. A point ``v + u`` is a vertex only where some direction finds both
   ``v`` and ``u`` extreme: pairs whose normal cones lie apart are left out beforehand.
 
-``P`` need not be ``H`` exactly (CAD exports round their coordinates): with ``t`` the
-smallest depth such that every triangle of ``P`` has all its corners within ``t`` of one
-facet plane of ``H``, ``P``'s boundary misses the inside of ``H_t = {x : n_k · x <= d_k -
-t}``, so one winding number at a point inside ``H_t`` shows ``H_t ⊂ P ⊂ H``. Offsets are
-monotone, so ``P``'s lies between ``H_t``'s and ``H``'s, and the bound adds their distance:
-at most ``t R / ρ`` (``ρ`` the depth of ``H``'s deepest point, ``R`` the farthest corner
-from it: ``H_t`` holds ``H`` shrunk about that point by ``1 - t/ρ``), else measured: the
-largest distance from a vertex of the larger to the smaller (a convex function of the
-point, so its maximum over a polytope is at a vertex). The path is taken only when the
-bound is within ``eps``.
+``P`` need not be ``H`` exactly (CAD exports round their coordinates): with ``t`` a
+depth such that every triangle of ``P`` has all its corners within ``t`` of one facet
+plane of ``H`` (about the least), ``P``'s boundary misses the inside of
+``H_t = {x : n_k · x <= d_k - t}``, so one winding number at a point inside ``H_t``
+shows ``H_t ⊂ P ⊂ H``. Offsets are monotone, so ``P``'s lies between ``H_t``'s and
+``H``'s, and the bound adds their distance: at most ``t R / ρ`` (``ρ`` the depth of
+``H``'s deepest point, ``R`` the farthest corner from it: ``H_t`` holds ``H`` shrunk about
+that point by ``1 - t/ρ``), else measured: the largest distance from a vertex of the
+larger to the smaller (a convex function of the point, so its maximum over a polytope is
+at a vertex). The path is taken only when the bound is within ``eps``.
 
 :func:`convex_offset` returns ``None`` otherwise (not convex enough, too many faces or
 points, qhull unable to build a hull); the caller then uses the cell source.
@@ -156,9 +156,10 @@ def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull | None:
 
 def _depth(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray,
            offsets: np.ndarray, eps: float) -> float:
-    """The least ``t`` such that every triangle has its corners within ``t`` below one of
-    the planes: each triangle tried first on the plane nearest its own normal, the planes
-    searched only for those farther than ``eps`` there."""
+    """A ``t`` such that every triangle has its corners within ``t`` below one of the
+    planes: each triangle's depth below the plane nearest its own normal, all planes
+    searched for the least only where that is farther than ``eps`` (so ``t`` is the least
+    whenever it exceeds ``eps``, and the hull path's choice is the same)."""
     corners = vertices[faces]                                       # (faces, 3, 3)
     own = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     nearest = np.argmax(own @ normals.T, axis=1)
@@ -209,9 +210,10 @@ def _gap_bound(hull: _Hull, centre: np.ndarray, inradius: float) -> float:
 
 
 def _gap_exact(hull: _Hull) -> float:
-    """The distance from ``H`` to ``H_t`` (their Hausdorff distance), by ``H_t``'s mesh."""
+    """The distance from ``H`` to ``H_t`` (their Hausdorff distance) measured to ``H_t``'s
+    mesh: at least that distance (the mesh's merged corners keep it inside ``H_t``)."""
     inner = _planes_hull(hull.normals, hull.offsets - hull.depth)
-    return math.inf if inner is None else _gap(hull.corners, inner[0]) + inner[2]
+    return math.inf if inner is None else _gap(hull.corners, inner[0])
 
 
 def _gap(corners: np.ndarray, smaller: trimesh.Trimesh) -> float:
@@ -224,8 +226,10 @@ def _gap(corners: np.ndarray, smaller: trimesh.Trimesh) -> float:
 
 
 def _eroded(hull: _Hull, r: float, rounding: float) -> tuple[trimesh.Trimesh, float]:
-    """``(H eroded by r, its distance to H_t eroded by r)``; an empty mesh when nothing is
-    left."""
+    """``(H eroded by r, a bound on its distance to H_t eroded by r)``; an empty mesh when
+    nothing is left. With the mesh's corners merged by ``m`` the bound is the gap measured
+    from its corners (inside ``H_t`` eroded: at least the true one) plus ``m`` for the
+    corners merged away, plus ``m`` for the mesh's own distance to ``H`` eroded."""
     outer = _planes_hull(hull.normals, hull.offsets - r, rounding)
     if outer is None:
         return trimesh.Trimesh(), 0.0
@@ -235,7 +239,7 @@ def _eroded(hull: _Hull, r: float, rounding: float) -> tuple[trimesh.Trimesh, fl
     inner = _planes_hull(hull.normals, hull.offsets - r - hull.depth, rounding)
     if inner is None:  # H_t eroded is empty, H eroded is not: the whole of it is between
         return mesh, float(np.ptp(mesh.vertices, axis=0).max())
-    return mesh, _gap(np.asarray(mesh.vertices), inner[0]) + merged + inner[2]
+    return mesh, _gap(np.asarray(mesh.vertices), inner[0]) + 2.0 * merged
 
 
 def _planes_hull(normals: np.ndarray, offsets: np.ndarray, thinnest: float = 0.0
@@ -275,7 +279,9 @@ def _deepest_point(normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray
                   b_ub=offsets, bounds=[(None, None)] * 3 + [(0.0, None)], method="highs")
     if res.status != 0:
         return None
-    return np.asarray(res.x[:3]), float(res.x[3])
+    # the depth the point really has (the solver's is within its tolerance of it)
+    centre = np.asarray(res.x[:3])
+    return centre, float(np.min(offsets - normals @ centre))
 
 
 def _grown(hull: _Hull, radius: float, eps: float

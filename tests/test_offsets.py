@@ -506,6 +506,7 @@ def test_the_gap_bound_holds_the_measured_gap_of_a_dented_hull():
     """A dent of up to 6e-3 in one face of a convex solid: the bound on the distance
     between its hull and the hull's planes moved in by the depth holds the measured one,
     within a small factor of the depth."""
+    from scipy.spatial import HalfspaceIntersection
     from shapes import random_convex
 
     import planner.offsets_convex as convex
@@ -520,7 +521,11 @@ def test_the_gap_bound_holds_the_measured_gap_of_a_dented_hull():
         hull = convex._hull_planes(dented, 0.1)
         centre, inradius = convex._deepest_point(hull.normals, hull.offsets)
         bound = convex._gap_bound(hull, centre, inradius)
-        assert 1e-4 < hull.depth and convex._gap_exact(hull) <= bound < 20 * hull.depth
+        # H_t's own corners (not merged: the true gap)
+        corners = HalfspaceIntersection(
+            np.column_stack([hull.normals, hull.depth - hull.offsets]), centre).intersections
+        inner = convex.hull_mesh(convex.convex_hull(corners))
+        assert 1e-4 < hull.depth and convex._gap(hull.corners, inner) <= bound < 20 * hull.depth
 
 
 def test_auto_takes_the_cells_for_a_solid_of_small_triangles():
@@ -531,7 +536,8 @@ def test_auto_takes_the_cells_for_a_solid_of_small_triangles():
 
     from planner.offsets import FINE_FACETS
 
-    bracket = l_bracket().subdivide().subdivide().subdivide()
+    bracket = l_bracket().subdivide().subdivide().subdivide().subdivide()
+    assert len(bracket.faces) == 5120
     per_eps2 = len(bracket.faces) / bracket.area
     fine, coarse = (math.sqrt(share / per_eps2) for share in (1.5 * FINE_FACETS, 0.5 * FINE_FACETS))
     cells = planner.offset(bracket, 0.1, eps=fine)

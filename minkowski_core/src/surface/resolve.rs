@@ -56,7 +56,8 @@ pub fn resolve_cell<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], 
     // one query for the eight
     let c = cell.center();
     let mut scratch = Vec::new();
-    let inside = known.filter(|&(q, _)| !src.meets_boundary(recs, q, c, &mut scratch)).map_or_else(|| src.cell_contains(recs, c), |(_, s)| s);
+    let carry = known.filter(|&(q, _)| recs.len() <= CARRY_WORDS && !src.meets_boundary(recs, q, c, &mut scratch));
+    let inside = carry.map_or_else(|| src.cell_contains(recs, c), |(_, s)| s);
     let known = Some((c, inside));
     let mut out = CellSurface::default();
     let mut own = Vec::new();
@@ -81,7 +82,7 @@ fn cut_surface<S: CellSource + ?Sized>(src: &S, recs: &[u32], cut: &Cut, pieces:
     // between them), else one point query
     let mut answered: Vec<(usize, bool, Vec3)> = known.map(|(q, inside)| (usize::MAX, inside, q)).into_iter().collect();
     let mut scratch = Vec::new();
-    let tries = CARRY_TRIES.min(CARRY_WORDS / recs.len().max(1)).max(1);
+    let tries = CARRY_TRIES.min(CARRY_WORDS / recs.len().max(1));
     let mut inside = |p: Vec3| {
         let region = cut.region(p);
         if let Some(&(_, known, _)) = answered.iter().find(|r| r.0 == region) {

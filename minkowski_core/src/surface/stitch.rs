@@ -5,8 +5,10 @@
 //! them at different points: T-junctions. The polygons are triangulated, their corners
 //! welded to vertices within a tolerance, and every edge used once (its reverse missing)
 //! is split at the vertices of other such edges lying on it, the triangle becoming a fan
-//! about its centroid. Nothing is moved, so the surface is the same point set; the
+//! about its centroid. Nothing is moved there, so the surface is the same point set; the
 //! caller checks that every edge then has its reverse exactly once (closed, manifold).
+//! Where sheets of it touch, [`unzip_touching_sheets`] gives each its own vertex, moved a
+//! little into it (the bound adds the move).
 //!
 //! Entry points: [`join`], [`open_edges`].
 
@@ -18,6 +20,9 @@ use crate::util::{FastMap, FastSet};
 /// How far, in cells, the copies of a vertex where sheets touched move apart into their
 /// own sheets ([`unzip_touching_sheets`]).
 pub const SHEETS_APART: f64 = 1e-3;
+/// The most they move, in cells, whatever float32 would need (so the bound still shrinks
+/// with the cells).
+pub const SHEETS_APART_MAX: f64 = 0.05;
 
 /// Add the convex polygons `polys` (each counter-clockwise about its outward normal) to
 /// `s`, welding corners within `tol` and splitting edges at T-junctions (see the module
@@ -191,8 +196,9 @@ pub fn pinched_vertices(faces: &[[u32; 3]]) -> Vec<u32> {
 /// Copies at one place would be welded into one again by any reader that joins vertices
 /// by position (STL has no others): each fan's vertex moves [`SHEETS_APART`] of `h` into
 /// its own fan (towards its triangles' centroids), at least 16 float32 steps of its
-/// coordinates, but less than half the height of any of its triangles (so none flips);
-/// `s.sheets_apart` records the largest move (the bound adds it). `at`:
+/// coordinates but at most [`SHEETS_APART_MAX`] of `h`, and less than a sixth of its
+/// height over the opposite edge in any of its triangles (so none flips, whichever of its
+/// corners move); `s.sheets_apart` records the largest move (the bound adds it). `at`:
 /// the vertices to look at (the ends of open edges, or the pinched vertices when there
 /// are none). Edges left open (a real hole) are left to the caller. Returns how many
 /// copies were made.
@@ -211,25 +217,36 @@ pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>, h: f64) -> usize
             }
         }
     }
+    // fans are found on the surface as unzipped so far (a hair-thin edge's second end
+    // splits once its first has); directions and heights use the places as they were
+    let before = s.vertices.clone();
+    let mut copied_from: Vec<u32> = Vec::new();
     let mut copies = 0;
     for v in at {
         let fans = fans(&s.faces, v, &star[&v]);
         if fans.len() < 2 {
             continue;
         }
-        let place = s.vertices[v as usize];
-        let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element());
-        // no triangle flips: a corner moved less than half its height above the opposite
-        // edge keeps its triangle's normal within the same half-space
-        let lowest = star[&v].iter().map(|&t| height_over_opposite_edge(s, s.faces[t], v)).fold(f64::INFINITY, f64::min);
-        let step = wanted.min(0.5 * lowest);
-        for (k, fan) in fans.into_iter().enumerate() {
-            let into = fan.iter().map(|&t| s.faces[t].iter().fold(Vec3::ZERO, |acc, &c| acc + s.vertices[c as usize]) / 3.0 - place).fold(Vec3::ZERO, |acc, d| acc + d);
-            let moved = place + into.normalize_or_zero() * step;
+        let was = |c: u32| before[copied_from.get((c as usize).wrapping_sub(before.len())).copied().unwrap_or(c) as usize];
+        let place = before[v as usize];
+        let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).min(SHEETS_APART_MAX * h);
+        // no triangle flips: its corners each moved less than a sixth of their heights
+        // over the opposite edges change its area by less than 7/12 of it
+        let lowest = star[&v].iter().map(|&t| height_over_opposite_edge(s.faces[t].map(was), s.faces[t].iter().position(|&c| c == v))).fold(f64::INFINITY, f64::min);
+        let step = wanted.min(lowest / 6.0);
+        let moves: Vec<(Vec<usize>, Vec3)> = fans
+            .into_iter()
+            .map(|fan| {
+                let into = fan.iter().map(|&t| s.faces[t].iter().fold(Vec3::ZERO, |acc, &c| acc + was(c)) / 3.0 - place).fold(Vec3::ZERO, |acc, d| acc + d);
+                (fan, place + into.normalize_or_zero() * step)
+            })
+            .collect();
+        for (k, (fan, moved)) in moves.into_iter().enumerate() {
             let id = if k == 0 {
                 v
             } else {
                 s.vertices.push(moved);
+                copied_from.push(v);
                 copies += 1;
                 s.vertices.len() as u32 - 1
             };
@@ -245,15 +262,16 @@ pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>, h: f64) -> usize
     copies
 }
 
-/// The distance of corner `v` of triangle `f` from the line through the other two.
-fn height_over_opposite_edge(s: &Surface, f: [u32; 3], v: u32) -> f64 {
-    let i = f.iter().position(|&c| c == v).unwrap_or(0);
-    let [p, x, y] = [f[i], f[(i + 1) % 3], f[(i + 2) % 3]].map(|c| s.vertices[c as usize]);
+/// The distance of corner `at` (0 when `None`) of the triangle with corners `p` from the
+/// line through the other two.
+fn height_over_opposite_edge(p: [Vec3; 3], at: Option<usize>) -> f64 {
+    let i = at.unwrap_or(0);
+    let (apex, x, y) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
     let base = (y - x).length();
     if base == 0.0 {
         return 0.0;
     }
-    (x - p).cross(y - p).length() / base
+    (x - apex).cross(y - apex).length() / base
 }
 
 /// The triangles `tris` about vertex `v` as closed fans (each a simple cycle of `v`'s link,
