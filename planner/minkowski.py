@@ -117,12 +117,13 @@ MAX_EPS_REL = 0.25
 that may miss the whole surface."""
 
 
-def _eps_value(eps, diag: float) -> float:
-    """``eps`` checked, or by default ``tol.eps_rel`` of the diagonal ``diag``."""
-    return tol.eps_rel * diag if eps is None else check_eps_at_most(_check_eps(eps), diag)
+def checked_eps(eps, diag: float) -> float:
+    """``eps`` checked (positive, finite, at most :data:`MAX_EPS_REL` of the result's
+    diagonal ``diag``), or by default ``tol.eps_rel`` of it."""
+    return tol.eps_rel * diag if eps is None else _at_most(_check_eps(eps), diag)
 
 
-def check_eps_at_most(eps: float, diag: float) -> float:
+def _at_most(eps: float, diag: float) -> float:
     """``eps``, refused when more than :data:`MAX_EPS_REL` of the result's diagonal."""
     if eps > MAX_EPS_REL * diag:
         raise InvalidParameterError(
@@ -135,7 +136,7 @@ def _grid_eps(box: np.ndarray, diag: float, eps, max_cells: int, *, from_memory:
               names: tuple[str, str] = ("a", "b")) -> float:
     """``eps`` (default ``tol.eps_rel`` of the diagonal), refused before any work when the
     grid would not fit the cell budget (``from_memory``: the memory limit's)."""
-    eps_value = _eps_value(eps, diag)
+    eps_value = checked_eps(eps, diag)
     estimate = _estimate_cells(box, eps_value)
     if estimate > max_cells:
         floor = eps_value * math.sqrt(estimate / max_cells)
@@ -216,7 +217,7 @@ def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bo
         diag = float(np.linalg.norm(box[1] - box[0]))
         if len(dec_a.pieces) == 1 and len(dec_b.pieces) == 1:
             # one convex sum: the core gives its hull, exact, with no grid to budget
-            eps_value = _eps_value(eps, diag)
+            eps_value = checked_eps(eps, diag)
         else:
             eps_value = _grid_eps(box, diag, eps, max_cells, from_memory=from_memory,
                                   names=names)
@@ -346,7 +347,7 @@ def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
         # no estimate from the box's area: cells resolved by the facets' planes end above
         # eps (a polyhedral sum needs about as many cells at any eps), so the core's own
         # leaf budget, counted before each allocation, is the one that refuses
-        eps_value = _eps_value(eps, diag)
+        eps_value = checked_eps(eps, diag)
         line.show(f"minkplan: {what}: surface at eps {eps_value:.3g}")
         try:
             surf = pair.native.surface(eps_value, max_cells=max_cells,

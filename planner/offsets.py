@@ -44,12 +44,11 @@ import trimesh
 from planner.errors import GeometryError, InvalidParameterError, ResourceLimitError
 
 from .meshes.kinds import classify
-from .minkowski import check_eps_at_most, surface_stats
+from .minkowski import checked_eps, surface_stats
 from .offsets_ball import ball_offset
 from .offsets_convex import convex_offset
 from .operands import as_mesh
 from .progress import StatusLine
-from .tolerances import tol
 
 __all__ = ["METHODS", "OffsetResult", "closing", "offset", "opening"]
 
@@ -131,10 +130,7 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     solid = _solid(mesh, name)
     extent = np.ptp(np.asarray(solid.bounds), axis=0)
     diagonal = float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
-    step = tol.eps_rel * diagonal if eps is None else float(eps)
-    if not (math.isfinite(step) and step > 0):
-        raise InvalidParameterError(f"eps = {eps!r}: must be a positive finite number")
-    check_eps_at_most(step, diagonal)
+    step = checked_eps(eps, diagonal)
     verb = "growing" if radius > 0 else "eroding"
     with StatusLine(progress) as line:
         line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")

@@ -43,7 +43,7 @@ import trimesh
 from planner.errors import ResourceLimitError
 from planner.problem import Part
 
-from .offsets_convex import convex_hull, hull_mesh, representatives, unit_ball
+from .offsets_convex import convex_hull, hull_mesh, representatives, rounding_allowance, unit_ball
 
 __all__ = ["BALL_SHARE", "MAX_SUBDIVISIONS", "Ball", "ball_offset", "face_directions",
            "inscribed_ball"]
@@ -120,7 +120,7 @@ def ball_offset(solid: trimesh.Trimesh, radius: float, eps: float, *, name: str,
     ball = inscribed_ball(r, BALL_SHARE * eps, face_directions(solid))
     if ball is None:
         return None
-    rounding = 1e-9 * float(np.linalg.norm(np.ptp(np.asarray(solid.bounds), axis=0)) + 2 * r)
+    rounding = rounding_allowance(solid, r)
     # (the solid was checked by the caller; the box around it and the hull are closed
     # and outward as made, so nothing is checked again)
     if radius > 0:

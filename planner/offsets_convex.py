@@ -44,7 +44,7 @@ import numpy as np
 import trimesh
 
 __all__ = ["MAX_FACES", "MAX_POINTS", "convex_hull", "convex_offset", "hull_mesh",
-           "representatives", "unit_ball"]
+           "representatives", "rounding_allowance", "unit_ball"]
 
 MAX_FACES = 5000
 """Solids with more triangles are left to the cell source (the test is faces × hull
@@ -71,8 +71,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
     from scipy.spatial import QhullError  # noqa: PLC0415
 
     t0 = time.perf_counter()
-    diag = float(np.linalg.norm(np.ptp(np.asarray(solid.bounds), axis=0))) + 2 * abs(radius)
-    rounding = PLANE_TOL_REL * diag
+    rounding = rounding_allowance(solid, radius)
     try:
         hull = _hull_planes(solid, eps)
         if hull is None:
@@ -108,6 +107,13 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
              "hull_depth": hull.depth, "ball_subdivisions": subdivisions,
              "seconds": time.perf_counter() - t0}
     return mesh, bound, stats
+
+
+def rounding_allowance(solid: trimesh.Trimesh, radius: float) -> float:
+    """:data:`PLANE_TOL_REL` of the diagonal of the solid's box grown by ``|radius|``: the
+    rounding every offset's bound adds."""
+    extent = np.ptp(np.asarray(solid.bounds), axis=0)
+    return PLANE_TOL_REL * (float(np.linalg.norm(extent)) + 2 * abs(radius))
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,7 @@ file could not be written there, checked before the work).
 from __future__ import annotations
 
 import json
+import logging
 import math
 import os
 import tempfile
@@ -68,8 +69,6 @@ def write_mesh(mesh, path: Path) -> None:
     with :data:`TEXT_DIGITS` decimals); warn when vertices apart in float64 share a
     position at float32 (STL and glTF store no more): a reader that joins vertices by
     position then sees the surface pinched there."""
-    import logging  # noqa: PLC0415
-
     kind = path.suffix.lower().lstrip(".")
     options = {"digits": TEXT_DIGITS} if kind in ("obj", "off") else {}
     atomic_write(path, lambda tmp: mesh.export(tmp, file_type=kind, **options))

@@ -383,9 +383,8 @@ impl Octree {
     /// when the build knew it ([`Leaf::corner_sign`]).
     pub fn known_corner(&self, leaf: &Leaf) -> Option<(Vec3, bool)> {
         let inside = leaf.corner_sign?;
-        let size = 1u64 << leaf.level;
-        let centre = leaf.ijk.map(|i| (u64::from(i) & !(2 * size - 1)) + size);
-        Some((lattice_at(self.origin, self.h, centre), inside))
+        let parent = leaf.ijk.map(|i| i & !((2u32 << leaf.level) - 1));
+        Some((lattice_centre(self.origin, self.h, parent, leaf.level + 1), inside))
     }
 
     /// Leaves per level and label.
@@ -489,6 +488,14 @@ pub(crate) fn lattice_cell(origin: Vec3, h: f64, ijk: [u32; 3], level: u8) -> Aa
     Aabb::new(lattice_at(origin, h, ijk.map(u64::from)), lattice_at(origin, h, ijk.map(|i| u64::from(i) + size)))
 }
 
+/// The centre of the cell at `ijk` of `level` above the finest: the lattice point its
+/// children share.
+#[inline]
+pub(crate) fn lattice_centre(origin: Vec3, h: f64, ijk: [u32; 3], level: u8) -> Vec3 {
+    let half = 1u64 << (level - 1);
+    lattice_at(origin, h, ijk.map(|i| u64::from(i) + half))
+}
+
 /// The position of lattice point `ijk` (every corner of every cell is computed this way).
 #[inline]
 pub(crate) fn lattice_at(origin: Vec3, h: f64, ijk: [u64; 3]) -> Vec3 {
@@ -498,12 +505,6 @@ pub(crate) fn lattice_at(origin: Vec3, h: f64, ijk: [u64; 3]) -> Vec3 {
 impl Ctx<'_> {
     fn cell(&self, ijk: [u32; 3], level: u8) -> Aabb {
         lattice_cell(self.origin, self.h, ijk, level)
-    }
-
-    /// The centre of a cell above the finest level: the lattice point its children share.
-    fn centre(&self, ijk: [u32; 3], level: u8) -> Vec3 {
-        let half = 1u64 << (level - 1);
-        lattice_at(self.origin, self.h, ijk.map(|i| u64::from(i) + half))
     }
 
     /// Filter `cand` against `cell` into `out`; the cell's label.
@@ -534,7 +535,7 @@ impl Ctx<'_> {
                 self.push_leaf(&mut out, ijk, level, label, &own, known);
                 return out;
             }
-            let centre = self.centre(ijk, level);
+            let centre = lattice_centre(self.origin, self.h, ijk, level);
             let mine = self.src.center_sign(centre, cand, &own, known).map(|s| (centre, s));
             let parts: Vec<Out> = (0..8u32)
                 .into_par_iter()
@@ -570,7 +571,7 @@ impl Ctx<'_> {
             self.push_leaf(out, ijk, level, label, &own, known);
             return;
         }
-        let centre = self.centre(ijk, level);
+        let centre = lattice_centre(self.origin, self.h, ijk, level);
         let mine = self.src.center_sign(centre, cand, &own, known).map(|s| (centre, s));
         for c in 0..8u32 {
             self.node_seq(child(ijk, level, c), level - 1, &own, mine, out);

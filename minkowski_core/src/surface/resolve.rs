@@ -52,13 +52,9 @@ pub fn resolve_cell<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], 
     if sub_levels == 0 {
         return None;
     }
-    // the octants' shared corner, for each of them: carried from the known point, else
-    // one query for the eight
-    let c = cell.center();
-    let mut scratch = Vec::new();
-    let carry = known.filter(|&(q, _)| recs.len() <= CARRY_WORDS && !src.meets_boundary(recs, q, c, &mut scratch));
-    let inside = carry.map_or_else(|| src.cell_contains(recs, c), |(_, s)| s);
-    let known = Some((c, inside));
+    // the octants' shared corner, for each MIXED one, answered when the first needs it:
+    // carried from the known point, else one query for the eight
+    let mut centre = None;
     let mut out = CellSurface::default();
     let mut own = Vec::new();
     for child in octants(cell) {
@@ -66,7 +62,8 @@ pub fn resolve_cell<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], 
         if src.classify(&child, recs, true, &mut own) != Label::Mixed {
             continue;
         }
-        let part = resolve_cell(src, &child, &own, sub_levels - 1, known)?;
+        let known = *centre.get_or_insert_with(|| centre_answer(src, cell, recs, known));
+        let part = resolve_cell(src, &child, &own, sub_levels - 1, Some(known))?;
         out.deviation = out.deviation.max(part.deviation);
         out.polys.extend(part.polys);
     }
@@ -112,6 +109,15 @@ fn cut_surface<S: CellSource + ?Sized>(src: &S, recs: &[u32], cut: &Cut, pieces:
         out.polys.push(polygon);
     }
     Some(out)
+}
+
+/// The cell's centre and the source's answer there: carried from the `known` point when
+/// no candidate lies between (and the records are few enough to clip), else one query.
+fn centre_answer<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], known: Option<(Vec3, bool)>) -> (Vec3, bool) {
+    let c = cell.center();
+    let mut scratch = Vec::new();
+    let carried = known.filter(|&(q, _)| recs.len() <= CARRY_WORDS && !src.meets_boundary(recs, q, c, &mut scratch));
+    (c, carried.map_or_else(|| src.cell_contains(recs, c), |(_, inside)| inside))
 }
 
 /// The eight octants of a box.
