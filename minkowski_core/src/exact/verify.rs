@@ -10,15 +10,22 @@
 //! (a solid mesh containing a box: no triangle meets the box, the winding number at its
 //! centre is not zero). Boxes none of these shows are split into octants, a few times.
 
+use super::inside_grid::{InsideGrid, Span};
+use super::mesh::TriMesh;
 use super::{ExactSource, Witness};
 use crate::math::{Aabb, Vec3};
+use std::sync::{Arc, OnceLock};
 
 /// Octant splits of one box at most.
 const MAX_SPLITS: u32 = 6;
 
-/// Vertices of a mesh tried as the nested one per box: its shell anchors, then evenly
-/// spaced others up to this many.
+/// Vertices per box and mesh asked exactly at most: a sample of them, or those whose
+/// shifted box the inside grid cannot tell.
 const NESTED_VERTICES: usize = 12;
+
+/// BVH queries of the solid per box and mesh at most, for vertices whose shifted box
+/// touches an inside voxel of its grid ([`InsideGrid::box_inside`]).
+const NESTED_QUERIES: usize = 64;
 
 impl ExactSource {
     /// Why every point of the closed box `cell` lies in the (grown) solid, shown from the
@@ -60,12 +67,22 @@ impl ExactSource {
 
     /// Whether at every `p` of the box a vertex of `p − B` lies in the solid `A_k` (the box
     /// `bx − b` inside `A_k` for a vertex `b` of `B`), or a vertex `a` of `A_k` lies in the
-    /// solid `p − B` (`bx − a` inside `B`): then `A_k` and `p − B` meet.
+    /// solid `p − B` (`bx − a` inside `B`): then `A_k` and `p − B` meet. Every vertex is
+    /// asked, through the solid's inside grid, when the nested test comes first
+    /// ([`ExactSource::nested_first`]: the planner's cells with pairs taken piece by piece,
+    /// where it spares FULL cells their costly records); else a sample of
+    /// [`NESTED_VERTICES`] vertices is asked exactly (the grid's voxels would cost more
+    /// than they spare).
     pub(super) fn vertex_nested(&self, k: usize, bx: &Aabb) -> bool {
         let a = &self.obstacles[k];
-        let shifted = |v: Vec3| Aabb::new(bx.min - v, bx.max - v);
-        (a.solid && sample(&self.b.anchors, &self.b.vertices).any(|b0| a.contains_box(&shifted(b0))))
-            || (self.b.solid && sample(&a.anchors, &a.vertices).any(|a0| self.b.contains_box(&shifted(a0))))
+        let nested = |solid: &TriMesh, g: &OnceLock<Arc<InsideGrid>>, other: &TriMesh| {
+            if self.nested_first() {
+                nested_in(solid, grid(g, solid), other, bx)
+            } else {
+                sample(&other.anchors, &other.vertices).any(|v| solid.contains_box(&Aabb::new(bx.min - v, bx.max - v)))
+            }
+        };
+        (a.solid && nested(a, &self.grids[k], &self.b)) || (self.b.solid && nested(&self.b, &self.b_grid, a))
     }
 }
 
@@ -73,6 +90,48 @@ impl ExactSource {
 fn sample<'a>(anchors: &'a [Vec3], vertices: &'a [Vec3]) -> impl Iterator<Item = Vec3> + 'a {
     let step = (vertices.len() / NESTED_VERTICES).max(1);
     anchors.iter().copied().chain(vertices.iter().step_by(step).copied()).take(NESTED_VERTICES)
+}
+
+/// The inside grid `g` of the solid `mesh`, made on first use.
+fn grid<'a>(g: &'a OnceLock<Arc<InsideGrid>>, mesh: &TriMesh) -> &'a InsideGrid {
+    g.get_or_init(|| Arc::new(InsideGrid::new(mesh)))
+}
+
+/// Whether the box `bx − v` lies in `solid` for some vertex `v` of `other`: `other`'s BVH
+/// walked with the boxes `bx − node` asked of the solid's inside grid (a node all of whose
+/// shifted boxes lie inside answers yes, one all outside is skipped), each vertex of a
+/// leaf asked alone ([`InsideGrid::box_inside`], with at most [`NESTED_QUERIES`] BVH
+/// queries), and the first [`NESTED_VERTICES`] the grid cannot tell asked exactly.
+fn nested_in(solid: &TriMesh, grid: &InsideGrid, other: &TriMesh, bx: &Aabb) -> bool {
+    let (mut queries, mut exact_left) = (NESTED_QUERIES, NESTED_VERTICES);
+    let mut stack = vec![0u32];
+    while let Some(ni) = stack.pop() {
+        let n = &other.nodes[ni as usize];
+        match grid.span(solid, &Aabb::new(bx.min - n.aabb.max, bx.max - n.aabb.min)) {
+            Span::Inside => return true,
+            Span::Outside => continue,
+            _ => {}
+        }
+        if !n.is_leaf() {
+            stack.extend([n.left + 1, n.left]);
+            continue;
+        }
+        for v in other.tris[n.tri as usize].p {
+            let q = Aabb::new(bx.min - v, bx.max - v);
+            let inside = match grid.box_inside(solid, &q, &mut queries) {
+                Some(inside) => inside,
+                None if exact_left > 0 => {
+                    exact_left -= 1;
+                    solid.contains_box(&q)
+                }
+                None => false,
+            };
+            if inside {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// The eight octants of a box.
