@@ -265,13 +265,14 @@ def memory_limit(limit_gib: float | None) -> Iterator[MemoryBudget]:
 
 def explain(error: ResourceLimitError, what: str | None = None,
             obstacles: list[str] | None = None, *, cell_bytes: int = SURFACE_CELL_BYTES,
-            knob: str = "eps", cells_given: bool = False,
+            knob: str = "eps", cells_given: str | None = None,
             decomposition: bool = True) -> ResourceLimitError:
     """The core's refusal ``error`` as a user reads it: prefixed by the input ``what``,
     the core's ``obstacle K`` named (``obstacles``; dropped without them), cells weighed
     at ``cell_bytes``, the cell size called ``knob``, naming the memory limit in force
-    and the setting that raises it — ``max_cells`` when the leaves ran out of a budget
-    the caller gave (``cells_given``; the candidate records stay the memory limit's);
+    and the setting that raises it — ``cells_given``, the setting that gave the budget
+    the leaves ran out of, when the caller gave one (the candidate records stay the
+    memory limit's);
     without ``decomposition`` the decomposition source is not offered (a command that
     has none)."""
     import re  # noqa: PLC0415
@@ -299,7 +300,7 @@ def explain(error: ResourceLimitError, what: str | None = None,
     message = message.replace("use a larger eps", f"use a larger {knob}")
     setting = f"raise --memory-limit ({budget.now()})"
     if cells_given and message.startswith("the octree needs more than"):
-        setting = "raise max_cells"
+        setting = f"raise {cells_given}"
     if "raise the memory limit" in message:
         message = message.replace("raise the memory limit", setting, 1)
     elif "--memory-limit" not in message and not lattice and not cells_given:

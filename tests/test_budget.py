@@ -16,6 +16,7 @@ import planner
 from planner import _minkowski_core as core
 from planner import budget
 from planner.errors import InvalidParameterError, ResourceLimitError
+from planner.planning import OctreeParams
 from planner.planning.search import SearchResult, SearchRun, search_without_margin
 from planner.roles import NO_PATH, NOT_FOUND
 
@@ -152,6 +153,16 @@ def test_a_small_limit_refuses_the_planners_cspace():
         planner.plan(scenario, progress=False)
     assert "peg_in_hole.yaml" in str(refused.value)
     assert "--memory-limit (now 0.002 GiB; planner.memory_limit)" in str(refused.value)
+
+
+def test_a_leaf_budget_given_to_the_planner_is_named_not_the_memory_limit():
+    scenario = planner.load_scenario(ROOT / "scenarios" / "peg_in_hole.yaml")
+    with pytest.raises(ResourceLimitError) as refused:
+        planner.plan(scenario, params=OctreeParams(max_leaves=100))
+    message = str(refused.value)
+    assert "octree needs more than 100 cells" in message and "\n" not in message
+    assert "raise OctreeParams.max_leaves" in message
+    assert "memory" not in message
 
 
 def test_no_time_left_for_the_search_without_the_margin():

@@ -105,6 +105,12 @@ class OctreeParams:
     local_first_pairs: int = 5_000_000
     direct_first_pairs: int = 5_000_000
 
+    @property
+    def leaves_setting(self) -> str | None:
+        """The setting that gave the leaf budget, for refusals (``None``: the memory
+        limit did)."""
+        return None if self.max_leaves is None else "OctreeParams.max_leaves"
+
 
 def default_contact_tolerance(scenario: Scenario, params: OctreeParams | None = None) -> float:
     """``planner.contact_tolerance``, or ``contact_rel`` times the scene's scale (the
@@ -268,7 +274,8 @@ class OctreePlanner:
         where = str(sc.path) if sc.path is not None else sc.name
         names = [f"{o.name} ⊕ −{sc.robot.name}" for o in sc.obstacles]
         return budget.explain(exc, f"{where}: {what} ({self._src.kind} source){after}", names,
-                              cell_bytes=budget.LEAF_BYTES, knob="planner.resolution")
+                              cell_bytes=budget.LEAF_BYTES, knob="planner.resolution",
+                              cells_given=self.params.leaves_setting)
 
     def _report_head(self) -> None:
         cs, sc = self.cspace, self.scenario

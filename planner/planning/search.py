@@ -106,9 +106,9 @@ def _refine(cs, channel: dict, run: SearchRun, index: int) -> SearchResult | Non
             stats = cs.refine(channel["leaves"], ring=run.params.ring,
                               levels=run.params.refine_levels)
     except ResourceLimitError as exc:
-        return SearchResult(NOT_FOUND, "budget",
-                            f"octree budget exhausted: "
-                            f"{budget.explain(exc, cell_bytes=budget.LEAF_BYTES)}")
+        refused = budget.explain(exc, cell_bytes=budget.LEAF_BYTES,
+                                 cells_given=run.params.leaves_setting)
+        return SearchResult(NOT_FOUND, "budget", f"octree budget exhausted: {refused}")
     if stats["refined"] == 0:
         return SearchResult(
             NOT_FOUND, "floor",

@@ -1,6 +1,6 @@
 //! [`InsideGrid`]: which voxels of a uniform grid over a solid mesh lie inside it, each
 //! found exactly the first time it is asked and kept, so that "does this box lie in the
-//! solid?" is mostly answered by a few lookups instead of a BVH query and a ray.
+//! solid?" is mostly answered by a few lookups instead of a BVH query and a ray cast.
 //!
 //! The nested-vertex test of the exact source ([`super::ExactSource::vertex_nested`]) asks
 //! that for a cell translated by every vertex of the other part: a cell is FULL when one
@@ -13,8 +13,10 @@
 //! A voxel is *inside* when no triangle meets the closed voxel and its centre is inside
 //! (then all of it is: the boundary is never crossed), *outside* when no triangle meets it
 //! and its centre is outside, else *boundary*. A box is inside the solid when every voxel
-//! it overlaps is inside, outside when every one is outside, and not inside when its
-//! centre's voxel is outside; otherwise the grid does not tell. These answers are exact.
+//! it overlaps is inside, or when one is and no triangle meets the box (a BVH query: the
+//! two are connected and the boundary is not crossed); outside when every one is outside;
+//! not inside when one is outside; when all are on the boundary the grid does not tell.
+//! These answers are exact.
 //! The grid has levels of voxels twice as large, each classified the same way, so that a
 //! box is asked on the level where it overlaps a few voxels.
 
