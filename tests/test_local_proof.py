@@ -106,9 +106,9 @@ def test_spirelli_held_at_the_start_orientation_is_walled_off_near_the_start():
     certificate = outcome.certificate
     assert certificate["verified"] and certificate["exact"] and certificate["local"]
     assert certificate["wall_cells_without_primitive"] == 0
-    # every vertex of the slab asked whether it lies in the solid world piece for a whole
+    # the slab's vertices asked whether they lie in the solid world piece for a whole
     # cell (the core's inside grid): the crossing region is walled off in large cells
-    # (7,980 walls; 62,516 when a sample of twelve vertices was asked)
+    # (about 8,000 walls; 62,516 when a sample of twelve vertices was asked)
     assert certificate["wall_cells"] < 20_000
     assert_walls_collide(outcome, scenario, 200)
     # no component cell holds the goal, and the start's cell is in the component

@@ -3,12 +3,13 @@
 //! solid?" is mostly answered by a few lookups instead of a BVH query and a ray cast.
 //!
 //! The nested-vertex test of the exact source ([`super::ExactSource::vertex_nested`]) asks
-//! that for a cell translated by every vertex of the other part: a cell is FULL when one
+//! that for a cell translated by the vertices of the other part: a cell is FULL when one
 //! vertex of the robot lies inside a solid obstacle at every translation of the cell. With
 //! a few exact tests per cell only a sample of the vertices could be asked; with the grid
-//! every vertex is, and the C-obstacle's interior where the parts cross each other (a
-//! union of many triangle-pair pieces, none of which alone covers a cell) becomes FULL at
-//! the cell size of that crossing instead of at the size of the pieces.
+//! far more can be (walking the part's BVH, whole nodes at once), and the C-obstacle's
+//! interior where the parts cross each other (a union of many triangle-pair pieces, none
+//! of which alone covers a cell) becomes FULL at the cell size of that crossing instead
+//! of at the size of the pieces.
 //!
 //! A voxel is *inside* when no triangle meets the closed voxel and its centre is inside
 //! (then all of it is: the boundary is never crossed), *outside* when no triangle meets it
@@ -24,8 +25,13 @@ use super::mesh::TriMesh;
 use crate::math::{Aabb, Vec3};
 use std::sync::atomic::{AtomicU8, Ordering};
 
-/// Voxels of the finest level at most (one byte each; the coarser levels add a seventh).
+/// Voxels of the finest levels of all the grids of one source (one byte each; the coarser
+/// levels add a seventh), shared among them: 2.3 MB in all, and [`MIN_VOXELS`] more per
+/// grid at most.
 pub const MAX_VOXELS: usize = 1 << 21;
+
+/// Voxels of the finest level of one grid at least (a small solid among large ones).
+const MIN_VOXELS: usize = 1 << 15;
 
 /// Voxels along the mesh's longest side at most, on the finest level.
 const SIDE_VOXELS: f64 = 256.0;
@@ -77,22 +83,28 @@ struct Level {
 
 impl Level {
     fn new(ext: Vec3, size: f64) -> Level {
-        let dims = ext.to_array().map(|e| ((e / size).ceil() as usize).max(1));
+        let dims = Level::dims(ext, size);
         Level { size, dims, state: (0..dims.iter().product()).map(|_| AtomicU8::new(UNKNOWN)).collect() }
+    }
+
+    /// Voxels along each axis of a box of extent `ext`.
+    fn dims(ext: Vec3, size: f64) -> [usize; 3] {
+        ext.to_array().map(|e| ((e / size).ceil() as usize).max(1))
     }
 }
 
 impl InsideGrid {
     /// The grid over the box of the solid `mesh`: cubic voxels, at most [`SIDE_VOXELS`]
-    /// along its longest side and [`MAX_VOXELS`] in all on the finest level, doubling up
-    /// to one voxel; nothing classified yet.
-    pub fn new(mesh: &TriMesh) -> InsideGrid {
+    /// along its longest side and `voxels` (no less than [`MIN_VOXELS`]) on the finest
+    /// level, doubling up to one voxel; nothing classified yet.
+    pub fn new(mesh: &TriMesh, voxels: usize) -> InsideGrid {
         debug_assert!(mesh.solid, "an inside grid of a surface");
+        let most = voxels.max(MIN_VOXELS);
         let ext = mesh.aabb.extent().max(Vec3::splat(f64::MIN_POSITIVE));
         let by_side = ext.max_element() / SIDE_VOXELS;
-        let by_count = (ext.x * ext.y * ext.z / MAX_VOXELS as f64).cbrt();
+        let by_count = (ext.x * ext.y * ext.z / most as f64).cbrt();
         let mut size = by_side.max(by_count).max(f64::MIN_POSITIVE);
-        while Level::new(ext, size).state.len() > MAX_VOXELS {
+        while Level::dims(ext, size).iter().product::<usize>() > most {
             size *= 1.01; // rounding of the ceilings
         }
         let mut levels = vec![Level::new(ext, size)];
@@ -104,7 +116,8 @@ impl InsideGrid {
 
     /// How the closed box `b` lies against the solid `mesh` (the grid's own), from the
     /// voxels it overlaps on the finest level where they are at most [`MAX_SPAN`] along
-    /// each axis; what lies beyond the mesh's box counts as an outside voxel.
+    /// each axis (none: [`Span::Unknown`]); what lies beyond the mesh's box counts as an
+    /// outside voxel.
     pub fn span(&self, mesh: &TriMesh, b: &Aabb) -> Span {
         let bounds = &mesh.aabb;
         if !b.overlaps(bounds) {
@@ -112,7 +125,10 @@ impl InsideGrid {
         }
         let within = bounds.contains_point(b.min) && bounds.contains_point(b.max);
         let (lo, hi) = (b.min.max(bounds.min), b.max.min(bounds.max));
-        for (l, level) in self.levels.iter().enumerate() {
+        // no level of voxels smaller than a third of the box's longest side: it spans more
+        // than three of them
+        let first = ((hi - lo).max_element() / (MAX_SPAN as f64 * self.levels[0].size)).log2().ceil().max(0.0) as usize;
+        for (l, level) in self.levels.iter().enumerate().skip(first) {
             let Some((vlo, vhi)) = self.covering(l, lo).zip(self.covering(l, hi)) else {
                 return Span::Unknown;
             };
@@ -135,9 +151,9 @@ impl InsideGrid {
                 }
             }
             return match (inside, outside, boundary) {
-                (true, _, false) => Span::Inside,
+                (true, false, false) => Span::Inside,
                 (false, true, false) => Span::Outside,
-                (true, _, true) => Span::TouchesInside,
+                (true, false, true) => Span::TouchesInside,
                 (false, true, _) => Span::TouchesOutside,
                 _ => Span::Unknown,
             };
@@ -167,7 +183,8 @@ impl InsideGrid {
         let level = &self.levels[l];
         let v: [usize; 3] = std::array::from_fn(|a| {
             let last = level.dims[a] - 1;
-            let mut i = (((p[a] - self.origin[a]) / level.size).floor().max(0.0) as usize).min(last);
+            // (truncation is the floor here: the quotient is not negative, or is clamped)
+            let mut i = (((p[a] - self.origin[a]) / level.size).max(0.0) as usize).min(last);
             // the division may round across a voxel face
             while i > 0 && self.lattice(level, a, i) > p[a] {
                 i -= 1;

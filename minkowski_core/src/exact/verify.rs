@@ -10,7 +10,7 @@
 //! (a solid mesh containing a box: no triangle meets the box, the winding number at its
 //! centre is not zero). Boxes none of these shows are split into octants, a few times.
 
-use super::inside_grid::{InsideGrid, Span};
+use super::inside_grid::{InsideGrid, Span, MAX_VOXELS};
 use super::mesh::TriMesh;
 use super::{ExactSource, Witness};
 use crate::math::{Aabb, Vec3};
@@ -22,6 +22,10 @@ const MAX_SPLITS: u32 = 6;
 /// Vertices per box and mesh asked exactly at most: a sample of them, or those whose
 /// shifted box the inside grid cannot tell.
 const NESTED_VERTICES: usize = 12;
+
+/// Nodes of the other mesh's BVH visited per box at most (where most of its shifted boxes
+/// lie near the solid's boundary, a walk to every vertex would cost more than it finds).
+const NESTED_NODES: usize = 512;
 
 /// BVH queries of the solid per box and mesh at most, for vertices whose shifted box
 /// touches an inside voxel of its grid ([`InsideGrid::box_inside`]).
@@ -62,53 +66,84 @@ impl ExactSource {
         if let Some(w) = self.piece_contains_box(bx) {
             return Some(w);
         }
-        (0..self.obstacles.len()).find(|&k| self.vertex_nested(k, bx)).map(|k| Witness::Nested { k })
+        (0..self.obstacles.len()).find(|&k| self.nested_exactly(k, bx)).map(|k| Witness::Nested { k })
+    }
+
+    /// [`ExactSource::vertex_nested`], its vertex's box then tested exactly (the grid's
+    /// answer re-verified: a certificate does not rest on the grid).
+    fn nested_exactly(&self, k: usize, bx: &Aabb) -> bool {
+        self.nested_vertex(k, bx).is_some_and(|(solid, v)| solid.contains_box(&shifted(bx, v)))
     }
 
     /// Whether at every `p` of the box a vertex of `p − B` lies in the solid `A_k` (the box
     /// `bx − b` inside `A_k` for a vertex `b` of `B`), or a vertex `a` of `A_k` lies in the
-    /// solid `p − B` (`bx − a` inside `B`): then `A_k` and `p − B` meet. Every vertex is
-    /// asked, through the solid's inside grid, when the nested test comes first
-    /// ([`ExactSource::nested_first`]: the planner's cells with pairs taken piece by piece,
-    /// where it spares FULL cells their costly records); else a sample of
-    /// [`NESTED_VERTICES`] vertices is asked exactly (the grid's voxels would cost more
-    /// than they spare).
+    /// solid `p − B` (`bx − a` inside `B`): then `A_k` and `p − B` meet.
     pub(super) fn vertex_nested(&self, k: usize, bx: &Aabb) -> bool {
+        self.nested_vertex(k, bx).is_some()
+    }
+
+    /// The solid and the vertex `v` of the other mesh that show [`ExactSource::vertex_nested`]
+    /// (`bx − v` in the solid). The vertices are asked through the solid's inside grid
+    /// ([`nested_in`]) when the nested test comes first ([`ExactSource::nested_first`]: the
+    /// planner's cells with a surface taken piece by piece, where it spares FULL cells
+    /// their costly records); else a sample of [`NESTED_VERTICES`] vertices is asked
+    /// exactly (the grid's voxels would cost more than they spare).
+    fn nested_vertex(&self, k: usize, bx: &Aabb) -> Option<(&TriMesh, Vec3)> {
         let a = &self.obstacles[k];
         let nested = |solid: &TriMesh, g: &OnceLock<Arc<InsideGrid>>, other: &TriMesh| {
             if self.nested_first() {
-                nested_in(solid, grid(g, solid), other, bx)
+                nested_in(solid, self.grid(g, solid), other, bx)
             } else {
-                sample(&other.anchors, &other.vertices).any(|v| solid.contains_box(&Aabb::new(bx.min - v, bx.max - v)))
+                sample(other).find(|&v| solid.contains_box(&shifted(bx, v)))
             }
         };
-        (a.solid && nested(a, &self.grids[k], &self.b)) || (self.b.solid && nested(&self.b, &self.b_grid, a))
+        let in_a = if a.solid { nested(a, &self.grids[k], &self.b) } else { None };
+        let in_b = || if self.b.solid { nested(&self.b, &self.b_grid, a) } else { None };
+        in_a.map(|v| (a, v)).or_else(|| in_b().map(|v| (&self.b, v)))
+    }
+
+    /// The inside grid `g` of the solid `mesh`, made on first use with its share of
+    /// [`MAX_VOXELS`] by the volume of its box among the solids' boxes.
+    fn grid<'a>(&self, g: &'a OnceLock<Arc<InsideGrid>>, mesh: &TriMesh) -> &'a InsideGrid {
+        g.get_or_init(|| {
+            let volume = |m: &TriMesh| m.aabb.extent().x * m.aabb.extent().y * m.aabb.extent().z;
+            let all: f64 = self.obstacles.iter().chain([&self.b]).filter(|m| m.solid).map(volume).sum();
+            let share = if all > 0.0 { volume(mesh) / all } else { 1.0 };
+            Arc::new(InsideGrid::new(mesh, (share * MAX_VOXELS as f64) as usize))
+        })
     }
 }
 
-/// The shell anchors, then evenly spaced vertices, [`NESTED_VERTICES`] in all at most.
-fn sample<'a>(anchors: &'a [Vec3], vertices: &'a [Vec3]) -> impl Iterator<Item = Vec3> + 'a {
-    let step = (vertices.len() / NESTED_VERTICES).max(1);
-    anchors.iter().copied().chain(vertices.iter().step_by(step).copied()).take(NESTED_VERTICES)
+/// The box `bx − v`.
+fn shifted(bx: &Aabb, v: Vec3) -> Aabb {
+    Aabb::new(bx.min - v, bx.max - v)
 }
 
-/// The inside grid `g` of the solid `mesh`, made on first use.
-fn grid<'a>(g: &'a OnceLock<Arc<InsideGrid>>, mesh: &TriMesh) -> &'a InsideGrid {
-    g.get_or_init(|| Arc::new(InsideGrid::new(mesh)))
+/// The mesh's shell anchors, then corners of evenly spaced triangles (a vertex no
+/// triangle uses is no part of it), [`NESTED_VERTICES`] in all at most.
+fn sample(mesh: &TriMesh) -> impl Iterator<Item = Vec3> + '_ {
+    let step = (mesh.tris.len() / NESTED_VERTICES).max(1);
+    mesh.anchors.iter().copied().chain(mesh.tris.iter().step_by(step).map(|t| t.p[0])).take(NESTED_VERTICES)
 }
 
-/// Whether the box `bx − v` lies in `solid` for some vertex `v` of `other`: `other`'s BVH
+/// A vertex `v` of `other` whose box `bx − v` lies in `solid`, if one is found: `other`'s BVH
 /// walked with the boxes `bx − node` asked of the solid's inside grid (a node all of whose
 /// shifted boxes lie inside answers yes, one all outside is skipped), each vertex of a
 /// leaf asked alone ([`InsideGrid::box_inside`], with at most [`NESTED_QUERIES`] BVH
-/// queries), and the first [`NESTED_VERTICES`] the grid cannot tell asked exactly.
-fn nested_in(solid: &TriMesh, grid: &InsideGrid, other: &TriMesh, bx: &Aabb) -> bool {
+/// queries), and the first [`NESTED_VERTICES`] the grid cannot tell asked exactly; at most
+/// [`NESTED_NODES`] nodes visited (then: none).
+fn nested_in(solid: &TriMesh, grid: &InsideGrid, other: &TriMesh, bx: &Aabb) -> Option<Vec3> {
     let (mut queries, mut exact_left) = (NESTED_QUERIES, NESTED_VERTICES);
     let mut stack = vec![0u32];
+    let mut visits = 0usize;
     while let Some(ni) = stack.pop() {
+        visits += 1;
+        if visits > NESTED_NODES {
+            return None;
+        }
         let n = &other.nodes[ni as usize];
         match grid.span(solid, &Aabb::new(bx.min - n.aabb.max, bx.max - n.aabb.min)) {
-            Span::Inside => return true,
+            Span::Inside => return Some(first_vertex(other, ni)),
             Span::Outside => continue,
             _ => {}
         }
@@ -117,7 +152,7 @@ fn nested_in(solid: &TriMesh, grid: &InsideGrid, other: &TriMesh, bx: &Aabb) -> 
             continue;
         }
         for v in other.tris[n.tri as usize].p {
-            let q = Aabb::new(bx.min - v, bx.max - v);
+            let q = shifted(bx, v);
             let inside = match grid.box_inside(solid, &q, &mut queries) {
                 Some(inside) => inside,
                 None if exact_left > 0 => {
@@ -127,11 +162,19 @@ fn nested_in(solid: &TriMesh, grid: &InsideGrid, other: &TriMesh, bx: &Aabb) -> 
                 None => false,
             };
             if inside {
-                return true;
+                return Some(v);
             }
         }
     }
-    false
+    None
+}
+
+/// A vertex under node `ni` of the mesh's BVH (its first leaf's triangle's first corner).
+fn first_vertex(mesh: &TriMesh, mut ni: u32) -> Vec3 {
+    while !mesh.nodes[ni as usize].is_leaf() {
+        ni = mesh.nodes[ni as usize].left;
+    }
+    mesh.tris[mesh.nodes[ni as usize].tri as usize].p[0]
 }
 
 /// The eight octants of a box.
