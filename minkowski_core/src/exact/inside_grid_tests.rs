@@ -21,6 +21,17 @@ fn random_boxes(mesh: &TriMesh, n: usize, seed: u64, rel: f64) -> Vec<Aabb> {
         .collect()
 }
 
+/// `n` separate triangles of side `size` along the x axis at height `y` (one every 0.1),
+/// each its own shell.
+fn push_strip(n: usize, y: f64, size: f64, v: &mut Vec<Vec3>, f: &mut Vec<[u32; 3]>) {
+    for i in 0..n {
+        let x = 0.1 * i as f64;
+        let k = v.len() as u32;
+        v.extend([Vec3::new(x, y, 0.0), Vec3::new(x + size, y, 0.0), Vec3::new(x, y + size, 0.0)]);
+        f.push([k, k + 1, k + 2]);
+    }
+}
+
 #[test]
 fn the_grid_answers_as_the_exact_box_test_or_not_at_all() {
     for (mesh, seed, rel) in [(torus_mesh(3.0, 1.0, 48, 24), 1, 0.02), (hollow_box(), 2, 0.02), (torus_mesh(3.0, 1.0, 48, 24), 3, 0.5)] {
@@ -78,13 +89,8 @@ fn vertices_beyond_a_sample_are_asked_through_the_grid_for_the_planner_with_surf
     let target = box_mesh([-1.0; 3], [1.0; 3]);
     let (mut v, mut f) = (Vec::new(), Vec::new());
     exact_tests::push_box(Vec3::new(0.0, -0.01, -0.01), Vec3::new(20.0, 0.01, 0.01), &mut v, &mut f);
-    // extra vertices along the bar (a strip of triangles), so that a sample skips the ends
-    for i in 0..200 {
-        let x = 0.1 * i as f64;
-        let n = v.len() as u32;
-        v.extend([Vec3::new(x, 0.02, 0.0), Vec3::new(x + 0.1, 0.02, 0.0), Vec3::new(x, 0.03, 0.0)]);
-        f.push([n, n + 1, n + 2]);
-    }
+    // extra vertices along the bar, so that a sample skips the ends
+    push_strip(200, 0.02, 0.1, &mut v, &mut f);
     let bar = TriMesh::surface(v, &f, "bar").unwrap();
     let walls = Some(Aabb::new(Vec3::splat(-30.0), Vec3::splat(30.0)));
     let src = ExactSource::new(vec![target.clone()], bar.negated(), 0.0, walls);
@@ -129,12 +135,7 @@ fn a_solid_robot_is_asked_through_its_own_grid() {
     exact_tests::push_box(Vec3::new(-0.05, -0.05, -0.05), Vec3::new(0.05, 0.05, 0.05), &mut v, &mut f);
     let bar = TriMesh::new(v, &f, "bar").unwrap();
     let (mut v, mut f) = (Vec::new(), Vec::new());
-    for i in 0..300 {
-        let x = 0.1 * i as f64;
-        let n = v.len() as u32;
-        v.extend([Vec3::new(x, 1.0, 0.0), Vec3::new(x + 0.05, 1.0, 0.0), Vec3::new(x, 1.05, 0.0)]);
-        f.push([n, n + 1, n + 2]);
-    }
+    push_strip(300, 1.0, 0.05, &mut v, &mut f);
     let strip = TriMesh::surface(v, &f, "strip").unwrap();
     let walls = Some(Aabb::new(Vec3::splat(-50.0), Vec3::splat(50.0)));
     let src = ExactSource::new(vec![strip.clone()], bar.negated(), 0.0, walls);
