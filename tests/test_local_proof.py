@@ -118,6 +118,20 @@ def test_spirelli_held_at_the_start_orientation_is_walled_off_near_the_start():
     assert np.any(np.all((boxes[:, 0] <= start) & (start <= boxes[:, 1]), axis=1))
 
 
+def test_the_flood_stops_at_the_deadline(monkeypatch):
+    # a deadline already passed: the flood fill tests a few nodes, not the room's
+    # thousands, and says the time limit stopped it
+    scenario = box_room(False, [0, 0, 0], [0, 0, 7])
+    source = choose_for([scenario.robot, *scenario.obstacles], scenario.settings)
+    checker = FclChecker.for_parts(scenario.robot, scenario.obstacles)
+    tests = []
+    collides = checker.collides
+    monkeypatch.setattr(checker, "collides", lambda p: tests.append(p) or collides(p))
+    deadline = Deadline(time.perf_counter())
+    assert prove_end_enclosed(scenario, source, checker, "start", deadline=deadline) is None
+    assert deadline.reached and len(tests) < 32
+
+
 def test_a_local_proof_out_of_memory_is_refused_in_one_line_naming_it():
     room = box_room(False, [0, 0, 0], [0, 0, 7])
     shell = room.obstacles[0].mesh.subdivide().subdivide().subdivide()  # 768 triangles

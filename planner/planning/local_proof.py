@@ -8,8 +8,9 @@ not converge; but a robot in a pocket is walled off by the C-obstacle cells near
 :func:`prove_end_enclosed`:
 
 1. a coarse FCL flood fill from the end (grid step the bounds' diagonal over
-   :data:`FLOOD_DIVISIONS`, at most :data:`FLOOD_MAX_NODES` free nodes) — a heuristic that
-   only chooses the box: it must close without reaching the other end;
+   :data:`FLOOD_DIVISIONS`, at most :data:`FLOOD_MAX_NODES` free nodes, stopped at the
+   deadline) — a heuristic that only chooses the box: it must close without reaching the
+   other end;
 2. the box is the flood's extent grown by :data:`MARGIN_STEPS` grid steps (clipped to the
    bounds), and the C-space is built over it alone — for slabs of the robot first
    (:mod:`.slabs`: walled off for a slab is walled off for the robot, at a fraction of the
@@ -60,6 +61,9 @@ FLOOD_DIVISIONS = 128
 
 FLOOD_MAX_NODES = 20_000
 """A flood that finds more free nodes than this is taken as not closed."""
+
+FLOOD_CHECK_EVERY = 16
+"""The flood asks the deadline once per this many nodes tested."""
 
 MARGIN_STEPS = 4
 """The box is the flood's extent grown by this many grid steps on every side (the walls
@@ -132,7 +136,7 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
     ends = {"start": np.asarray(scenario.start, float), "goal": np.asarray(scenario.goal, float)}
     point, other = ends[which], ends["goal" if which == "start" else "start"]
     step = float(np.linalg.norm(hi - lo)) / FLOOD_DIVISIONS
-    extent = _flood(checker, point, other, lo, hi, step)
+    extent = _flood(checker, point, other, lo, hi, step, deadline)
     if extent is None:
         return None
     box = np.stack([np.maximum(point + (extent[0] - MARGIN_STEPS) * step, lo),
@@ -174,16 +178,22 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
 
 
 def _flood(checker: FclChecker, point: np.ndarray, other: np.ndarray, lo: np.ndarray,
-           hi: np.ndarray, step: float) -> np.ndarray | None:
+           hi: np.ndarray, step: float, deadline: Deadline) -> np.ndarray | None:
     """The grid extent ``[min, max]`` (in steps from ``point``) of the free nodes a flood
     fill from ``point`` reaches, or ``None`` when it does not close within
-    :data:`FLOOD_MAX_NODES`, reaches the node next to ``other``, or ``point`` is not free."""
+    :data:`FLOOD_MAX_NODES`, reaches the node next to ``other``, ``point`` is not free, or
+    the deadline passes (asked every :data:`FLOOD_CHECK_EVERY` nodes: an FCL test of a
+    large soup can take tens of milliseconds)."""
     target = tuple(int(v) for v in np.round((other - point) / step))
     seen = {(0, 0, 0)}
     queue = collections.deque([(0, 0, 0)])
     low, high = np.zeros(3), np.zeros(3)
     free = 0
+    tested = 0
     while queue:
+        tested += 1
+        if tested % FLOOD_CHECK_EVERY == 0 and deadline.would_pass():
+            return None
         node = queue.popleft()
         p = point + step * np.asarray(node, dtype=np.float64)
         if np.any(p < lo) or np.any(p > hi) or checker.collides(p):
