@@ -342,6 +342,12 @@ def surface_cells(max_cells: int | None = None) -> tuple[int, bool]:
     return current().surface_cells(), True
 
 
+def cells_setting(from_memory: bool) -> str | None:
+    """The setting a refusal of :func:`surface_cells`' budget names for :func:`explain`
+    (``None``: the memory limit's)."""
+    return None if from_memory else "max_cells"
+
+
 def refuse_cells(what: str, cells: float, max_cells: int, from_memory: bool, fix: str
                  ) -> ResourceLimitError:
     """The refusal of a surface that would need about ``cells`` cells, over ``max_cells``."""

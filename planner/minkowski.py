@@ -231,7 +231,7 @@ def _decomposition_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bo
                                       max_refinements=max_refinements, simplify=simplify)
         except ResourceLimitError as exc:
             raise budget.explain(exc, f"{names[0]} ⊕ {names[1]}",
-                                 cells_given=None if from_memory else "max_cells") from exc
+                                 cells_given=budget.cells_setting(from_memory)) from exc
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     error_bound = float(surf["error_bound"]) + pair.excess
     stats = {
@@ -353,8 +353,8 @@ def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
             surf = pair.native.surface(eps_value, max_cells=max_cells,
                                        max_refinements=max_refinements, simplify=simplify)
         except ResourceLimitError as exc:
-            given = None if from_memory else "max_cells"
-            raise budget.explain(exc, what, cells_given=given) from exc
+            raise budget.explain(exc, what,
+                                 cells_given=budget.cells_setting(from_memory)) from exc
     mesh, surface_stats, surface_seconds = _surface_mesh(surf, names, warn_complex)
     stats = {
         "source": "exact",

@@ -196,7 +196,7 @@ def _cell_offset(solid: trimesh.Trimesh, radius: float, step: float, max_cells: 
         raw = offset_surface(checked, radius, step, max_cells=cells)
     except ResourceLimitError as exc:
         raise budget.explain(exc, f"{name} offset by {radius:g}",
-                             cells_given=None if from_memory else "max_cells") from exc
+                             cells_given=budget.cells_setting(from_memory)) from exc
     surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
     return surface, float(raw["error_bound"]), {"triangles": len(surface.faces),
                                                 **surface_stats(raw)}
