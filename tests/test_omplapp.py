@@ -388,3 +388,42 @@ def test_a_problem_in_omplapp_format_imports_in_omplapps_frame():
     assert kinds == [(2, False)] + [(12, True)] * 4   # the floor's doubled quad, 4 boxes
     assert robot_reference_point(read_app_mesh(WINDOW.with_name("window_robot.dae"))) \
         == pytest.approx([0, 0, 0])
+
+
+def window_copy(tmp_path: Path, edit) -> Path:
+    for source in WINDOW.parent.glob("window*"):
+        (tmp_path / source.name).write_bytes(source.read_bytes())
+    path = tmp_path / "window.cfg"
+    path.write_text(edit(path.read_text()))
+    return path
+
+
+@pytest.mark.parametrize(("edit", "field", "hint"), [
+    (lambda t: t.replace("volume.max.z", "volume.mx.z"), "problem.volume.mx.z",
+     "did you mean 'volume.max.z'?"),
+    (lambda t: t.replace("time_limit", "time_limt"), "benchmark.time_limt",
+     "did you mean 'time_limit'?"),
+    (lambda t: t.replace("goal.axis.y", "goal.axis.yy"), "problem.goal.axis.yy",
+     "did you mean 'goal.axis.y'?"),
+])
+def test_a_key_that_looks_like_a_typo_is_refused(tmp_path, edit, field, hint):
+    path = window_copy(tmp_path, edit)
+    with pytest.raises(ScenarioError) as info:
+        load_omplapp(path)
+    assert info.value.field == field
+    assert str(info.value).startswith(f"{path}:") and hint in str(info.value)
+
+
+def test_a_key_omplapp_does_not_define_is_noted_as_ignored(tmp_path):
+    path = window_copy(tmp_path, lambda t: t.replace("[benchmark]",
+                                                     "colour = blue\n\n[benchmark]"))
+    notes = load_omplapp(path).notes
+    assert "keys OMPL.app does not define, ignored: problem.colour" in notes
+    assert not any("ignored" in note for note in load_omplapp(WINDOW).notes)
+
+
+def test_a_kinodynamic_problem_is_refused(tmp_path):
+    path = window_copy(tmp_path, lambda t: t.replace("[benchmark]",
+                                                     "control = blimp\n\n[benchmark]"))
+    with pytest.raises(ScenarioError, match=r"problem.control: 'blimp': kinodynamic"):
+        load_omplapp(path)

@@ -26,12 +26,16 @@ throughout (``hold_orientation="start"`` or ``"goal"``, the CLI's
 that offers the reading. ``Scenario.notes`` records every decision of the import.
 
 Duplicate keys are accepted as OMPL.app accepts them (the last one counts): its own
-``cubicles_opt.cfg`` lists ``aps=`` twice under ``[planner]``.
+``cubicles_opt.cfg`` lists ``aps=`` twice under ``[planner]``. A key of ``[problem]`` or
+``[benchmark]`` that OMPL.app does not define is an error when it is close to one it does
+(``volume.mx.z``, ``time_limt``: a typo that would silently change the problem), and is
+noted as ignored otherwise. ``control`` (a kinodynamic system) is refused.
 """
 
 from __future__ import annotations
 
 import configparser
+import difflib
 import math
 import os
 import re
@@ -72,6 +76,19 @@ __all__ = [
 
 # ------------------------------------------------------------------------------ config
 
+_POSE_KEYS = ("x", "y", "z", "theta", "axis.x", "axis.y", "axis.z")
+#: The keys OMPL.app's documentation defines, per section it reads.
+KNOWN_KEYS = {
+    "problem": ("name", "robot", "world", "objective", "objective.threshold", "control",
+                "sampler",
+                *(f"{end}.{key}" for end in ("start", "goal") for key in _POSE_KEYS),
+                *(f"volume.{end}.{axis}" for end in ("min", "max") for axis in "xyz")),
+    "benchmark": ("time_limit", "mem_limit", "run_count", "output", "save_paths",
+                  "simplify"),
+}
+#: How alike an unknown key must be to a known one to be taken for its typo.
+_TYPO_CUTOFF = 0.8
+
 
 def _cfg_line(text: str, key: str) -> int | None:
     pattern = re.compile(rf"^\s*{re.escape(key)}\s*[=:]", re.IGNORECASE)
@@ -108,8 +125,27 @@ class _Cfg:
         self.problem = parser["problem"]
         self.parser = parser
 
+    def unknown_keys(self) -> list[str]:
+        """Keys OMPL.app does not define, as ``section.key``; raises for a likely typo."""
+        unknown = []
+        for section, known in KNOWN_KEYS.items():
+            if not self.parser.has_section(section):
+                continue
+            for key in self.parser[section]:
+                if key in known:
+                    continue
+                close = difflib.get_close_matches(key, known, n=1, cutoff=_TYPO_CUTOFF)
+                if close:
+                    raise self.key_error(section, key, f"unknown key; did you mean "
+                                                       f"{close[0]!r}?")
+                unknown.append(f"{section}.{key}")
+        return unknown
+
     def error(self, key: str, problem: str) -> ScenarioError:
-        field = f"problem.{key}"
+        return self.key_error("problem", key, problem)
+
+    def key_error(self, section: str, key: str, problem: str) -> ScenarioError:
+        field = f"{section}.{key}"
         line = _cfg_line(self.text, key)
         where = self.label if line is None else f"{self.label}:{line}"
         return ScenarioError(f"{where}: {field}: {problem}", field=field, line=line)
@@ -176,17 +212,24 @@ def load_omplapp(cfg_path: str | os.PathLike[str], *,
         ScenarioError: missing or malformed keys (field ``problem.<key>``, with its line),
             missing or unusable meshes, a 2D (SE(2)) problem, a goal orientation that
             differs from the start's (unless ``hold_orientation`` says which to keep),
-            start or goal outside the volume.
+            start or goal outside the volume, a key that looks like a typo of one
+            OMPL.app defines, a kinodynamic (``control``) problem.
     """
     path = Path(cfg_path)
     cfg = _Cfg(path)
     base = path.parent
+    ignored = cfg.unknown_keys()
+    if cfg.has("control"):
+        raise cfg.error("control", f"{cfg.problem['control'].strip()!r}: kinodynamic "
+                                   "problems are not supported, only rigid-body ones")
     if not cfg.has("start.z") and cfg.has("start.x"):
         raise cfg.error("start.z", "missing: 2D (SE(2)) problems are not supported, only "
                                    "3D rigid bodies")
     start = cfg.vector("start")
     goal = cfg.vector("goal")
     notes: list[str] = []
+    if ignored:
+        notes.append(f"keys OMPL.app does not define, ignored: {', '.join(ignored)}")
     orientation = _held_orientation(cfg, hold_orientation, notes)
     robot_file = cfg.mesh_path("robot", base)
     world_file = cfg.mesh_path("world", base)
@@ -276,10 +319,7 @@ def _benchmark_time_limit(cfg: _Cfg) -> float | None:
     except ValueError:
         value = math.nan
     if not (math.isfinite(value) and value > 0):
-        line = _cfg_line(cfg.text, "time_limit")
-        where = cfg.label if line is None else f"{cfg.label}:{line}"
-        raise ScenarioError(f"{where}: benchmark.time_limit: expected a number > 0, got "
-                            f"{raw!r}", field="benchmark.time_limit", line=line)
+        raise cfg.key_error("benchmark", "time_limit", f"expected a number > 0, got {raw!r}")
     return value
 
 
