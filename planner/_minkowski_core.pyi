@@ -20,6 +20,7 @@ __all__ = [
     "num_threads",
     "offset_surface",
     "set_record_budget",
+    "set_time_limit",
     "union_surface",
     "winding_numbers",
 ]
@@ -65,6 +66,8 @@ def build_octree(
 def num_threads() -> int: ...
 def set_record_budget(bytes: int) -> int:
     """Set the octree's candidate-record budget (bytes) for what follows; the previous."""
+def set_time_limit(seconds: float | None = None) -> None:
+    """Stop octree builds and refinements ``seconds`` from now (None: never)."""
 def budget_units() -> dict[str, int]:
     """Bytes of the units the budgets count: leaf, record_word, facet; max_record_words."""
 def front_windings(

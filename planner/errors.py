@@ -2,13 +2,14 @@
 
 Every error minkplan raises on bad input or exhausted limits derives from
 :class:`MinkplanError`, and also from the matching built-in exception (``ValueError``,
-``MemoryError``, ``RuntimeError``), so callers that already catch the built-in keep
-working::
+``MemoryError``, ``TimeoutError``, ``RuntimeError``), so callers that already catch the
+built-in keep working::
 
     MinkplanError(Exception)
     ├── InvalidMeshError(MinkplanError, ValueError)       bad solid or unreadable mesh file
     ├── InvalidParameterError(MinkplanError, ValueError)  bad argument value (eps <= 0, ...)
     ├── ResourceLimitError(MinkplanError, MemoryError)    work would not fit in memory/time
+    ├── TimeLimitError(MinkplanError, TimeoutError)       time limit passed in native work
     ├── GeometryError(MinkplanError, RuntimeError)        core failed on valid-looking input
     └── ScenarioError(MinkplanError, ValueError)          scenario YAML problem (field, line)
 
@@ -31,6 +32,7 @@ __all__ = [
     "MinkplanError",
     "ResourceLimitError",
     "ScenarioError",
+    "TimeLimitError",
 ]
 
 
@@ -73,6 +75,12 @@ class ResourceLimitError(MinkplanError, MemoryError):
     so small that the grid exceeds the memory limit's share, see :mod:`planner.budget`).
     The message names the input, the limit and how to stay within it (``--memory-limit``,
     a larger eps, the decomposition source)."""
+
+
+class TimeLimitError(MinkplanError, TimeoutError):
+    """The time limit passed during a long native step (an octree build or refinement,
+    see :mod:`planner.deadline`); the step changed nothing. The planner reports it as
+    ``not_found`` (``time_limit``)."""
 
 
 class GeometryError(MinkplanError, RuntimeError):

@@ -17,9 +17,10 @@ import trimesh
 from conftest import SHARED_ASSETS
 
 import planner
+from planner.deadline import Deadline
 from planner.errors import ResourceLimitError
 from planner.planning import OctreeParams
-from planner.planning.local_proof import Deadline, prove_end_enclosed, wall_off
+from planner.planning.local_proof import prove_end_enclosed, wall_off
 from planner.planning.slabs import subsets
 from planner.problem import Body, PlannerSettings, Robot, Scenario
 from planner.sources import choose_for
@@ -87,7 +88,11 @@ def test_a_room_with_an_open_top_is_not_walled_off_and_the_path_is_found():
     scenario = box_room(True, [0, 0, 0], [0, 0, 7])
     outcome = planner.plan(scenario, params=LOCAL_ALWAYS)
     assert outcome.status == "found", outcome.message
-    assert "local_proof" not in outcome.report
+    tried = outcome.report["local_proof"]
+    assert tried["proved"] is False
+    assert [(a["end"], a["outcome"]) for a in tried["attempts"]] == [
+        (end, "the flood fill did not close")
+        for end in ("start", "goal")]
     assert outcome.validation["fcl"]["valid"] and outcome.validation["ompl"]["valid"]
 
 
@@ -226,7 +231,9 @@ def test_a_time_limit_spent_on_local_proofs_is_the_answer_not_a_larger_cspace():
     outcome = planner.plan(slotted, params=LOCAL_ALWAYS)
     assert outcome.status == "not_found" and outcome.reason == "time_limit", outcome.message
     assert "local proofs" in outcome.message and outcome.cspace is None
-    assert outcome.timings["total"] < 60  # the slab's last round may overrun, not a search
+    assert outcome.timings["total"] < 60  # not a search over the whole bounds
+    attempts = outcome.report["local_proof"]["attempts"]
+    assert "time limit" in attempts[-1]["outcome"], attempts
 
 
 class _GrowingCSpace:

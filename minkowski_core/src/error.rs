@@ -76,6 +76,13 @@ pub enum CoreError {
         /// Memory per facet.
         bytes_per_facet: usize,
     },
+    /// The time limit ([`crate::deadline`]) passed during a long step; nothing it would
+    /// have changed was changed. Fix: a longer time limit, or larger cells.
+    #[error("time limit reached during the {during}")]
+    TimeLimit {
+        /// The step it stopped.
+        during: String,
+    },
     /// There are no primitives to work on. Fix: give at least one convex piece per operand.
     #[error("{what}: no convex pieces given")]
     Empty {

@@ -14,6 +14,7 @@
 #![warn(missing_docs)]
 
 pub mod bvh;
+pub mod deadline;
 pub mod error;
 pub mod exact;
 pub mod flat_faces;

@@ -20,6 +20,7 @@ pyo3::import_exception!(planner.errors, InvalidMeshError);
 pyo3::import_exception!(planner.errors, InvalidParameterError);
 pyo3::import_exception!(planner.errors, ResourceLimitError);
 pyo3::import_exception!(planner.errors, GeometryError);
+pyo3::import_exception!(planner.errors, TimeLimitError);
 
 impl From<CoreError> for PyErr {
     fn from(e: CoreError) -> PyErr {
@@ -28,6 +29,7 @@ impl From<CoreError> for PyErr {
             CoreError::NonFinite { .. } | CoreError::Degenerate { .. } | CoreError::Empty { .. } | CoreError::InvalidGeometry { .. } => InvalidMeshError::new_err(msg),
             CoreError::InvalidParameter { .. } => InvalidParameterError::new_err(msg),
             CoreError::ResourceLimit { .. } | CoreError::FacetLimit { .. } | CoreError::RecordLimit { .. } => ResourceLimitError::new_err(msg),
+            CoreError::TimeLimit { .. } => TimeLimitError::new_err(msg),
         }
     }
 }
@@ -504,6 +506,20 @@ fn set_record_budget(bytes: usize) -> usize {
     crate::octree::set_record_budget(bytes / word) * word
 }
 
+/// Stop the octree builds and refinements that follow `seconds` from now (None: never),
+/// with planner.errors.TimeLimitError; see planner.deadline.
+#[pyfunction]
+#[pyo3(signature = (seconds=None))]
+fn set_time_limit(seconds: Option<f64>) -> PyResult<()> {
+    let after = match seconds {
+        Some(s) if s.is_nan() => return Err(InvalidParameterError::new_err("seconds = NaN: must be a number")),
+        Some(s) => Some(std::time::Duration::from_secs_f64(s.clamp(0.0, 1e9))),
+        None => None,
+    };
+    crate::deadline::set_deadline(after);
+    Ok(())
+}
+
 /// Bytes of the fixed-size records the budgets count: {"leaf", "record_word", "facet"}.
 #[pyfunction]
 fn budget_units(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
@@ -524,6 +540,7 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(build_octree, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
     m.add_function(wrap_pyfunction!(set_record_budget, m)?)?;
+    m.add_function(wrap_pyfunction!(set_time_limit, m)?)?;
     m.add_function(wrap_pyfunction!(budget_units, m)?)?;
     m.add_function(wrap_pyfunction!(front_windings, m)?)?;
     m.add_function(wrap_pyfunction!(crossing_windings, m)?)?;

@@ -20,16 +20,18 @@ not converge; but a robot in a pocket is walled off by the C-obstacle cells near
    FULL leaf around it is verified by the core and none is a wall of the box that is not a
    face of the bounds. Then no path leaves the component, whatever lies outside the box:
    no path (exact on the exact source). Otherwise nothing is claimed and the planner
-   searches the whole bounds as before — unless the time limit went on the proofs, or a
-   step of them was not started because it would have ended after it (then the answer is
+   searches the whole bounds as before — unless the time limit went on the proofs (the
+   native builds and refinements stop at it, :mod:`planner.deadline`), or a step of them
+   was not started because it would have ended after it (then the answer is
    ``not_found``, ``time_limit``) or the proof ran out of memory
    (:class:`~planner.errors.ResourceLimitError`, raised). Then the pocket's walls need
    finer cells than the limit allows; a path out of the pocket would pass a gap narrower
    than the flood's step, which the C-space over the whole bounds would have to resolve
    with cells as fine, so it is not tried.
 
-The assembly planner's enclosures (:mod:`planner.assembly.enclosure`) use :func:`wall_off`
-too.
+What each end's proof tried (the flood, each robot subset, and how it ended) goes into
+``report.json`` (``local_proof.attempts``). The assembly planner's enclosures
+(:mod:`planner.assembly.enclosure`) use :func:`wall_off` too.
 """
 
 from __future__ import annotations
@@ -43,7 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from planner.errors import ResourceLimitError
+from planner.deadline import Deadline
+from planner.errors import ResourceLimitError, TimeLimitError
 from planner.problem import Scenario
 from planner.sources import Source
 from planner.validation import FclChecker
@@ -51,7 +54,7 @@ from planner.validation import FclChecker
 from .slabs import subsets
 
 __all__ = ["FLOOD_DIVISIONS", "FLOOD_MAX_NODES", "MARGIN_STEPS",
-           "Deadline", "LocalProof", "leaf_boxes", "prove_end_enclosed", "surface_pairs",
+           "LocalProof", "leaf_boxes", "prove_end_enclosed", "surface_pairs",
            "wall_off"]
 
 log = logging.getLogger(__name__)
@@ -83,25 +86,6 @@ _STEPS = ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1))
 
 
 @dataclass
-class Deadline:
-    """A ``time.perf_counter()`` value ``at``, whether some step was not started because
-    it would have ended after it (``reached``), and the seconds per robot triangle the
-    last local C-space took to build (``cspace_pace``, 0 before the first: the start's
-    and the goal's proofs share it)."""
-
-    at: float
-    reached: bool = False
-    cspace_pace: float = 0.0
-
-    def would_pass(self, seconds: float = 0.0) -> bool:
-        """Whether a step of ``seconds`` started now would end after the deadline (then
-        ``reached`` is set)."""
-        passes = time.perf_counter() + seconds > self.at
-        self.reached |= passes
-        return passes
-
-
-@dataclass
 class LocalProof:
     """A proved enclosure of one end: its C-space (over the box ``summary["box"]``), the
     core's certificate (``raw``, as :meth:`CSpace.enclosure` gives it) and a summary for
@@ -122,59 +106,94 @@ def surface_pairs(scenario: Scenario) -> int:
 
 
 def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
-                       which: str, *, deadline: Deadline) -> LocalProof | None:
+                       which: str, *, deadline: Deadline,
+                       attempts: list[dict[str, Any]] | None = None) -> LocalProof | None:
     """A proof that the ``which`` end (``"start"`` or ``"goal"``) is walled off near it,
     or ``None`` (see the module documentation); ``deadline.reached`` tells whether the
-    time limit stopped it.
+    time limit stopped it. What was tried, and how it ended, is appended to ``attempts``
+    (for ``report.json``): one entry per robot subset, or one for the flood.
 
     Raises:
         ResourceLimitError: the box's C-space or its refinement would pass the memory
             limit.
     """
     t0 = time.perf_counter()
+    tried = attempts if attempts is not None else []
     lo, hi = (np.asarray(b, dtype=np.float64) for b in scenario.bounds)
     ends = {"start": np.asarray(scenario.start, float), "goal": np.asarray(scenario.goal, float)}
     point, other = ends[which], ends["goal" if which == "start" else "start"]
     step = float(np.linalg.norm(hi - lo)) / FLOOD_DIVISIONS
     extent = _flood(checker, point, other, lo, hi, step, deadline)
     if extent is None:
+        why = "stopped by the time limit" if deadline.reached else "did not close"
+        tried.append(_attempt(which, None, None, f"the flood fill {why}", t0))
         return None
     box = np.stack([np.maximum(point + (extent[0] - MARGIN_STEPS) * step, lo),
                     np.minimum(point + (extent[1] + MARGIN_STEPS) * step, hi)])
     if np.all((box[0] <= other) & (other <= box[1])):
-        return None  # the other end is in the box: not a pocket of one end
+        # not a pocket of one end
+        tried.append(_attempt(which, box, None, f"the {_other(which)} lies in the box", t0))
+        return None
     bounds_faces = [bool(box[0][s // 2] <= lo[s // 2]) if s % 2 == 0 else
                     bool(box[1][s // 2] >= hi[s // 2]) for s in range(6)]
     side = float(np.max(box[1] - box[0]))
     for label, robot in subsets(scenario.robot):
         t_subset = time.perf_counter()
+        subset = {"subset": label, "triangles": len(robot.mesh.faces)}
         if deadline.would_pass(deadline.cspace_pace * len(robot.mesh.faces)):
-            log.info("local proof at the %s, %s: its C-space would end after the time limit",
-                     which, label)
+            tried.append(_attempt(which, box, subset, "not started: its C-space would end "
+                                                      "after the time limit", t_subset))
             break
         whole = robot is scenario.robot
         try:
-            cs = source.cspace(scenario.obstacles, robot, box, side / FLOOR_DIVISIONS,
-                               side / COARSE_DIVISIONS)
-            deadline.cspace_pace = ((time.perf_counter() - t_subset)
-                                    / max(len(robot.mesh.faces), 1))
-            raw, rounds = wall_off(cs, point, bounds_faces=bounds_faces, deadline=deadline,
-                                   select=inside_obstacles)
+            with deadline.native():
+                cs = source.cspace(scenario.obstacles, robot, box, side / FLOOR_DIVISIONS,
+                                   side / COARSE_DIVISIONS)
+                deadline.cspace_pace = ((time.perf_counter() - t_subset)
+                                        / max(len(robot.mesh.faces), 1))
+                raw, rounds = wall_off(cs, point, bounds_faces=bounds_faces,
+                                       deadline=deadline, select=inside_obstacles)
         except ResourceLimitError:
+            tried.append(_attempt(which, box, subset, "over the memory limit", t_subset))
             if whole:
                 raise
-            log.info("local proof at the %s, %s: over the memory limit", which, label)
             continue
-        log.info("local proof at the %s (box %s), %s (%d triangles): %s after %d rounds in "
-                 "%.2f s", which, np.round(box, 4).tolist(), label, len(robot.mesh.faces),
-                 "proved" if raw else "not proved", rounds, time.perf_counter() - t_subset)
+        except TimeLimitError:
+            deadline.reached = True
+            tried.append(_attempt(which, box, subset, "stopped by the time limit", t_subset))
+            break
+        outcome = ("proved" if raw is not None else
+                   "stopped by the time limit" if deadline.reached else "not walled off")
+        tried.append(_attempt(which, box, subset, outcome, t_subset, rounds=rounds))
         if raw is not None:
             summary = {"end": which, "box": box.tolist(), "flood_step": step,
-                       "bounds_faces": bounds_faces, "rounds": rounds,
-                       "robot": {"subset": label, "triangles": len(robot.mesh.faces)},
+                       "bounds_faces": bounds_faces, "rounds": rounds, "robot": subset,
                        "seconds": time.perf_counter() - t0}
             return LocalProof(which, cs, raw, summary)
     return None
+
+
+def _other(which: str) -> str:
+    return "goal" if which == "start" else "start"
+
+
+def _attempt(which: str, box: np.ndarray | None, subset: dict[str, Any] | None,
+             outcome: str, t0: float, *, rounds: int | None = None) -> dict[str, Any]:
+    """One entry of a local proof's attempts (logged as it is made)."""
+    seconds = time.perf_counter() - t0
+    entry: dict[str, Any] = {"end": which, "outcome": outcome, "seconds": seconds}
+    if box is not None:
+        entry["box"] = box.tolist()
+    if subset is not None:
+        entry["robot"] = subset
+    if rounds is not None:
+        entry["rounds"] = rounds
+    log.info("local proof at the %s%s%s: %s%s in %.2f s", which,
+             "" if box is None else f" (box {np.round(box, 4).tolist()})",
+             "" if subset is None else f", {subset['subset']} ({subset['triangles']} "
+                                       "triangles)",
+             outcome, "" if rounds is None else f" after {rounds} rounds", seconds)
+    return entry
 
 
 def _flood(checker: FclChecker, point: np.ndarray, other: np.ndarray, lo: np.ndarray,

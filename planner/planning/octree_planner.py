@@ -38,7 +38,8 @@ from typing import Any
 import numpy as np
 
 from planner import budget
-from planner.errors import ResourceLimitError
+from planner.deadline import Deadline, native_deadline
+from planner.errors import ResourceLimitError, TimeLimitError
 from planner.problem import Scenario
 from planner.progress import StatusLine
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
@@ -48,7 +49,7 @@ from planner.validation import FclChecker
 from .certificates import certificate_document
 from .direct import Direct, direct_motion, triangle_pairs
 from .endpoints import Ends, attach_ends
-from .local_proof import Deadline, LocalProof, prove_end_enclosed, surface_pairs
+from .local_proof import LocalProof, prove_end_enclosed, surface_pairs
 from .outcome import PlanOutcome
 from .report import Clock, cell_report, smallest_mixed_cell
 from .search import SearchResult, SearchRun, search, search_without_margin
@@ -232,6 +233,8 @@ class OctreePlanner:
                 or surface_pairs(sc) < self.params.local_first_pairs):
             return None
         deadline = Deadline(time.perf_counter() + sc.settings.time_limit)
+        attempts: list[dict[str, Any]] = []
+        self.report["local_proof"] = {"proved": False, "attempts": attempts}
         for which in ("start", "goal"):
             if deadline.would_pass():
                 break
@@ -239,10 +242,12 @@ class OctreePlanner:
             try:
                 with self.clock.stage("octree"):
                     proof = prove_end_enclosed(sc, self._src, self.checker, which,
-                                               deadline=deadline)
+                                               deadline=deadline, attempts=attempts)
             except ResourceLimitError as exc:
                 raise self._refusal(exc, f"the local proof at the {which}") from exc
             if proof is not None:
+                self.report["local_proof"] = {"proved": True, **proof.summary,
+                                              "attempts": attempts}
                 return proof
         self.out_of_time = deadline.reached or deadline.would_pass()
         return None
@@ -340,8 +345,14 @@ class OctreePlanner:
             self.report[f"{which}_escape"] = escape
         self.bar.show("minkplan: searching")
         run = SearchRun(self.params, self.clock, self.rounds, deadline, self.bar)
-        first = search(self.cspace, ends.points["start"], ends.points["goal"], run)
-        result, space = search_without_margin(self._build, first, self.margin, ends.points, run)
+        try:
+            with native_deadline(deadline):
+                first = search(self.cspace, ends.points["start"], ends.points["goal"], run)
+                result, space = search_without_margin(self._build, first, self.margin,
+                                                      ends.points, run)
+        except TimeLimitError as exc:
+            return self._finish(NOT_FOUND, "time_limit",
+                                f"{exc} after {len(self.rounds)} refinement rounds")
         space = space if space is not None else self.cspace
         if result.status == NO_PATH:
             return self._no_path(result, space, ends)
@@ -391,7 +402,6 @@ class OctreePlanner:
             proof.cspace, raw, points, exact=source.exact, source_kind=source.kind,
             relative_to=source.relative_to(self._parts), obstacle_of=self.obstacle_of)
         certificate["local"] = proof.summary
-        self.report["local_proof"] = proof.summary
         message = (f"no path: the {proof.which} is walled off by "
                    f"{certificate['wall_cells']} FULL cells (exact) in a box around it")
         return self._finish(NO_PATH, "certificate", message, certificate=certificate,

@@ -270,6 +270,8 @@ struct Ctx<'a> {
     count: AtomicUsize,
     words: AtomicUsize,
     abort: AtomicBool,
+    /// Whether the time limit ([`crate::deadline`]) stopped the build.
+    timed_out: AtomicBool,
 }
 
 type Out = (Vec<Leaf>, Vec<u32>);
@@ -299,7 +301,8 @@ impl Octree {
     /// # Errors
     /// [`CoreError::InvalidParameter`] for a non-positive or non-finite `h`,
     /// [`CoreError::ResourceLimit`] when the lattice or the leaf count would exceed the limits,
-    /// [`CoreError::RecordLimit`] when the candidate records would pass [`record_budget`].
+    /// [`CoreError::RecordLimit`] when the candidate records would pass [`record_budget`],
+    /// [`CoreError::TimeLimit`] when the time limit ([`crate::deadline`]) passed.
     pub fn build<S: CellSource>(source: &S, region: &Aabb, h: f64, max_cells: usize) -> CoreResult<Octree> {
         Self::build_within(source, region, h, max_cells, record_budget())
     }
@@ -336,11 +339,25 @@ impl Octree {
                 detail: format!("the region is {n:.0} cells wide; the lattice addresses at most 2^{MAX_DEPTH}"),
             });
         }
-        let ctx = Ctx { src: source, origin, h, budget: max_cells, max_words, planar, count: AtomicUsize::new(0), words: AtomicUsize::new(0), abort: AtomicBool::new(false) };
+        let ctx = Ctx {
+            src: source,
+            origin,
+            h,
+            budget: max_cells,
+            max_words,
+            planar,
+            count: AtomicUsize::new(0),
+            words: AtomicUsize::new(0),
+            abort: AtomicBool::new(false),
+            timed_out: AtomicBool::new(false),
+        };
         let root = source.root_records();
         let (leaves, cands) = ctx.node([0, 0, 0], depth as u8, &root, None);
         if ctx.words.load(Ordering::Relaxed) > max_words {
             return Err(record_limit(max_words, h, "octree build"));
+        }
+        if ctx.timed_out.load(Ordering::Relaxed) {
+            return Err(CoreError::TimeLimit { during: "octree build".into() });
         }
         if ctx.abort.load(Ordering::Relaxed) {
             return Err(CoreError::ResourceLimit { budget: max_cells, cell_size: h, detail: "octree leaves".into() });
@@ -520,6 +537,10 @@ impl Ctx<'_> {
 
     fn leaf(&self, ijk: [u32; 3], level: u8, label: Label, cand_len: usize) -> Leaf {
         if self.count.fetch_add(1, Ordering::Relaxed) >= self.budget {
+            self.abort.store(true, Ordering::Relaxed);
+        }
+        if crate::deadline::passed() {
+            self.timed_out.store(true, Ordering::Relaxed);
             self.abort.store(true, Ordering::Relaxed);
         }
         Leaf { ijk, level, label, cand_start: 0, cand_len: cand_len as u32, corner_sign: None }

@@ -11,6 +11,7 @@ use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
 use crate::octree::{lattice_cell, record_budget, record_limit, CellSource, Label, Leaf, Octree, MAX_DEPTH};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What a [`refine`] call did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -88,8 +89,9 @@ impl Classifier<'_> {
 ///
 /// # Errors
 /// [`CoreError::ResourceLimit`] when the octree would exceed `max_leaves` leaves,
-/// [`CoreError::RecordLimit`] when its candidate records would pass [`record_budget`]
-/// (nothing is changed then).
+/// [`CoreError::RecordLimit`] when its candidate records would pass [`record_budget`],
+/// [`CoreError::TimeLimit`] when the time limit ([`crate::deadline`]) passed before every
+/// target was split (nothing is changed then).
 pub fn refine<S: CellSource>(source: &S, oct: &mut Octree, index: &mut LeafIndex, targets: &[usize], levels: u8, max_leaves: usize) -> CoreResult<RefineStats> {
     refine_within(source, oct, index, targets, levels, max_leaves, record_budget())
 }
@@ -109,10 +111,15 @@ pub(crate) fn refine_within<S: CellSource>(
     todo.dedup();
     let cls = Classifier { src: source, origin: oct.origin, h: oct.h };
     let levels = levels.max(1);
+    let timed_out = AtomicBool::new(false);
     let parts: Vec<Vec<(Leaf, Vec<u32>)>> = {
         let oct_ref: &Octree = oct;
         todo.par_iter()
             .map(|&t| {
+                if timed_out.load(Ordering::Relaxed) || crate::deadline::passed() {
+                    timed_out.store(true, Ordering::Relaxed);
+                    return Vec::new();
+                }
                 let leaf = oct_ref.leaves[t];
                 let s = leaf.cand_start as usize;
                 let cand = &oct_ref.cands[s..s + leaf.cand_len as usize];
@@ -122,6 +129,9 @@ pub(crate) fn refine_within<S: CellSource>(
             })
             .collect()
     };
+    if timed_out.load(Ordering::Relaxed) {
+        return Err(CoreError::TimeLimit { during: "roadmap refinement".into() });
+    }
     let created: usize = parts.iter().map(|p| p.len()).sum();
     if oct.leaves.len() - todo.len() + created > max_leaves {
         return Err(CoreError::ResourceLimit { budget: max_leaves, cell_size: oct.h, detail: "roadmap leaves during refinement".into() });
