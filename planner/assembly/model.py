@@ -154,7 +154,7 @@ class AssemblyResult:
             groups = "".join(f"; {s.part} is put together first: {' -> '.join(inner_order(s))}"
                              for s in self.removal if s.members)
             return f"assembly order: {' -> '.join(self.order)}{groups}"
-        how = "proved" if self.proved else "not proved: some planner gave up"
+        how = self._how_proved()
         text = f"no sequence: interlocked parts {', '.join(self.interlocked)} ({how})"
         together = [s for s in self.removal if set(self.interlocked) <= set(s.members)]
         if together:
@@ -163,6 +163,18 @@ class AssemblyResult:
         if others:
             text += f"; also stuck: {', '.join(others)}"
         return text
+
+    def _how_proved(self) -> str:
+        """Whether, and for which motions, the interlocked set was proved: the proofs
+        speak of motions that meet no other part, which is all a user asked when no
+        interference was allowed, and not all when one was."""
+        if not self.proved:
+            return "not proved: some planner gave up"
+        if self.assembly.interference > 0:
+            return (f"proved for motions that meet no other part; motions that penetrate "
+                    f"by up to the interference {self.assembly.interference:.3g} are not "
+                    "covered")
+        return "proved"
 
     def interference_json(self) -> dict[str, Any]:
         """The interference tolerance the user gave (``0``: none), the penetration every
