@@ -165,11 +165,11 @@ impl CellSource for OffsetSource<'_> {
     }
 
     fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {
-        let near = cand.iter().map(|&t| self.distance(t, p)).fold(f64::INFINITY, f64::min);
+        // the first record within the radius decides (the nearest one need not be found)
         if self.grow {
-            near <= self.radius || self.inside_far(p)
+            cand.iter().any(|&t| self.distance(t, p) <= self.radius) || self.inside_far(p)
         } else {
-            near >= self.radius && self.inside_far(p)
+            cand.iter().all(|&t| self.distance(t, p) >= self.radius) && self.inside_far(p)
         }
     }
 
@@ -194,7 +194,18 @@ impl CellSource for OffsetSource<'_> {
 
     fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>) {
         out.clear();
-        out.extend(cand.iter().filter_map(|&t| self.near_interval(t, a, b)));
+        for &t in cand {
+            match self.near_interval(t, a, b) {
+                // one neighbourhood holds the whole segment: so does the union
+                Some((s0, s1)) if s0 <= 0.0 && s1 >= 1.0 => {
+                    out.clear();
+                    out.push((0.0, 1.0));
+                    return;
+                }
+                Some(iv) => out.push(iv),
+                None => {}
+            }
+        }
         merge_sorted(out);
     }
 
