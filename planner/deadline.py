@@ -45,13 +45,24 @@ class Deadline:
             yield
 
 
+_active: list[float] = []
+"""The deadlines of the :func:`native_deadline` blocks the process is in, outermost first."""
+
+
 @contextmanager
 def native_deadline(at: float) -> Iterator[None]:
     """Inside, the native core's octree builds and refinements stop at ``at`` (a
-    ``time.perf_counter()`` value) with :class:`~planner.errors.TimeLimitError`; after,
-    they run without a limit again."""
-    set_time_limit(max(at - time.perf_counter(), 0.0))
+    ``time.perf_counter()`` value), or at an enclosing block's earlier deadline, with
+    :class:`~planner.errors.TimeLimitError`; after, the enclosing block's deadline holds
+    again (none outside every block)."""
+    _active.append(min([at, *_active]))
+    _set(_active[-1])
     try:
         yield
     finally:
-        set_time_limit(None)
+        _active.pop()
+        _set(_active[-1] if _active else None)
+
+
+def _set(at: float | None) -> None:
+    set_time_limit(None if at is None else max(at - time.perf_counter(), 0.0))

@@ -52,3 +52,16 @@ def test_the_deadline_is_cleared_even_when_the_step_fails():
     with pytest.raises(RuntimeError), Deadline(time.perf_counter() - 1.0).native():
         raise RuntimeError("a failing step")
     assert len(torus_space()) > 0
+
+
+def test_an_inner_block_keeps_the_earlier_deadline_and_gives_back_the_outer_one():
+    far = time.perf_counter() + 3600
+    with native_deadline(time.perf_counter() - 1.0):
+        with native_deadline(far), pytest.raises(TimeLimitError):
+            torus_space()  # the outer, earlier deadline holds inside
+        with pytest.raises(TimeLimitError):
+            torus_space()  # and again after the inner block
+    with native_deadline(far):
+        with native_deadline(time.perf_counter() - 1.0), pytest.raises(TimeLimitError):
+            torus_space()
+        assert len(torus_space()) > 0  # the outer, far deadline is back
