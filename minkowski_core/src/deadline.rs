@@ -3,7 +3,9 @@
 //!
 //! The caller (the planner) sets it before a step that must end by its time limit and
 //! clears it after ([`set_deadline`]); one value per process, like the memory budget of
-//! the candidate records, since the work it bounds runs one C-space at a time.
+//! the candidate records: it bounds every build in the process while it is set, so one
+//! plan at a time may set it (the planner's own use; batch runs give each task its own
+//! process).
 //!
 //! [`CoreError::TimeLimit`]: crate::error::CoreError::TimeLimit
 
@@ -27,34 +29,46 @@ fn now_ns() -> u64 {
     u64::try_from(epoch().elapsed().as_nanos()).unwrap_or(NONE - 1)
 }
 
-/// Stop the work `after` from now (`None`: never); a negative or zero `after` stops it at
-/// once.
+/// Stop the work `after` from now (`None`: never); a zero `after` stops it at once.
 pub fn set_deadline(after: Option<Duration>) {
-    let at = after.map_or(NONE, |d| now_ns().saturating_add(u64::try_from(d.as_nanos()).unwrap_or(NONE)).min(NONE - 1));
-    DEADLINE_NS.store(at, Ordering::Relaxed);
+    DEADLINE_NS.store(deadline_at(now_ns(), after), Ordering::Relaxed);
 }
 
 /// Whether the deadline has passed.
 #[inline]
 pub fn passed() -> bool {
-    let at = DEADLINE_NS.load(Ordering::Relaxed);
-    at != NONE && now_ns() >= at
+    is_past(DEADLINE_NS.load(Ordering::Relaxed), now_ns())
+}
+
+/// The deadline `after` from `now` (nanoseconds after [`epoch`]; [`NONE`] for none).
+fn deadline_at(now: u64, after: Option<Duration>) -> u64 {
+    after.map_or(NONE, |d| now.saturating_add(u64::try_from(d.as_nanos()).unwrap_or(NONE)).min(NONE - 1))
+}
+
+/// Whether the deadline `at` has passed at `now`.
+fn is_past(at: u64, now: u64) -> bool {
+    at != NONE && now >= at
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    // the process-wide value is not set here: tests of builds run beside these
+
     #[test]
-    fn a_deadline_passes_after_its_time_and_none_never() {
-        set_deadline(Some(Duration::from_millis(30)));
-        assert!(!passed());
-        std::thread::sleep(Duration::from_millis(40));
-        assert!(passed());
-        set_deadline(None);
-        assert!(!passed());
-        set_deadline(Some(Duration::ZERO));
-        assert!(passed());
-        set_deadline(None);
+    fn a_deadline_passes_at_its_time_and_none_never() {
+        let at = deadline_at(1_000, Some(Duration::from_nanos(500)));
+        assert_eq!(at, 1_500);
+        assert!(!is_past(at, 1_499) && is_past(at, 1_500) && is_past(at, u64::MAX - 1));
+        assert!(is_past(deadline_at(1_000, Some(Duration::ZERO)), 1_000));
+        assert!(!is_past(deadline_at(1_000, None), u64::MAX - 1));
+    }
+
+    #[test]
+    fn a_deadline_far_away_does_not_wrap_around() {
+        let at = deadline_at(u64::MAX - 10, Some(Duration::from_secs(u64::MAX)));
+        assert_eq!(at, NONE - 1);
+        assert!(!is_past(at, u64::MAX - 10));
     }
 }

@@ -11,7 +11,7 @@ use crate::union::{approximate_solid, approximate_union, UnionParams, UnionResul
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
@@ -848,7 +848,8 @@ impl PyCSpace {
 
     /// Split the MIXED leaves above the floor among `leaves` (with `ring`, also their MIXED
     /// neighbours) `levels` times. Returns dict `refined`, `created`, `by_label` (3 counts).
-    /// Raises ResourceLimitError beyond the leaf budget (nothing changed then).
+    /// Raises ResourceLimitError beyond the leaf budget, TimeLimitError when the time limit
+    /// (set_time_limit) passed (nothing changed then).
     #[pyo3(signature = (leaves, ring=true, levels=1))]
     fn refine<'py>(&mut self, py: Python<'py>, leaves: Vec<usize>, ring: bool, levels: u8) -> PyResult<Bound<'py, PyDict>> {
         let max = self.max_leaves;
@@ -947,5 +948,63 @@ fn certificate_dict<'py>(py: Python<'py>, cs: &crate::roadmap::CSpace, c: &crate
         })
         .collect();
     d.set_item("wall_boxes", numpy::ndarray::Array3::from_shape_vec((c.walls.len(), 2, 3), flat).expect("n x 2 x 3").into_pyarray(py))?;
+    let witnesses = PyList::empty(py);
+    for w in &c.witnesses {
+        match w {
+            None => witnesses.append(py.None())?,
+            Some(w) => witnesses.append(wall_witness_list(py, w)?)?,
+        }
+    }
+    d.set_item("wall_witnesses", witnesses)?;
     Ok(d)
+}
+
+/// A wall leaf's witness as a list of dicts, one per part of its box, in the robot's
+/// terms (the C-space's `B` is the robot reflected): `kind` "triangles" (at every
+/// translation `t` of `box`, `robot_triangle + t` meets `obstacle_triangle`),
+/// "robot_vertex" (`vertex + t` lies in the solid obstacle), "obstacle_vertex" (`vertex`
+/// lies in the solid robot placed at `t`), "bounds" (`side`: beyond the bounds) or
+/// "primitive" (a convex primitive of the decomposition holds the box).
+fn wall_witness_list<'py>(py: Python<'py>, w: &crate::roadmap::WallWitness) -> PyResult<Bound<'py, PyList>> {
+    use crate::exact::BoxWitness;
+    let out = PyList::empty(py);
+    let parts = match w {
+        crate::roadmap::WallWitness::Primitive(k) => {
+            let d = PyDict::new(py);
+            d.set_item("kind", "primitive")?;
+            d.set_item("primitive", *k)?;
+            out.append(d)?;
+            return Ok(out);
+        }
+        crate::roadmap::WallWitness::Exact(parts) => parts,
+    };
+    let corners = |p: &[Vec3; 3], sign: f64| -> Vec<[f64; 3]> { [p[0], p[2], p[1]].iter().map(|v| (*v * sign).to_array()).collect() };
+    for (bx, why) in parts {
+        let d = PyDict::new(py);
+        d.set_item("box", vec![bx.min.to_array(), bx.max.to_array()])?;
+        match why {
+            BoxWitness::Piece { k, a, b, .. } => {
+                d.set_item("kind", "triangles")?;
+                d.set_item("obstacle", *k)?;
+                d.set_item("obstacle_triangle", vec![a[0].to_array(), a[1].to_array(), a[2].to_array()])?;
+                d.set_item("robot_triangle", corners(b, -1.0))?;
+            }
+            BoxWitness::VertexOfB { k, v } => {
+                d.set_item("kind", "robot_vertex")?;
+                d.set_item("obstacle", *k)?;
+                d.set_item("vertex", (-*v).to_array())?;
+            }
+            BoxWitness::VertexOfA { k, v } => {
+                d.set_item("kind", "obstacle_vertex")?;
+                d.set_item("obstacle", *k)?;
+                d.set_item("vertex", v.to_array())?;
+            }
+            BoxWitness::Wall { side } => {
+                d.set_item("kind", "bounds")?;
+                d.set_item("side", *side)?;
+            }
+        }
+        out.append(d)?;
+    }
+    Ok(out)
 }

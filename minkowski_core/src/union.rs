@@ -214,8 +214,9 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         let oct = match built {
             Ok(o) => o,
             Err(e) => match best {
-                Some(b) => return Ok(b), // the finer grid does not fit: keep what we have
-                None => return Err(e),
+                // the finer grid does not fit: keep what we have (a time limit is no fit)
+                Some(b) if !matches!(e, CoreError::TimeLimit { .. }) => return Ok(b),
+                _ => return Err(e),
             },
         };
         t_oct += t0.elapsed().as_secs_f64();

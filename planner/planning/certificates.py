@@ -1,6 +1,20 @@
 """No-path certificates as ``report.json`` and ``certificate.json`` keep them: the
 walled-off component of EMPTY and MIXED leaves and the FULL leaves around it, each
-re-verified by the core and named by the obstacle (or the bounds) that blocks it."""
+re-verified by the core and named by the obstacle (or the bounds) that blocks it.
+
+Each wall cell carries its *witnesses*, one per part of its box (the core splits a box
+into octants where no single witness holds all of it), so that a check that trusts
+nothing of minkplan can confirm it, a robot translation ``t`` of the part at a time:
+
+- ``"triangles"``: ``robot_triangle + t`` meets ``obstacle_triangle`` (the robot's
+  triangle in its own frame; the set of such ``t`` is convex, so the part's eight corners
+  decide);
+- ``"robot_vertex"``: ``vertex + t`` lies inside the solid ``obstacle``;
+- ``"obstacle_vertex"``: ``vertex`` (the obstacle's) lies inside the solid robot placed
+  at ``t``;
+- ``"bounds"``: the part lies beyond the bounds' ``side`` (``2 · axis + upper``);
+- ``"primitive"``: (decomposition source) the convex primitive holds the box.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +25,15 @@ from typing import Any
 import numpy as np
 
 __all__ = ["certificate_document"]
+
+
+def _named(witnesses: list[dict[str, Any]] | None,
+           obstacle_of: Callable[[int], str]) -> list[dict[str, Any]] | None:
+    """The core's witnesses of one wall cell, each obstacle index replaced by its name."""
+    if witnesses is None:
+        return None
+    return [{**w, "obstacle": obstacle_of(int(w["obstacle"]))} if "obstacle" in w else w
+            for w in witnesses]
 
 
 def certificate_document(cs, raw: dict[str, Any], ends: dict[str, np.ndarray], *, exact: bool,
@@ -44,8 +67,10 @@ def certificate_document(cs, raw: dict[str, Any], ends: dict[str, np.ndarray], *
         "floor": cs.floor,
         "contact": "touching counts as collision (contact tolerance 0 for the proof)",
         "walls": [
-            {"leaf": int(leaf), "box": box.tolist(), "primitive": int(p), "obstacle": name}
-            for leaf, box, p, name in zip(leaves, boxes, prims, obstacles, strict=True)
+            {"leaf": int(leaf), "box": box.tolist(), "primitive": int(p), "obstacle": name,
+             "witnesses": _named(why, obstacle_of)}
+            for leaf, box, p, name, why in zip(leaves, boxes, prims, obstacles,
+                                               raw["wall_witnesses"], strict=True)
         ],
         "component": {"leaves": component, "boxes": comp_boxes.tolist()},
     }

@@ -58,6 +58,7 @@ use convolution::{convolution_scan, planar_regions};
 pub use depth::{facet_nearest, Depth};
 pub use mesh::{MeshNode, Tri, TriMesh};
 pub use piece::{pair_box_relation, pair_contains_box, pair_contains_point, BoxRelation, Piece};
+pub use verify::BoxWitness;
 
 use crate::bvh::Bvh;
 use crate::error::{CoreError, CoreResult};

@@ -31,21 +31,79 @@ const NESTED_NODES: usize = 512;
 /// touches an inside voxel of its grid ([`InsideGrid::box_inside`]).
 const NESTED_QUERIES: usize = 64;
 
+/// Why one box lies in the C-obstacle `A_k ⊕ B`, in the parts' own coordinates: what a
+/// check that trusts nothing of the core needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BoxWitness {
+    /// Inside the piece `a ⊕ b` of two triangles: at every `p` of the box, `a` and
+    /// `p − b` meet.
+    Piece {
+        /// Obstacle.
+        k: usize,
+        /// Its triangle.
+        i: usize,
+        /// The triangle of `B`.
+        j: usize,
+        /// Corners of the obstacle's triangle.
+        a: [Vec3; 3],
+        /// Corners of `B`'s triangle.
+        b: [Vec3; 3],
+    },
+    /// At every `p` of the box, the vertex `p − v` of `p − B` lies in the solid `A_k`
+    /// (the box shifted by `−v` does).
+    VertexOfB {
+        /// Obstacle.
+        k: usize,
+        /// The vertex of `B`.
+        v: Vec3,
+    },
+    /// At every `p` of the box, the vertex `v` of `A_k` lies in the solid `p − B` (the
+    /// box shifted by `−v` lies in `B`).
+    VertexOfA {
+        /// Obstacle.
+        k: usize,
+        /// The obstacle's vertex.
+        v: Vec3,
+    },
+    /// Beyond the wall `side` (= 2 · axis + upper).
+    Wall {
+        /// Side.
+        side: usize,
+    },
+}
+
+impl BoxWitness {
+    /// The witness without its coordinates.
+    pub fn kind(&self) -> Witness {
+        match *self {
+            BoxWitness::Piece { k, i, j, .. } => Witness::Piece { k, i, j },
+            BoxWitness::VertexOfB { k, .. } | BoxWitness::VertexOfA { k, .. } => Witness::Nested { k },
+            BoxWitness::Wall { side } => Witness::Wall { side },
+        }
+    }
+}
+
 impl ExactSource {
     /// Why every point of the closed box `cell` lies in the (grown) solid, shown from the
     /// triangles alone (see the module documentation), or `None` when that cannot be shown
     /// within `budget` box tests (decremented) and a few octant splits. The witness is that
     /// of the first part shown.
     pub fn verify_box(&self, cell: &Aabb, budget: &mut usize) -> Option<Witness> {
+        self.verify_box_witnesses(cell, budget).map(|parts| parts[0].1.kind())
+    }
+
+    /// [`ExactSource::verify_box`] with the witness of every part the box was split into:
+    /// `(part, witness)`, the parts covering the box.
+    pub fn verify_box_witnesses(&self, cell: &Aabb, budget: &mut usize) -> Option<Vec<(Aabb, BoxWitness)>> {
         let mut stack = vec![(*cell, 0u32)];
-        let mut first = None;
+        let mut shown = Vec::new();
         while let Some((bx, depth)) = stack.pop() {
             if *budget == 0 {
                 return None;
             }
             *budget -= 1;
-            if let Some(w) = self.box_shown(&bx) {
-                first.get_or_insert(w);
+            if let Some(w) = self.box_witness_of(&bx) {
+                shown.push((bx, w));
                 continue;
             }
             if depth == MAX_SPLITS {
@@ -53,26 +111,35 @@ impl ExactSource {
             }
             stack.extend(octants(&bx).map(|c| (c, depth + 1)));
         }
-        first
+        Some(shown)
     }
 
     /// A wall slab, one piece, or one vertex nested for the whole box.
     pub(super) fn box_shown(&self, bx: &Aabb) -> Option<Witness> {
+        self.box_witness_of(bx).map(|w| w.kind())
+    }
+
+    /// [`ExactSource::box_shown`] with the witness's coordinates.
+    fn box_witness_of(&self, bx: &Aabb) -> Option<BoxWitness> {
         if self.walls.is_some() {
             if let Some(side) = (0..6).find(|&side| self.wall_box(side, bx).0) {
-                return Some(Witness::Wall { side });
+                return Some(BoxWitness::Wall { side });
             }
         }
-        if let Some(w) = self.piece_contains_box(bx) {
-            return Some(w);
+        if let Some(Witness::Piece { k, i, j }) = self.piece_contains_box(bx) {
+            return Some(BoxWitness::Piece { k, i, j, a: self.obstacles[k].tris[i].p, b: self.b.tris[j].p });
         }
-        (0..self.obstacles.len()).find(|&k| self.nested_exactly(k, bx)).map(|k| Witness::Nested { k })
+        (0..self.obstacles.len()).find_map(|k| self.nested_exactly(k, bx))
     }
 
     /// [`ExactSource::vertex_nested`], its vertex's box then tested exactly (the grid's
     /// answer re-verified: a certificate does not rest on the grid).
-    fn nested_exactly(&self, k: usize, bx: &Aabb) -> bool {
-        self.nested_vertex(k, bx).is_some_and(|(solid, v)| solid.contains_box(&shifted(bx, v)))
+    fn nested_exactly(&self, k: usize, bx: &Aabb) -> Option<BoxWitness> {
+        let (solid, v) = self.nested_vertex(k, bx)?;
+        if !solid.contains_box(&shifted(bx, v)) {
+            return None;
+        }
+        Some(if std::ptr::eq(solid, &self.obstacles[k]) { BoxWitness::VertexOfB { k, v } } else { BoxWitness::VertexOfA { k, v } })
     }
 
     /// Whether at every `p` of the box a vertex of `p − B` lies in the solid `A_k` (the box

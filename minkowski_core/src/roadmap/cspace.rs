@@ -11,7 +11,7 @@ use super::index::LeafIndex;
 use super::refine::{refine, rescale, RefineStats};
 use super::search::{astar, SearchResult};
 use crate::error::{CoreError, CoreResult};
-use crate::exact::{ExactSource, TriMesh, Witness};
+use crate::exact::{BoxWitness, ExactSource, TriMesh, Witness};
 use crate::math::{Aabb, Vec3};
 use crate::minkowski::PolytopeSet;
 use crate::octree::{CellSource, Label, LevelCounts, Octree, MAX_DEPTH};
@@ -47,10 +47,24 @@ pub struct Certificate {
     /// source: obstacle, or `n_obstacle + side` for a wall) that [`CSpace::verify_leaf`]
     /// showed to contain it, `usize::MAX` where that could not be shown.
     pub walls: Vec<(usize, usize)>,
+    /// Per wall leaf (as in `walls`), why it is blocked (`None` where that could not be
+    /// shown): what a check that trusts nothing of the core needs.
+    pub witnesses: Vec<Option<WallWitness>>,
     /// Whether every wall leaf was shown to be blocked (the certificate holds).
     pub verified: bool,
     /// Number of components of the non-FULL leaves.
     pub n_components: usize,
+}
+
+/// Why a FULL leaf is blocked.
+#[derive(Clone, Debug, PartialEq)]
+pub enum WallWitness {
+    /// The exact source's witnesses of the parts the leaf's box was split into (their
+    /// union is the box), in the coordinates of the obstacles and the reflected robot.
+    Exact(Vec<(Aabb, BoxWitness)>),
+    /// The convex primitive (or wall, `n_obstacle + side`) of the decomposition that
+    /// contains the leaf's box.
+    Primitive(usize),
 }
 
 /// Box tests [`CSpace::certificate`] spends at most re-verifying the wall leaves of the
@@ -459,7 +473,9 @@ impl CSpace {
     /// face neighbours above the floor) `levels` times.
     ///
     /// # Errors
-    /// [`CoreError::ResourceLimit`] beyond `max_leaves` leaves.
+    /// [`CoreError::ResourceLimit`] beyond `max_leaves` leaves,
+    /// [`CoreError::RecordLimit`] beyond the records' budget, [`CoreError::TimeLimit`]
+    /// when the time limit ([`crate::deadline`]) passed (nothing is changed then).
     pub fn refine(&mut self, leaves: &[usize], ring: bool, levels: u8, max_leaves: usize) -> CoreResult<RefineStats> {
         let refinable = |i: usize| self.oct.leaves[i].label == Label::Mixed && self.oct.leaves[i].level > 0;
         let mut targets: BTreeSet<usize> = leaves.iter().copied().filter(|&i| i < self.oct.leaves.len() && refinable(i)).collect();
@@ -518,12 +534,21 @@ impl CSpace {
     /// pairs and nesting, never the reduced convolution). `budget`: box tests left for the
     /// exact source.
     pub fn verify_leaf(&self, i: usize, budget: &mut usize) -> Option<usize> {
+        self.verify_leaf_witness(i, budget).map(|(prim, _)| prim)
+    }
+
+    /// [`CSpace::verify_leaf`] with the witness: `(primitive, why)`.
+    pub fn verify_leaf_witness(&self, i: usize, budget: &mut usize) -> Option<(usize, WallWitness)> {
         match &self.obstacles {
-            Obstacles::Union(_) => self.primitive_containing_leaf(i),
-            Obstacles::Exact(e) => e.verify_box(&self.oct.cell_box(&self.oct.leaves[i]), budget).map(|w| match w {
-                Witness::Piece { k, .. } | Witness::Nested { k } => k,
-                Witness::Wall { side } => self.n_obstacle + side,
-            }),
+            Obstacles::Union(_) => self.primitive_containing_leaf(i).map(|k| (k, WallWitness::Primitive(k))),
+            Obstacles::Exact(e) => {
+                let parts = e.verify_box_witnesses(&self.oct.cell_box(&self.oct.leaves[i]), budget)?;
+                let prim = match parts[0].1.kind() {
+                    Witness::Piece { k, .. } | Witness::Nested { k } => k,
+                    Witness::Wall { side } => self.n_obstacle + side,
+                };
+                Some((prim, WallWitness::Exact(parts)))
+            }
         }
     }
 
@@ -560,8 +585,8 @@ impl CSpace {
                 walls.insert(leaf);
             }
         }
-        let (walls, verified) = self.verified_walls(walls);
-        Some(Certificate { labels: labels.clone(), goal_component_size: mg.len(), start_component: ms, walls_around_start: around_start, walls, verified, n_components })
+        let (walls, witnesses, verified) = self.verified_walls(walls);
+        Some(Certificate { labels: labels.clone(), goal_component_size: mg.len(), start_component: ms, walls_around_start: around_start, walls, witnesses, verified, n_components })
     }
 
     /// The component of the non-FULL leaves that holds `start` and the FULL leaves around
@@ -581,8 +606,8 @@ impl CSpace {
         let labels = components(leaves.len(), &pairs, free);
         let n_components = labels.iter().filter(|&&c| c != u32::MAX).max().map_or(0, |&m| m as usize + 1);
         let members: Vec<usize> = (0..leaves.len()).filter(|&i| labels[i] == labels[s]).collect();
-        let (walls, verified) = self.verified_walls(self.full_neighbours(&members));
-        Some(Certificate { labels, goal_component_size: 0, start_component: members, walls_around_start: true, walls, verified, n_components })
+        let (walls, witnesses, verified) = self.verified_walls(self.full_neighbours(&members));
+        Some(Certificate { labels, goal_component_size: 0, start_component: members, walls_around_start: true, walls, witnesses, verified, n_components })
     }
 
     /// FULL leaves face-adjacent to a leaf of `component`.
@@ -600,11 +625,17 @@ impl CSpace {
 
     /// Each wall leaf with the primitive shown to contain it (`usize::MAX` where none
     /// was), and whether all were shown.
-    fn verified_walls(&self, walls: BTreeSet<usize>) -> (Vec<(usize, usize)>, bool) {
+    fn verified_walls(&self, walls: BTreeSet<usize>) -> (Vec<(usize, usize)>, Vec<Option<WallWitness>>, bool) {
         let mut budget = VERIFY_BUDGET;
-        let walls: Vec<(usize, usize)> = walls.into_iter().map(|w| (w, self.verify_leaf(w, &mut budget).unwrap_or(usize::MAX))).collect();
-        let verified = walls.iter().all(|w| w.1 != usize::MAX);
-        (walls, verified)
+        let (walls, witnesses): (Vec<(usize, usize)>, Vec<Option<WallWitness>>) = walls
+            .into_iter()
+            .map(|w| match self.verify_leaf_witness(w, &mut budget) {
+                Some((prim, why)) => ((w, prim), Some(why)),
+                None => ((w, usize::MAX), None),
+            })
+            .unzip();
+        let verified = witnesses.iter().all(Option::is_some);
+        (walls, witnesses, verified)
     }
 }
 

@@ -33,7 +33,7 @@ mod roadmap_tests;
 
 pub use adjacency::{face_adjacency, neighbors, shared_face, Adjacency, Neighbor};
 pub use components::components;
-pub use cspace::{Attachment, CSpace, Certificate, Obstacles};
+pub use cspace::{Attachment, CSpace, Certificate, Obstacles, WallWitness};
 pub use index::{cell_key, LeafIndex};
 #[cfg(test)]
 pub(crate) use refine::refine_within;
