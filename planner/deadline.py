@@ -6,6 +6,10 @@ octree builds and refinements, which can run for minutes on large triangle soups
 stopped from inside by :meth:`Deadline.native` (they raise
 :class:`~planner.errors.TimeLimitError` and change nothing), so a plan ends near its
 limit instead of after the step that was running.
+
+The native deadline is one value per process (like the candidate records' memory
+budget): while a block sets it, it bounds every build in the process, so one plan at a
+time may use it — as the planner does (batch runs give each task its own process).
 """
 
 from __future__ import annotations
@@ -55,8 +59,9 @@ def native_deadline(at: float) -> Iterator[None]:
     ``time.perf_counter()`` value), or at an enclosing block's earlier deadline, with
     :class:`~planner.errors.TimeLimitError`; after, the enclosing block's deadline holds
     again (none outside every block)."""
-    _active.append(min([at, *_active]))
-    _set(_active[-1])
+    effective = min([at, *_active])
+    _set(effective)
+    _active.append(effective)
     try:
         yield
     finally:

@@ -418,8 +418,24 @@ def test_a_key_omplapp_does_not_define_is_noted_as_ignored(tmp_path):
     path = window_copy(tmp_path, lambda t: t.replace("[benchmark]",
                                                      "colour = blue\n\n[benchmark]"))
     notes = load_omplapp(path).notes
-    assert "keys OMPL.app does not define, ignored: problem.colour" in notes
+    assert "sections and keys OMPL.app does not define, ignored: problem.colour" in notes
     assert not any("ignored" in note for note in load_omplapp(WINDOW).notes)
+    # OMPL.app's benchmark options are known keys, not noted
+    path = window_copy(tmp_path, lambda t: t.replace(
+        "[benchmark]", "threshold = 0.1\nsolution_length = 10\n\n[extra]\na = 1\n\n[benchmark]"))
+    assert load_omplapp(path).notes[0] == ("sections and keys OMPL.app does not define, "
+                                           "ignored: [extra]")
+
+
+def test_a_misspelled_section_is_refused_and_a_repeated_key_noted(tmp_path):
+    path = window_copy(tmp_path, lambda t: t.replace("[benchmark]", "[benchmrk]"))
+    with pytest.raises(ScenarioError, match=r"window.cfg:\d+: \[benchmrk\]: unknown "
+                                            r"section; did you mean \[benchmark\]\?"):
+        load_omplapp(path)
+    path = window_copy(tmp_path, lambda t: t.replace("goal.z = -80", "goal.z = -70\ngoal.z = -80"))
+    scenario = load_omplapp(path)
+    assert scenario.goal[2] == -80  # the last one counts
+    assert any("more than once in [problem]" in n and "goal.z" in n for n in scenario.notes)
 
 
 def test_a_kinodynamic_problem_is_refused(tmp_path):

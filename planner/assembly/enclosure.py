@@ -31,7 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from planner.errors import ResourceLimitError
+from planner.deadline import native_deadline
+from planner.errors import ResourceLimitError, TimeLimitError
 from planner.planning.local_proof import leaf_boxes, wall_off
 from planner.planning.slabs import subsets
 from planner.problem import Part
@@ -151,21 +152,18 @@ def _enclosed_in_box(source: Source, part: Part, obstacles: list[Part], start: n
     inside the box (the proof) or cannot be (``None``)."""
     bounds = np.stack([start - half, start + half])
     side = 2.0 * half
-    try:
-        cs = source.cspace(obstacles, part, bounds, side / FLOOR_DIVISIONS,
-                           side / COARSE_DIVISIONS)
-    except ResourceLimitError as error:
-        log.info("enclosure box %.3g: %s", half, error)
-        return None
-
     def mixed_inside_box(cs, leaves, members):
         inside = _inside_box(cs, leaves, members, bounds)
         return [int(i) for i in members[inside & (leaves["label"][members] == _MIXED)]]
 
     try:
-        enclosure, rounds = wall_off(cs, start, bounds_faces=[False] * 6, deadline=deadline,
-                                     select=mixed_inside_box, max_rounds=MAX_ROUNDS)
-    except ResourceLimitError as error:
+        with native_deadline(deadline):  # the core's builds stop at it too
+            cs = source.cspace(obstacles, part, bounds, side / FLOOR_DIVISIONS,
+                               side / COARSE_DIVISIONS)
+            enclosure, rounds = wall_off(cs, start, bounds_faces=[False] * 6,
+                                         deadline=deadline, select=mixed_inside_box,
+                                         max_rounds=MAX_ROUNDS)
+    except (ResourceLimitError, TimeLimitError) as error:
         log.info("enclosure box %.3g: %s", half, error)
         return None
     if enclosure is None:

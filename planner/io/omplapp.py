@@ -26,16 +26,20 @@ throughout (``hold_orientation="start"`` or ``"goal"``, the CLI's
 that offers the reading. ``Scenario.notes`` records every decision of the import.
 
 Duplicate keys are accepted as OMPL.app accepts them (the last one counts): its own
-``cubicles_opt.cfg`` lists ``aps=`` twice under ``[planner]``. A key of ``[problem]`` or
-``[benchmark]`` that OMPL.app does not define is an error when it is close to one it does
-(``volume.mx.z``, ``time_limt``: a typo that would silently change the problem), and is
-noted as ignored otherwise. ``control`` (a kinodynamic system) is refused.
+``cubicles_opt.cfg`` lists ``aps=`` twice under ``[planner]``; one repeated in
+``[problem]`` is noted (and logged as a warning). A section, or a key of ``[problem]`` or
+``[benchmark]``, that OMPL.app does not define is an error when it is close to one it
+does (``[benchmrk]``, ``volume.mx.z``, ``time_limt``: a typo that would silently change
+the problem), and is noted and logged as ignored otherwise (OMPL.app passes other
+``[problem]`` keys to its planners as parameters; minkplan has none to give them to).
+``control`` (a kinodynamic system) is refused.
 """
 
 from __future__ import annotations
 
 import configparser
 import difflib
+import logging
 import math
 import os
 import re
@@ -76,11 +80,15 @@ __all__ = [
 
 # ------------------------------------------------------------------------------ config
 
+log = logging.getLogger(__name__)
+
 _POSE_KEYS = ("x", "y", "z", "theta", "axis.x", "axis.y", "axis.z")
-#: The keys OMPL.app's documentation defines, per section it reads.
-KNOWN_KEYS = {
+_KNOWN_SECTIONS = ("problem", "benchmark", "planner")
+#: The keys OMPL.app defines, per section whose keys it checks (its documentation and its
+#: benchmark program's options).
+_KNOWN_KEYS = {
     "problem": ("name", "robot", "world", "objective", "objective.threshold", "control",
-                "sampler",
+                "sampler", "threshold", "solution_length",
                 *(f"{end}.{key}" for end in ("start", "goal") for key in _POSE_KEYS),
                 *(f"volume.{end}.{axis}" for end in ("min", "max") for axis in "xyz")),
     "benchmark": ("time_limit", "mem_limit", "run_count", "output", "save_paths",
@@ -88,6 +96,30 @@ KNOWN_KEYS = {
 }
 #: How alike an unknown key must be to a known one to be taken for its typo.
 _TYPO_CUTOFF = 0.8
+
+
+def _section_line(text: str, section: str) -> int | None:
+    pattern = re.compile(rf"^\s*\[\s*{re.escape(section)}\s*\]", re.IGNORECASE)
+    for number, line in enumerate(text.splitlines(), start=1):
+        if pattern.match(line):
+            return number
+    return None
+
+
+def _repeated_problem_keys(text: str) -> list[str]:
+    """Keys given more than once in ``[problem]`` (the last one counts)."""
+    seen: dict[str, int] = {}
+    section = None
+    for line in text.splitlines():
+        header = re.match(r"^\s*\[\s*([^\]]+?)\s*\]", line)
+        if header:
+            section = header.group(1).lower()
+            continue
+        entry = re.match(r"^\s*([^#;\s=:][^=:]*?)\s*[=:]", line)
+        if section == "problem" and entry:
+            key = entry.group(1).lower()
+            seen[key] = seen.get(key, 0) + 1
+    return [key for key, count in seen.items() if count > 1]
 
 
 def _cfg_line(text: str, key: str) -> int | None:
@@ -126,9 +158,21 @@ class _Cfg:
         self.parser = parser
 
     def unknown_keys(self) -> list[str]:
-        """Keys OMPL.app does not define, as ``section.key``; raises for a likely typo."""
+        """Sections and keys OMPL.app does not define, as ``[section]`` and
+        ``section.key``; raises for a likely typo of one it does."""
         unknown = []
-        for section, known in KNOWN_KEYS.items():
+        for section in self.parser.sections():
+            if section in _KNOWN_SECTIONS:
+                continue
+            close = difflib.get_close_matches(section, _KNOWN_SECTIONS, n=1,
+                                              cutoff=_TYPO_CUTOFF)
+            if close:
+                line = _section_line(self.text, section)
+                where = self.label if line is None else f"{self.label}:{line}"
+                raise ScenarioError(f"{where}: [{section}]: unknown section; did you mean "
+                                    f"[{close[0]}]?", field=section, line=line)
+            unknown.append(f"[{section}]")
+        for section, known in _KNOWN_KEYS.items():
             if not self.parser.has_section(section):
                 continue
             for key in self.parser[section]:
@@ -229,7 +273,14 @@ def load_omplapp(cfg_path: str | os.PathLike[str], *,
     goal = cfg.vector("goal")
     notes: list[str] = []
     if ignored:
-        notes.append(f"keys OMPL.app does not define, ignored: {', '.join(ignored)}")
+        notes.append(f"sections and keys OMPL.app does not define, ignored: "
+                     f"{', '.join(ignored)}")
+    repeated = _repeated_problem_keys(cfg.text)
+    if repeated:
+        notes.append(f"keys given more than once in [problem] (the last one counts, as "
+                     f"OMPL.app reads them): {', '.join(repeated)}")
+    for note in notes:
+        log.warning("%s: %s", path, note)
     orientation = _held_orientation(cfg, hold_orientation, notes)
     robot_file = cfg.mesh_path("robot", base)
     world_file = cfg.mesh_path("world", base)

@@ -121,7 +121,7 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
     tried = attempts if attempts is not None else []
     lo, hi = (np.asarray(b, dtype=np.float64) for b in scenario.bounds)
     ends = {"start": np.asarray(scenario.start, float), "goal": np.asarray(scenario.goal, float)}
-    point, other = ends[which], ends["goal" if which == "start" else "start"]
+    point, other = ends[which], ends[_other(which)]
     step = float(np.linalg.norm(hi - lo)) / FLOOD_DIVISIONS
     extent = _flood(checker, point, other, lo, hi, step, deadline)
     if extent is None:
@@ -145,6 +145,7 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
                                                       "after the time limit", t_subset))
             break
         whole = robot is scenario.robot
+        reached_before, deadline.reached = deadline.reached, False
         try:
             with deadline.native():
                 cs = source.cspace(scenario.obstacles, robot, box, side / FLOOR_DIVISIONS,
@@ -154,6 +155,7 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
                 raw, rounds = wall_off(cs, point, bounds_faces=bounds_faces,
                                        deadline=deadline, select=inside_obstacles)
         except ResourceLimitError:
+            deadline.reached |= reached_before
             tried.append(_attempt(which, box, subset, "over the memory limit", t_subset))
             if whole:
                 raise
@@ -162,8 +164,8 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
             deadline.reached = True
             tried.append(_attempt(which, box, subset, "stopped by the time limit", t_subset))
             break
-        outcome = ("proved" if raw is not None else
-                   "stopped by the time limit" if deadline.reached else "not walled off")
+        outcome = _outcome(raw is not None, rounds, deadline.reached)
+        deadline.reached |= reached_before
         tried.append(_attempt(which, box, subset, outcome, t_subset, rounds=rounds))
         if raw is not None:
             summary = {"end": which, "box": box.tolist(), "flood_step": step,
@@ -171,6 +173,17 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
                        "seconds": time.perf_counter() - t0}
             return LocalProof(which, cs, raw, summary)
     return None
+
+
+def _outcome(proved: bool, rounds: int, out_of_time: bool) -> str:
+    """How one robot subset's proof ended, in words (for ``report.json``)."""
+    if proved:
+        return "proved"
+    if out_of_time:
+        return "not walled off: its next refinement round would end after the time limit"
+    if rounds >= MAX_ROUNDS:
+        return f"not walled off within {MAX_ROUNDS} refinement rounds"
+    return "not walled off: nothing left to refine"
 
 
 def _other(which: str) -> str:

@@ -237,6 +237,8 @@ class OctreePlanner:
         self.report["local_proof"] = {"proved": False, "attempts": attempts}
         for which in ("start", "goal"):
             if deadline.would_pass():
+                attempts.append({"end": which, "outcome": "not started: the time limit "
+                                                          "passed", "seconds": 0.0})
                 break
             self.bar.show(f"minkplan: a local proof at the {which}")
             try:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from planner import budget
-from planner.errors import ResourceLimitError
+from planner.errors import ResourceLimitError, TimeLimitError
 from planner.progress import StatusLine
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
 
@@ -164,8 +164,14 @@ def search_without_margin(build: Callable[[float], Any], first: SearchResult, ma
             f"time limit reached: no path keeps the clearance margin {margin:.4g}, and "
             f"there was no time left to search without it"), None
     log.info("no path with margin %.3g; checking without the margin", margin)
-    space = build(0.0)
-    second = search(space, ends["start"], ends["goal"], run)
+    try:
+        space = build(0.0)
+        second = search(space, ends["start"], ends["goal"], run)
+    except TimeLimitError:
+        return SearchResult(
+            NOT_FOUND, "time_limit",
+            f"time limit reached: no path keeps the clearance margin {margin:.4g}, and "
+            f"the search without it did not end in time"), None
     if second.status == FOUND:
         return SearchResult(
             NOT_FOUND, "clearance",

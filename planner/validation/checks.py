@@ -30,6 +30,9 @@ class CheckerTolerances:
             directions or depth estimates.
         witness_fractions: lengths, as fractions of ``delta``, of the witness
             translations tried to certify a configuration in tolerated contact.
+        witness_ladder_steps: also tried, the lengths ``2**(k / steps)`` between the
+            smallest fraction of ``delta`` and ``delta`` (a ladder fixed in length, so
+            that a larger tolerance accepts what a smaller one did); 0: none.
     """
 
     contact_floor_rel: float = 1e-9
@@ -38,6 +41,7 @@ class CheckerTolerances:
     max_checks_per_segment: int = 1_000_000
     max_contacts: int = 64
     witness_fractions: tuple[float, ...] = (0.25, 0.5, 1.0)
+    witness_ladder_steps: int = 8
 
 
 @dataclass(frozen=True)

@@ -294,13 +294,30 @@ class FclChecker:
         if delta <= 0.0:
             return None
         unique = self._witness_directions(t) if directions is None else directions
-        for fraction in sorted(self.tolerances.witness_fractions):
-            length = fraction * delta
+        for length in self._witness_lengths(delta):
             for direction in unique:
                 d_u = self._free_distance(t + length * direction)
                 if d_u is not None:  # the first (shortest) witness found
                     return max(0.0, length - d_u)
         return None
+
+    def _witness_lengths(self, delta: float) -> list[float]:
+        """The witness lengths tried under tolerance ``delta``, shortest first: ``delta``
+        times the checker's fractions, and the lengths of a fixed ladder of
+        :attr:`~CheckerTolerances.witness_ladder_steps` per doubling between the smallest
+        fraction and ``delta``. The ladder does not move with ``delta``, so a larger
+        tolerance tries the lengths a smaller one did (down to its smallest fraction):
+        a pose whose free window is narrow (a nut free only near whole thread turns)
+        accepted under one tolerance is not rejected under a larger one."""
+        fractions = self.tolerances.witness_fractions
+        lengths = {f * delta for f in fractions}
+        steps = self.tolerances.witness_ladder_steps
+        if steps > 0:
+            low = min(fractions) * delta
+            first, last = (math.ceil(steps * math.log2(low)),
+                           math.floor(steps * math.log2(delta)))
+            lengths.update(2.0 ** (k / steps) for k in range(first, last + 1))
+        return sorted(lengths)
 
     def _witness_directions(self, t: np.ndarray) -> list[np.ndarray]:
         """The distinct escape directions at ``t`` from every obstacle near the robot."""
