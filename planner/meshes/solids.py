@@ -127,6 +127,9 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
             f"exporter{obj_hint(mesh)}"
         )
     _check_winding(vertices, faces, label)
+    if report["flipped_shells"]:  # said once the result is a solid
+        log.info("%s: %d of %d closed shell(s) were inside out; flipped them", label,
+                 report["flipped_shells"], report["shells"])
     result = trimesh.Trimesh(vertices, faces, process=False)
     result.metadata.update(getattr(mesh, "metadata", {}) or {})
     result.metadata["name"] = name
@@ -259,10 +262,6 @@ def orient_shells(vertices, faces, label, scale, report):
         mask = flip_shell[labels]
         faces = faces.copy()
         faces[mask] = faces[mask][:, ::-1]
-        log.info(
-            "%s: %d of %d closed shell(s) were inside out; flipped them",
-            label, int(flip_shell.sum()), count,
-        )
     report["flipped_shells"] = int(flip_shell.sum())
     report["shells"] = int(count)
     report["cavities"] = int(

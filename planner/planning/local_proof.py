@@ -169,7 +169,9 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
         tried.append(_attempt(which, box, subset, outcome, t_subset, rounds=rounds))
         if raw is not None:
             summary = {"end": which, "box": box.tolist(), "flood_step": step,
-                       "bounds_faces": bounds_faces, "rounds": rounds, "robot": subset,
+                       "bounds_faces": [f"{'-+'[side % 2]}{'xyz'[side // 2]}"
+                                        for side in range(6) if bounds_faces[side]],
+                       "rounds": rounds, "robot": subset,
                        "seconds": time.perf_counter() - t0}
             return LocalProof(which, cs, raw, summary)
     return None

@@ -404,8 +404,11 @@ class OctreePlanner:
             proof.cspace, raw, points, exact=source.exact, source_kind=source.kind,
             relative_to=source.relative_to(self._parts), obstacle_of=self.obstacle_of)
         certificate["local"] = proof.summary
+        beyond = certificate["wall_cells_by_obstacle"].get(WALL, 0)
+        of_bounds = f", {beyond} of them beyond the bounds" if beyond else ""
         message = (f"no path: the {proof.which} is walled off by "
-                   f"{certificate['wall_cells']} FULL cells (exact) in a box around it")
+                   f"{certificate['wall_cells']} FULL cells (exact{of_bounds}) in a box "
+                   "around it")
         return self._finish(NO_PATH, "certificate", message, certificate=certificate,
                             space=proof.cspace)
 
