@@ -99,11 +99,7 @@ _TYPO_CUTOFF = 0.8
 
 
 def _section_line(text: str, section: str) -> int | None:
-    pattern = re.compile(rf"^\s*\[\s*{re.escape(section)}\s*\]", re.IGNORECASE)
-    for number, line in enumerate(text.splitlines(), start=1):
-        if pattern.match(line):
-            return number
-    return None
+    return _first_line(text, rf"^\s*\[\s*{re.escape(section)}\s*\]")
 
 
 def _repeated_problem_keys(text: str) -> list[str]:
@@ -123,9 +119,14 @@ def _repeated_problem_keys(text: str) -> list[str]:
 
 
 def _cfg_line(text: str, key: str) -> int | None:
-    pattern = re.compile(rf"^\s*{re.escape(key)}\s*[=:]", re.IGNORECASE)
+    return _first_line(text, rf"^\s*{re.escape(key)}\s*[=:]")
+
+
+def _first_line(text: str, pattern: str) -> int | None:
+    """The number of the first line that ``pattern`` matches (case-insensitive)."""
+    compiled = re.compile(pattern, re.IGNORECASE)
     for number, line in enumerate(text.splitlines(), start=1):
-        if pattern.match(line):
+        if compiled.match(line):
             return number
     return None
 
