@@ -224,10 +224,11 @@ def _parser() -> argparse.ArgumentParser:
                      help="accept parts that overlap by up to DEPTH (units) in the "
                      "assembled pose, and plan with that much penetration allowed "
                      "(replaces the file's 'interference')")
-    from planner import cli_batch, cli_shapes
+    from planner import cli_batch, cli_shapes, cli_verify
 
     cli_shapes.add_parsers(sub, computing)
     cli_batch.add_parser(sub, common)
+    cli_verify.add_parser(sub, common)
     return p
 
 
@@ -661,6 +662,10 @@ def _main(argv: list[str] | None) -> int:
             from planner.cli_batch import cmd_batch
 
             return cmd_batch(args)
+        if args.command == "verify":
+            from planner.cli_verify import cmd_verify
+
+            return cmd_verify(args)
         if args.command == "offset":
             from planner.cli_shapes import cmd_offset
 

@@ -1,94 +1,35 @@
 """Every wall cell of a no-path certificate carries witnesses that a check trusting
-nothing of minkplan confirms: here with scipy's convex hulls (a triangle pair's piece),
-trimesh's containment and FCL's box-against-triangles test (a vertex inside a solid),
-and the bounds; the witnesses' parts cover each wall cell's box."""
+nothing of minkplan's core confirms (planner.validation.certificate_check, minkplan
+verify): scipy's convex hulls (a triangle pair's piece), trimesh's containment and FCL's
+box-against-triangles test (a vertex inside a solid), the bounds; the witnesses' parts
+cover each wall cell's box, and the component's faces are covered by its walls. A
+certificate with a wall or a witness taken away or moved fails."""
 
 from __future__ import annotations
 
-import fcl
+import copy
+import json
+from pathlib import Path
+
 import numpy as np
-import pytest
 import trimesh
-from scipy.spatial import ConvexHull, QhullError
 from test_exact_planning import write_scenario
 from test_local_proof import LOCAL_ALWAYS, box_room
 
 import planner
+from planner.cli import main
+from planner.io import load_scenario
 from planner.problem import Body, PlannerSettings, Robot, Scenario
-
-SLACK = 1e-9
-"""Relative rounding slack of the independent tests (a wall cell may touch its piece)."""
-
-
-def corners(box: np.ndarray) -> np.ndarray:
-    lo, hi = box
-    return np.array([[(lo, hi)[i >> a & 1][a] for a in range(3)] for i in range(8)])
-
-
-def piece_holds(box: np.ndarray, obstacle: np.ndarray, robot: np.ndarray) -> bool:
-    """Whether every translation of ``box`` makes the robot's triangle meet the
-    obstacle's: the box's corners lie in the convex hull of ``o - r`` (the translations
-    where they meet), up to rounding."""
-    points = (obstacle[:, None, :] - robot[None, :, :]).reshape(-1, 3)
-    scale = float(np.abs(points).max() + np.abs(box).max())
-    try:
-        hull = ConvexHull(points)
-    except QhullError:
-        return False  # a flat piece holds no box
-    return bool(np.all(corners(box) @ hull.equations[:, :3].T + hull.equations[:, 3]
-                       <= SLACK * scale))
-
-
-def box_in_solid(box: np.ndarray, solid: trimesh.Trimesh) -> bool:
-    """Whether the box lies inside the closed mesh: its centre inside, and no triangle
-    meets it (FCL's box against the triangles)."""
-    centre, half = box.mean(axis=0), (box[1] - box[0]) / 2
-    if not solid.contains([centre])[0]:
-        return False
-    model = fcl.BVHModel()
-    model.beginModel(len(solid.vertices), len(solid.faces))
-    model.addSubModel(np.asarray(solid.vertices), np.asarray(solid.faces))
-    model.endModel()
-    grown = fcl.Box(*(2 * half * (1 + SLACK)))
-    request = fcl.CollisionRequest()
-    result = fcl.CollisionResult()
-    return not fcl.collide(fcl.CollisionObject(grown, fcl.Transform(centre)),
-                           fcl.CollisionObject(model, fcl.Transform()), request, result)
+from planner.validation.certificate_check import box_in_solid, check_certificate, piece_holds
 
 
 def check_witnesses(outcome, scenario) -> dict[str, int]:
-    """Confirm every wall cell's witnesses independently; counts by kind."""
-    obstacles = {o.name: o for o in scenario.obstacles}
-    lo, hi = (np.asarray(b, dtype=np.float64) for b in scenario.bounds)
-    kinds: dict[str, int] = {}
-    for wall in outcome.certificate["walls"]:
-        box = np.asarray(wall["box"])
-        parts = wall["witnesses"]
-        assert parts, f"wall cell {wall['leaf']} has no witness"
-        volume = sum(float(np.prod(np.subtract(*np.asarray(p["box"])[::-1]))) for p in parts)
-        assert volume == pytest.approx(float(np.prod(box[1] - box[0])), rel=1e-9)
-        for part in parts:
-            sub = np.asarray(part["box"])
-            assert np.all(sub[0] >= box[0] - 1e-12) and np.all(sub[1] <= box[1] + 1e-12)
-            kind = part["kind"]
-            kinds[kind] = kinds.get(kind, 0) + 1
-            if kind == "triangles":
-                assert piece_holds(sub, np.asarray(part["obstacle_triangle"]),
-                                   np.asarray(part["robot_triangle"])), part
-            elif kind == "robot_vertex":
-                solid = obstacles[part["obstacle"]]
-                assert solid.solid
-                assert box_in_solid(sub + np.asarray(part["vertex"]), solid.mesh), part
-            elif kind == "obstacle_vertex":
-                assert scenario.robot.solid
-                assert box_in_solid(np.asarray(part["vertex"]) - sub[::-1],
-                                    scenario.robot.mesh), part
-            elif kind == "bounds":
-                axis, upper = divmod(part["side"], 2)
-                assert sub[0][axis] >= hi[axis] if upper else sub[1][axis] <= lo[axis]
-            else:
-                raise AssertionError(f"unexpected witness kind {kind!r}")
-    return kinds
+    """The certificate checked without the core; its witnesses' parts by kind."""
+    check = check_certificate(outcome.certificate, scenario)
+    assert check.valid and check.point_in_component and check.component_closed, \
+        check.failures
+    assert check.walls == outcome.certificate["wall_cells"] and check.unchecked == 0
+    return check.witnesses
 
 
 def test_witnesses_of_a_peg_on_a_plate_hold_for_independent_tests(tmp_path):
@@ -156,3 +97,50 @@ def test_a_wrong_witness_fails_the_independent_tests():
     cube = trimesh.creation.box(extents=[2, 2, 2])
     assert box_in_solid(np.array([[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]]), cube)
     assert not box_in_solid(np.array([[0.5, 0.5, 0.5], [1.5, 1.5, 1.5]]), cube)
+
+
+def test_a_tampered_certificate_fails_and_the_command_says_so(tmp_path, capsys):
+    hollow_box(4, 2).export(tmp_path / "cage.stl")
+    (tmp_path / "s.yaml").write_text(
+        "name: cage\nrobot: {name: cage, mesh: cage.stl}\n"
+        "obstacles:\n  - {name: post, box: [1, 1, 1]}\n"
+        "start: [0, 0, 0]\ngoal: [0, 0, 9]\n"
+        "bounds: {min: [-12, -12, -12], max: [12, 12, 12]}\n")
+    scenario = load_scenario(tmp_path / "s.yaml")
+    outcome = planner.plan(scenario, progress=False)
+    assert outcome.status == "no_path", outcome.message
+    good = outcome.certificate
+    assert check_certificate(good, scenario).valid
+    # a wall cell taken away: the component is no longer closed
+    holed = copy.deepcopy(good)
+    del holed["walls"][len(holed["walls"]) // 2]
+    check = check_certificate(holed, scenario)
+    assert not check.valid and not check.component_closed
+    # a witness moved: a triangle of the robot, or a vertex, shifted far away
+    for kind, key in (("triangles", "robot_triangle"), ("obstacle_vertex", "vertex")):
+        moved = copy.deepcopy(good)
+        wall = next(w for w in moved["walls"] if w["witnesses"][0]["kind"] == kind)
+        wall["witnesses"][0][key] = (np.asarray(wall["witnesses"][0][key]) + 100.0).tolist()
+        check = check_certificate(moved, scenario)
+        assert not check.valid and check.component_closed and check.n_failures == 1
+        assert f"{kind} witness does not hold" in check.failures[0]
+    # the command line: exit 0 for the certificate as written, 1 for the tampered one
+    out = tmp_path / "out"
+    assert main(["plan", str(tmp_path / "s.yaml"), "--out", str(out), "--no-progress"]) == 1
+    capsys.readouterr()
+    assert main(["verify", str(tmp_path / "s.yaml"), str(out)]) == 0
+    assert "holds: the start lies in a closed component" in capsys.readouterr().out
+    (tmp_path / "bad.json").write_text(json.dumps(holed))
+    assert main(["verify", str(tmp_path / "s.yaml"), str(tmp_path / "bad.json")]) == 1
+    assert "does not hold" in capsys.readouterr().out
+    assert main(["verify", str(tmp_path / "s.yaml"), str(tmp_path / "none.json")]) == 2
+
+
+def test_a_decomposition_certificate_is_said_to_rest_on_primitives(tmp_path, capsys):
+    scenario = Path(__file__).resolve().parents[1] / "scenarios" / "sealed_chamber.yaml"
+    out = tmp_path / "out"
+    assert main(["plan", str(scenario), "--out", str(out), "--no-progress"]) == 1
+    capsys.readouterr()
+    assert main(["verify", str(scenario), str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "convex primitives of the decomposition source" in said and "holds" not in said
