@@ -124,6 +124,27 @@ def test_a_tampered_certificate_fails_and_the_command_says_so(tmp_path, capsys):
         check = check_certificate(moved, scenario)
         assert not check.valid and check.component_closed and check.n_failures == 1
         assert f"{kind} witness does not hold" in check.failures[0]
+    # geometry that is not the scenario's: an obstacle renamed, a triangle invented
+    renamed = copy.deepcopy(good)
+    for wall in renamed["walls"]:
+        for witness in wall["witnesses"]:
+            witness["obstacle"] = "nonexistent"
+    assert not check_certificate(renamed, scenario).valid
+    invented = copy.deepcopy(good)
+    wall = next(w for w in invented["walls"] if w["witnesses"][0]["kind"] == "triangles")
+    witness = wall["witnesses"][0]
+    witness["robot_triangle"] = (np.asarray(witness["robot_triangle"]) * (1 + 1e-6)).tolist()
+    assert not check_certificate(invented, scenario).valid
+    # the walled point is not the scenario's start; a part listed twice; a wall twice
+    moved_point = copy.deepcopy(good)
+    moved_point["walled_point"] = [0.1, 0.0, 0.0]
+    assert not check_certificate(moved_point, scenario).valid
+    doubled = copy.deepcopy(good)
+    doubled["walls"][0]["witnesses"] = doubled["walls"][0]["witnesses"] * 2
+    assert not check_certificate(doubled, scenario).valid
+    twice = copy.deepcopy(good)
+    twice["walls"].append(copy.deepcopy(twice["walls"][0]))
+    assert not check_certificate(twice, scenario).valid
     # the command line: exit 0 for the certificate as written, 1 for the tampered one
     out = tmp_path / "out"
     assert main(["plan", str(tmp_path / "s.yaml"), "--out", str(out), "--no-progress"]) == 1
@@ -134,6 +155,11 @@ def test_a_tampered_certificate_fails_and_the_command_says_so(tmp_path, capsys):
     assert main(["verify", str(tmp_path / "s.yaml"), str(tmp_path / "bad.json")]) == 1
     assert "does not hold" in capsys.readouterr().out
     assert main(["verify", str(tmp_path / "s.yaml"), str(tmp_path / "none.json")]) == 2
+    broken = copy.deepcopy(good)
+    del broken["walls"][0]["box"]
+    (tmp_path / "broken.json").write_text(json.dumps(broken))
+    assert main(["verify", str(tmp_path / "s.yaml"), str(tmp_path / "broken.json")]) == 2
+    assert "not a minkplan certificate" in capsys.readouterr().err
 
 
 def test_a_decomposition_certificate_is_said_to_rest_on_primitives(tmp_path, capsys):
@@ -141,6 +167,7 @@ def test_a_decomposition_certificate_is_said_to_rest_on_primitives(tmp_path, cap
     out = tmp_path / "out"
     assert main(["plan", str(scenario), "--out", str(out), "--no-progress"]) == 1
     capsys.readouterr()
-    assert main(["verify", str(scenario), str(out)]) == 0
+    assert main(["verify", str(scenario), str(out)]) == 1
     said = capsys.readouterr().out
-    assert "convex primitives of the decomposition source" in said and "holds" not in said
+    assert "not checked" in said and "convex primitives of the decomposition" in said
+    assert "holds" not in said

@@ -5,10 +5,16 @@ lies in a *component* of cells that no translation leaves without entering a *wa
 and that every translation in a wall cell is blocked. :func:`check_certificate` confirms
 both with independent libraries, from the scenario's meshes:
 
-1. the walled point lies in a component cell;
-2. the component is closed: every face of every component cell is covered by faces of
+1. the walled point is the scenario's start (or goal) and lies in a component cell; the
+   other end does not;
+2. the cells (component and walls) are disjoint cells of one octree lattice (cubes of
+   the smallest side times powers of two, each on the lattice at its size, none inside
+   another, none listed twice), so that areas and volumes can be summed;
+3. the component is closed: every face of every component cell is covered by faces of
    other component cells and of wall cells (areas summed across the face's plane);
-3. every wall cell is blocked: its witnesses' parts cover its box, and each holds —
+4. every wall cell is blocked: its witnesses' parts tile its box, each names geometry of
+   the scenario (a triangle or vertex of the named obstacle, of the robot as oriented;
+   compared exactly: the core copies the coordinates), and each holds —
    ``"triangles"``: the parts' corners lie in the convex hull of ``o − r`` over the two
    triangles' corners (scipy's Qhull; the set of translations where they meet is that
    hull, so the corners decide); ``"robot_vertex"`` / ``"obstacle_vertex"``: the vertex's
@@ -16,8 +22,10 @@ both with independent libraries, from the scenario's meshes:
    solid's triangles: no contact); ``"bounds"``: the part lies beyond the bounds' face;
    ``"primitive"`` (a decomposition's convex piece) is not checked here and is counted.
 
-Rounding: coordinates match within :data:`SLACK` of the scene's size. The check speaks of
-the meshes as the scenario loads them (solids and surfaces), as the certificate does.
+Rounding: coordinates match within :data:`SLACK` of the scenario's size (never of the
+certificate's). The check speaks of the meshes as the scenario loads them (solids and
+surfaces, as the loader classified them), as the certificate does. Malformed certificates
+raise (``ValueError``, ``KeyError``, ``TypeError``, ``IndexError``).
 """
 
 from __future__ import annotations
@@ -93,31 +101,57 @@ def piece_holds(box: np.ndarray, obstacle: np.ndarray, robot: np.ndarray) -> boo
                        <= SLACK * scale))
 
 
-class _Solids:
-    """FCL models of the solids a check asks about, built once each."""
+class _Parts:
+    """The scenario's meshes as a check asks about them: their vertices and triangles
+    (so that a witness names geometry of the parts, not anything), and FCL models of the
+    solids, built once each."""
 
-    def __init__(self) -> None:
+    def __init__(self, scenario: Scenario) -> None:
+        self.robot = scenario.robot
+        self.obstacles = {o.name: o for o in scenario.obstacles}
+        self._vertices: dict[int, set[tuple[float, ...]]] = {}
+        self._triangles: dict[int, set[frozenset[tuple[float, ...]]]] = {}
         self.models: dict[int, fcl.BVHModel] = {}
+
+    def has_vertex(self, mesh: trimesh.Trimesh, v: np.ndarray) -> bool:
+        key = id(mesh)
+        if key not in self._vertices:
+            used = np.asarray(mesh.vertices)[np.unique(np.asarray(mesh.faces))]
+            self._vertices[key] = {tuple(p) for p in used.tolist()}
+        return tuple(np.asarray(v, dtype=np.float64).tolist()) in self._vertices[key]
+
+    def has_triangle(self, mesh: trimesh.Trimesh, corners: np.ndarray) -> bool:
+        key = id(mesh)
+        if key not in self._triangles:
+            tris = np.asarray(mesh.vertices)[np.asarray(mesh.faces)].tolist()
+            self._triangles[key] = {frozenset(map(tuple, t)) for t in tris}
+        return frozenset(map(tuple, np.asarray(corners, dtype=np.float64).tolist())) \
+            in self._triangles[key]
 
     def model(self, mesh: trimesh.Trimesh) -> fcl.BVHModel:
         key = id(mesh)
         if key not in self.models:
-            model = fcl.BVHModel()
-            model.beginModel(len(mesh.vertices), len(mesh.faces))
-            model.addSubModel(np.asarray(mesh.vertices, dtype=np.float64),
-                              np.asarray(mesh.faces, dtype=np.int32))
-            model.endModel()
-            self.models[key] = model
+            self.models[key] = _fcl_model(mesh)
         return self.models[key]
 
 
-def box_in_solid(box: np.ndarray, solid: trimesh.Trimesh, models: _Solids | None = None) -> bool:
+def _fcl_model(mesh: trimesh.Trimesh) -> fcl.BVHModel:
+    model = fcl.BVHModel()
+    model.beginModel(len(mesh.vertices), len(mesh.faces))
+    model.addSubModel(np.asarray(mesh.vertices, dtype=np.float64),
+                      np.asarray(mesh.faces, dtype=np.int32))
+    model.endModel()
+    return model
+
+
+def box_in_solid(box: np.ndarray, solid: trimesh.Trimesh,
+                 model: fcl.BVHModel | None = None) -> bool:
     """Whether the box lies inside the closed mesh ``solid``: its centre inside
     (trimesh), and no triangle meets it (FCL's box against the triangles)."""
     centre, half = box.mean(axis=0), (box[1] - box[0]) / 2
     if not solid.contains([centre])[0]:
         return False
-    model = (models or _Solids()).model(solid)
+    model = model if model is not None else _fcl_model(solid)
     grown = fcl.Box(*(2 * half * (1 + SLACK)))
     result = fcl.CollisionResult()
     return not fcl.collide(fcl.CollisionObject(grown, fcl.Transform(centre)),
@@ -127,77 +161,153 @@ def box_in_solid(box: np.ndarray, solid: trimesh.Trimesh, models: _Solids | None
 
 def check_certificate(certificate: dict[str, Any], scenario: Scenario) -> CertificateCheck:
     """Check ``certificate`` (as ``certificate.json`` holds it) against ``scenario``'s
-    meshes and bounds (see the module documentation)."""
+    meshes, ends and bounds (see the module documentation).
+
+    Raises:
+        ValueError, KeyError, TypeError, IndexError: the certificate is malformed.
+    """
     t0 = time.perf_counter()
     out = CertificateCheck()
-    component = np.asarray(certificate["component"]["boxes"], dtype=np.float64).reshape(-1, 2, 3)
+    component = _boxes(certificate["component"]["boxes"])
     walls = certificate["walls"]
-    wall_boxes = np.asarray([w["box"] for w in walls], dtype=np.float64).reshape(-1, 2, 3)
+    wall_boxes = _boxes([w["box"] for w in walls])
     lo, hi = (np.asarray(b, dtype=np.float64) for b in scenario.bounds)
-    scale = float(np.abs(np.concatenate([component.reshape(-1, 3), wall_boxes.reshape(-1, 3),
-                                         [lo, hi]])).max())
-    tol = SLACK * max(scale, 1.0)
-    point = np.asarray(certificate["walled_point"], dtype=np.float64)
-    out.point_in_component = bool(np.any(np.all((component[:, 0] - tol <= point)
-                                                 & (point <= component[:, 1] + tol), axis=1)))
-    if not out.point_in_component:
-        out.fail(f"the walled point {point.tolist()} lies in no component cell")
+    tol = SLACK * _scene_size(scenario)  # from the scenario, never from the certificate
+    _check_ends(certificate, scenario, component, tol, out)
+    for message in _lattice_problems(np.concatenate([component, wall_boxes]), tol):
+        out.fail(message)
     uncovered = _uncovered_faces(component, wall_boxes, tol)
     out.component_closed = not uncovered
     for message in uncovered:
         out.fail(message)
-    solids = _Solids()
+    parts = _Parts(scenario)
     for wall in walls:
         out.walls += 1
-        _check_wall(wall, scenario, lo, hi, tol, solids, out)
+        _check_wall(wall, scenario, lo, hi, tol, parts, out)
     out.seconds = time.perf_counter() - t0
     return out
 
 
+def _boxes(rows: Any) -> np.ndarray:
+    """Boxes ``(n, 2, 3)`` from a certificate's lists: finite, ``lo < hi``."""
+    boxes = np.asarray(rows, dtype=np.float64).reshape(-1, 2, 3)
+    if not np.all(np.isfinite(boxes)) or np.any(boxes[:, 1] <= boxes[:, 0]):
+        raise ValueError("a box is not finite or has no volume")
+    return boxes
+
+
+def _scene_size(scenario: Scenario) -> float:
+    """The largest coordinate of the scenario's bounds, ends and meshes (at least 1)."""
+    lo, hi = scenario.bounds
+    values = [np.abs(lo).max(), np.abs(hi).max(), np.abs(scenario.start).max(),
+              np.abs(scenario.goal).max(), np.abs(scenario.robot.mesh.bounds).max(),
+              *(np.abs(o.mesh.bounds).max() for o in scenario.obstacles)]
+    return max(1.0, float(max(values)))
+
+
+def _check_ends(certificate: dict[str, Any], scenario: Scenario, component: np.ndarray,
+                tol: float, out: CertificateCheck) -> None:
+    """The walled point is the scenario's start (or goal), in the component; the other
+    end is not."""
+    walled = certificate["walled"]
+    if walled not in ("start", "goal"):
+        raise ValueError(f"walled = {walled!r}: expected 'start' or 'goal'")
+    ends = {"start": np.asarray(scenario.start, float), "goal": np.asarray(scenario.goal, float)}
+    point = np.asarray(certificate["walled_point"], dtype=np.float64)
+    if point.shape != (3,) or not np.allclose(point, ends[walled], rtol=0.0, atol=tol):
+        out.fail(f"the walled point {point.tolist()} is not the scenario's {walled} "
+                 f"{ends[walled].tolist()}")
+
+    def inside(p: np.ndarray, grow: float) -> bool:
+        return bool(np.any(np.all((component[:, 0] - grow <= p) & (p <= component[:, 1] + grow),
+                                  axis=1)))
+
+    out.point_in_component = inside(ends[walled], tol)
+    if not out.point_in_component:
+        out.fail(f"the {walled} lies in no component cell")
+    other = "goal" if walled == "start" else "start"
+    if inside(ends[other], -tol):
+        out.fail(f"the {other} lies in the component too")
+
+
+def _lattice_problems(boxes: np.ndarray, tol: float) -> list[str]:
+    """Why the cells are not disjoint cells of one octree lattice: cubes of the smallest
+    one's side times powers of two, each on that lattice at its own size, none holding
+    another's centre (for such cells overlapping means nesting)."""
+    sizes = boxes[:, 1] - boxes[:, 0]
+    floor = float(sizes.min())
+    levels = np.round(np.log2(sizes[:, 0] / floor)).astype(np.int64)
+    cube = floor * 2.0 ** levels
+    if np.any(np.abs(sizes - cube[:, None]) > tol) or floor <= 100 * tol:
+        return ["the cells are not cubes of the smallest one's side times powers of two "
+                "(or are thinner than the check can tell)"]
+    origin = boxes[int(np.argmax(sizes[:, 0])), 0]  # a largest cell: every level's lattice
+    steps = (boxes[:, 0] - origin) / cube[:, None]
+    if np.any(np.abs(steps - np.round(steps)) * cube[:, None] > tol):
+        return ["the cells do not lie on one lattice"]
+    keys = {(int(level), *map(int, np.round(s))) for level, s in zip(levels, steps, strict=True)}
+    if len(keys) < len(boxes):
+        return ["a cell is listed twice"]
+    centres = boxes.mean(axis=1)
+    for level in np.unique(levels):
+        index = np.floor((centres - origin) / (floor * 2.0 ** level)).astype(np.int64)
+        for i, ijk in enumerate(index):
+            if levels[i] < level and (int(level), *map(int, ijk)) in keys:
+                return [f"cell {i} lies inside a larger cell"]
+    return []
+
+
 def _check_wall(wall: dict[str, Any], scenario: Scenario, lo: np.ndarray, hi: np.ndarray,
-                tol: float, solids: _Solids, out: CertificateCheck) -> None:
+                tol: float, parts: _Parts, out: CertificateCheck) -> None:
     """Check one wall cell's witnesses (see the module documentation)."""
-    box = np.asarray(wall["box"], dtype=np.float64)
-    parts = wall.get("witnesses")
+    box = _boxes([wall["box"]])[0]
+    witnesses = wall.get("witnesses")
     name = f"wall cell {wall['leaf']}"
-    if not parts:
+    if not witnesses:
         out.fail(f"{name} has no witness")
         return
-    boxes = np.asarray([p["box"] if "box" in p else wall["box"] for p in parts])
+    boxes = _boxes([w["box"] if "box" in w else wall["box"] for w in witnesses])
     volume = float(np.prod(boxes[:, 1] - boxes[:, 0], axis=1).sum())
     inside = np.all(boxes[:, 0] >= box[0] - tol) and np.all(boxes[:, 1] <= box[1] + tol)
-    if not inside or not np.isclose(volume, float(np.prod(box[1] - box[0])), rtol=1e-9):
-        out.fail(f"{name}: its witnesses' parts do not cover its box")
-    obstacles = {o.name: o for o in scenario.obstacles}
-    for part, sub in zip(parts, boxes, strict=True):
-        kind = part["kind"]
+    disjoint = not _lattice_problems(boxes, tol)
+    if not (inside and disjoint
+            and np.isclose(volume, float(np.prod(box[1] - box[0])), rtol=1e-9)):
+        out.fail(f"{name}: its witnesses' parts do not tile its box")
+    for witness, sub in zip(witnesses, boxes, strict=True):
+        kind = witness["kind"]
         out.witnesses[kind] = out.witnesses.get(kind, 0) + 1
         if kind == "primitive":
             out.unchecked += 1
             continue
-        if not _part_holds(kind, part, sub, scenario, obstacles, lo, hi, tol, solids):
+        if not _part_holds(kind, witness, sub, lo, hi, tol, parts):
             out.fail(f"{name}: its {kind} witness does not hold for the box {sub.tolist()}")
 
 
-def _part_holds(kind: str, part: dict[str, Any], sub: np.ndarray, scenario: Scenario,
-                obstacles: dict, lo: np.ndarray, hi: np.ndarray, tol: float,
-                solids: _Solids) -> bool:
-    """Whether one witness part holds (see the module documentation)."""
-    if kind == "triangles":
-        return piece_holds(sub, np.asarray(part["obstacle_triangle"], dtype=np.float64),
-                           np.asarray(part["robot_triangle"], dtype=np.float64))
-    if kind == "robot_vertex":
-        solid = obstacles.get(part["obstacle"])
-        return bool(solid is not None and solid.solid and box_in_solid(
-            sub + np.asarray(part["vertex"], dtype=np.float64), solid.mesh, solids))
-    if kind == "obstacle_vertex":
-        return scenario.robot.solid and box_in_solid(
-            np.asarray(part["vertex"], dtype=np.float64) - sub[::-1], scenario.robot.mesh,
-            solids)
+def _part_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, lo: np.ndarray,
+                hi: np.ndarray, tol: float, parts: _Parts) -> bool:
+    """Whether one witness holds for its part ``sub`` of a wall cell, with its geometry
+    the scenario's own (see the module documentation)."""
     if kind == "bounds":
-        axis, upper = divmod(int(part["side"]), 2)
+        axis, upper = divmod(int(witness["side"]), 2)
+        if not 0 <= axis < 3:
+            raise ValueError(f"side = {witness['side']!r}: expected 0 to 5")
         return bool(sub[0][axis] >= hi[axis] - tol if upper else sub[1][axis] <= lo[axis] + tol)
-    return False
+    obstacle = parts.obstacles.get(witness["obstacle"])
+    if obstacle is None:
+        return False
+    if kind == "triangles":
+        o = np.asarray(witness["obstacle_triangle"], dtype=np.float64).reshape(3, 3)
+        r = np.asarray(witness["robot_triangle"], dtype=np.float64).reshape(3, 3)
+        return (parts.has_triangle(obstacle.mesh, o) and parts.has_triangle(parts.robot.mesh, r)
+                and piece_holds(sub, o, r))
+    v = np.asarray(witness["vertex"], dtype=np.float64).reshape(3)
+    if kind == "robot_vertex":
+        return (obstacle.solid and parts.has_vertex(parts.robot.mesh, v)
+                and box_in_solid(sub + v, obstacle.mesh, parts.model(obstacle.mesh)))
+    if kind == "obstacle_vertex":
+        return (parts.robot.solid and parts.has_vertex(obstacle.mesh, v)
+                and box_in_solid(v - sub[::-1], parts.robot.mesh, parts.model(parts.robot.mesh)))
+    raise ValueError(f"kind = {kind!r}: not a witness kind")
 
 
 def _uncovered_faces(component: np.ndarray, walls: np.ndarray, tol: float) -> list[str]:
