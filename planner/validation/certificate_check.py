@@ -41,6 +41,8 @@ from scipy.spatial import ConvexHull, QhullError
 
 from planner.problem import Scenario
 
+from .fcl_checker import bvh_model
+
 __all__ = ["SLACK", "CertificateCheck", "box_in_solid", "check_certificate", "piece_holds"]
 
 SLACK = 1e-9
@@ -136,12 +138,7 @@ class _Parts:
 
 
 def _fcl_model(mesh: trimesh.Trimesh) -> fcl.BVHModel:
-    model = fcl.BVHModel()
-    model.beginModel(len(mesh.vertices), len(mesh.faces))
-    model.addSubModel(np.asarray(mesh.vertices, dtype=np.float64),
-                      np.asarray(mesh.faces, dtype=np.int32))
-    model.endModel()
-    return model
+    return bvh_model(np.asarray(mesh.vertices), np.asarray(mesh.faces))
 
 
 def box_in_solid(box: np.ndarray, solid: trimesh.Trimesh,

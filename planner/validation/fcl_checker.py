@@ -67,6 +67,16 @@ __all__ = [
 ]
 
 
+def bvh_model(vertices: np.ndarray, faces: np.ndarray) -> fcl.BVHModel:
+    """FCL's BVH of the triangles ``faces`` of ``vertices`` (a surface to FCL)."""
+    bvh = fcl.BVHModel()
+    bvh.beginModel(len(vertices), len(faces))
+    bvh.addSubModel(np.ascontiguousarray(vertices, dtype=np.float64),
+                    np.ascontiguousarray(faces, dtype=np.int32))
+    bvh.endModel()
+    return bvh
+
+
 class _Part:
     """One mesh prepared for FCL and containment queries (containment only in a solid)."""
 
@@ -83,10 +93,7 @@ class _Part:
         self.faces = faces
         self.lo = vertices[faces].reshape(-1, 3).min(axis=0)
         self.hi = vertices[faces].reshape(-1, 3).max(axis=0)
-        bvh = fcl.BVHModel()
-        bvh.beginModel(len(vertices), len(faces))
-        bvh.addSubModel(vertices, faces.astype(np.int32))
-        bvh.endModel()
+        bvh = bvh_model(vertices, faces)
         self.bvh = bvh
         self.obj = fcl.CollisionObject(bvh, fcl.Transform())
         # One vertex per connected surface component: when no triangles touch, each
