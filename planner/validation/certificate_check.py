@@ -180,7 +180,7 @@ def check_certificate(certificate: dict[str, Any], scenario: Scenario) -> Certif
     parts = _Parts(scenario)
     for wall in walls:
         out.walls += 1
-        _check_wall(wall, scenario, lo, hi, tol, parts, out)
+        _check_wall(wall, lo, hi, tol, parts, out)
     out.seconds = time.perf_counter() - t0
     return out
 
@@ -254,8 +254,8 @@ def _lattice_problems(boxes: np.ndarray, tol: float) -> list[str]:
     return []
 
 
-def _check_wall(wall: dict[str, Any], scenario: Scenario, lo: np.ndarray, hi: np.ndarray,
-                tol: float, parts: _Parts, out: CertificateCheck) -> None:
+def _check_wall(wall: dict[str, Any], lo: np.ndarray, hi: np.ndarray, tol: float,
+                parts: _Parts, out: CertificateCheck) -> None:
     """Check one wall cell's witnesses (see the module documentation)."""
     box = _boxes([wall["box"]])[0]
     witnesses = wall.get("witnesses")

@@ -512,12 +512,7 @@ impl CSpace {
         let b = self.oct.cell_box(&self.oct.leaves[i]);
         let set = match &self.obstacles {
             Obstacles::Union(set) => set,
-            Obstacles::Exact(e) => {
-                return e.box_witness(&b).map(|w| match w {
-                    Witness::Piece { k, .. } | Witness::Nested { k } => k,
-                    Witness::Wall { side } => self.n_obstacle + side,
-                })
-            }
+            Obstacles::Exact(e) => return e.box_witness(&b).map(|w| self.primitive_of(w)),
         };
         let mut found: Option<usize> = None;
         set.bvh.for_each_overlapping(&b, |k| {
@@ -537,17 +532,22 @@ impl CSpace {
         self.verify_leaf_witness(i, budget).map(|(prim, _)| prim)
     }
 
+    /// The primitive an exact witness names: its obstacle, or `n_obstacle + side` for a
+    /// wall.
+    fn primitive_of(&self, w: Witness) -> usize {
+        match w {
+            Witness::Piece { k, .. } | Witness::Nested { k } => k,
+            Witness::Wall { side } => self.n_obstacle + side,
+        }
+    }
+
     /// [`CSpace::verify_leaf`] with the witness: `(primitive, why)`.
     pub fn verify_leaf_witness(&self, i: usize, budget: &mut usize) -> Option<(usize, WallWitness)> {
         match &self.obstacles {
             Obstacles::Union(_) => self.primitive_containing_leaf(i).map(|k| (k, WallWitness::Primitive(k))),
             Obstacles::Exact(e) => {
                 let parts = e.verify_box_witnesses(&self.oct.cell_box(&self.oct.leaves[i]), budget)?;
-                let prim = match parts[0].1.kind() {
-                    Witness::Piece { k, .. } | Witness::Nested { k } => k,
-                    Witness::Wall { side } => self.n_obstacle + side,
-                };
-                Some((prim, WallWitness::Exact(parts)))
+                Some((self.primitive_of(parts[0].1.kind()), WallWitness::Exact(parts)))
             }
         }
     }
