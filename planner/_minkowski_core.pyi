@@ -15,6 +15,7 @@ __all__ = [
     "__version__",
     "budget_units",
     "build_octree",
+    "closed_shell_sizes",
     "crossing_windings",
     "front_windings",
     "num_threads",
@@ -78,6 +79,13 @@ def crossing_windings(
     vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
 ) -> npt.NDArray[np.int64]:
     """Winding number in front of both faces of each crossing (int64 min: unknown)."""
+def closed_shell_sizes(
+    vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
+) -> list[int]:
+    """Triangle counts of the closed shells (mod 2: every edge, welded, used an even
+    number of times) the triangles hold, most first, as the exact source's shell
+    witnesses find them."""
+
 def winding_numbers(
     vertices: npt.NDArray[np.float64],
     faces: npt.NDArray[np.int64],

@@ -124,7 +124,7 @@ def test_a_child_killed_mid_task_is_recorded_as_crashed():
     timer.start()
     t0 = time.perf_counter()
     escape = make_tasks(find_problems([SHARED_ASSETS / "omplapp" / "escape.cfg"]),
-                        ["minkplan"], 1, hold_orientation="start")[0]  # a minute's work
+                        ["minkplan"], 1, hold_orientation="start")[0]  # 20 s of work
     record = run_task(escape.to_json(), Limits())
     timer.join()
     assert record["status"] == "crashed" and "SIGKILL" in record["message"]

@@ -171,3 +171,51 @@ def test_a_decomposition_certificate_is_said_to_rest_on_primitives(tmp_path, cap
     said = capsys.readouterr().out
     assert "not checked" in said and "convex primitives of the decomposition" in said
     assert "holds" not in said
+
+
+def frame_on_a_rod() -> Scenario:
+    """A square frame of four bars (closed boxes, subdivided, taken as a surface) around
+    a long open tube (a surface) that it cannot leave by translation."""
+    bars = [trimesh.creation.box(extents=e, transform=trimesh.transformations.translation_matrix(c))
+            for e, c in [([1, 6, 1], [2.5, 0, 0]), ([1, 6, 1], [-2.5, 0, 0]),
+                         ([4, 1, 1], [0, 2.5, 0]), ([4, 1, 1], [0, -2.5, 0])]]
+    frame = trimesh.util.concatenate([b.subdivide().subdivide() for b in bars])
+    tube = trimesh.creation.box(extents=[0.6, 0.6, 30])
+    tube = trimesh.Trimesh(tube.vertices, tube.faces[np.abs(tube.face_normals[:, 2]) < 0.5],
+                           process=False)
+    return Scenario(name="frame", units="m",
+                    robot=Robot("frame", frame, "test", solid=False, kind_reason="test"),
+                    obstacles=[Body("tube", tube, "test", solid=False, kind_reason="test")],
+                    start=[0, 0, 0], goal=[9, 0, 0], orientation=np.eye(3),
+                    bounds=(np.full(3, -12.0), np.full(3, 12.0)),
+                    settings=PlannerSettings(time_limit=60))
+
+
+def test_witnesses_of_a_frame_on_a_tube_include_its_closed_shells(tmp_path, capsys):
+    # the tube crosses a bar's closed shell: its connected surface holds a point inside
+    # the bar and reaches far outside it, for every translation of a wall cell
+    scenario = frame_on_a_rod()
+    outcome = planner.plan(scenario, progress=False)
+    assert outcome.status == "no_path", outcome.message
+    kinds = check_witnesses(outcome, scenario)
+    assert kinds.get("robot_shell", 0) > 0, kinds
+    certificate = outcome.certificate
+    assert all(shell["of"] == "robot" and len(shell["faces"]) >= 12
+               for shell in certificate["shells"])
+    index = next(i for i, w in enumerate(certificate["walls"])
+                 if any(p["kind"] == "robot_shell" for p in w["witnesses"]))
+
+    def tampered(change) -> bool:
+        broken = copy.deepcopy(certificate)
+        part = next(p for p in broken["walls"][index]["witnesses"] if p["kind"] == "robot_shell")
+        change(broken, part)
+        return check_certificate(broken, scenario).valid
+
+    shell_of = lambda b, p: b["shells"][p["shell"]]  # noqa: E731
+    assert not tampered(lambda b, p: shell_of(b, p)["faces"].pop()), "a shell left open"
+    assert not tampered(lambda b, p: p.update(point=(np.asarray(p["point"]) + [0, 0, 0.3]
+                                                     ).tolist())), "the point off its triangle"
+    assert not tampered(lambda b, p: p.update(far_vertex=p["point"])), \
+        "the far vertex inside the shell's box, and no vertex"
+    assert not tampered(lambda b, p: p.update(kind="obstacle_shell")), "the robot's shell " \
+        "named as the obstacle's"

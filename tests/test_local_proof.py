@@ -25,6 +25,7 @@ from planner.planning.slabs import subsets
 from planner.problem import Body, PlannerSettings, Robot, Scenario
 from planner.sources import choose_for
 from planner.validation import FclChecker
+from planner.validation.certificate_check import check_certificate
 
 LOCAL_ALWAYS = OctreeParams(local_first_pairs=0)
 
@@ -121,6 +122,24 @@ def test_spirelli_held_at_the_start_orientation_is_walled_off_near_the_start():
     start, goal = np.asarray(scenario.start), np.asarray(scenario.goal)
     assert not np.any(np.all((boxes[:, 0] <= goal) & (goal <= boxes[:, 1]), axis=1))
     assert np.any(np.all((boxes[:, 0] <= start) & (start <= boxes[:, 1]), axis=1))
+
+
+def test_escape_held_at_the_start_orientation_is_walled_off_by_the_rings_shells():
+    # the ring (a surface: eight tube segments sharing their caps, seven inside out) is
+    # linked with the pipe; the wall cells are translations where the pipe's connected
+    # surface crosses a closed shell of the ring, checked again without the core
+    cfg = SHARED_ASSETS / "omplapp" / "escape.cfg"
+    scenario = planner.load_problem(cfg, hold_orientation="start")
+    assert not scenario.robot.solid
+    assert [label for label, _ in subsets(scenario.robot)][0] == "whole part"
+    outcome = planner.plan(scenario)
+    assert outcome.status == "no_path", outcome.message
+    certificate = outcome.certificate
+    assert certificate["verified"] and certificate["exact"] and certificate["local"]
+    check = check_certificate(certificate, scenario)
+    assert check.valid and check.component_closed, check.failures
+    assert check.witnesses.get("robot_shell", 0) > 0, check.witnesses
+    assert_walls_collide(outcome, scenario, 40)
 
 
 def test_the_flood_stops_at_the_deadline(monkeypatch):

@@ -366,6 +366,16 @@ fn winding_numbers<'py>(
     Ok(out.into_pyarray(py))
 }
 
+/// The triangle counts of the closed shells (mod 2: every edge, vertices welded, used an
+/// even number of times; orientation aside) that the triangles (faces (m, 3) of vertices
+/// (n, 3)) hold, most first: closed patches, and open ones whose boundaries cancel, as the
+/// exact source's witnesses find them. Cheap: no lattice is made.
+#[pyfunction]
+fn closed_shell_sizes(vertices: PyReadonlyArray2<'_, f64>, faces: PyReadonlyArray2<'_, i64>) -> PyResult<Vec<usize>> {
+    let mesh = mesh_of(&vertices, &faces, "mesh", false)?;
+    Ok(crate::exact::shells::closed_shells(&mesh.vertices, &mesh.faces).iter().map(Vec::len).collect())
+}
+
 /// A mesh checked to be closed and consistently oriented (no winding check).
 fn closed_mesh(vertices: &PyReadonlyArray2<'_, f64>, faces: &PyReadonlyArray2<'_, i64>) -> PyResult<TriMesh> {
     let surface = mesh_of(vertices, faces, "mesh", false)?;
@@ -545,6 +555,7 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(front_windings, m)?)?;
     m.add_function(wrap_pyfunction!(crossing_windings, m)?)?;
     m.add_function(wrap_pyfunction!(winding_numbers, m)?)?;
+    m.add_function(wrap_pyfunction!(closed_shell_sizes, m)?)?;
     m.add_class::<PyCSpace>()?;
     m.add_class::<ExactSum>()?;
     m.add_class::<CheckedMesh>()?;
@@ -949,23 +960,60 @@ fn certificate_dict<'py>(py: Python<'py>, cs: &crate::roadmap::CSpace, c: &crate
         .collect();
     d.set_item("wall_boxes", numpy::ndarray::Array3::from_shape_vec((c.walls.len(), 2, 3), flat).expect("n x 2 x 3").into_pyarray(py))?;
     let witnesses = PyList::empty(py);
+    let mut shells: Vec<ShellKey> = Vec::new();
     for w in &c.witnesses {
         match w {
             None => witnesses.append(py.None())?,
-            Some(w) => witnesses.append(wall_witness_list(py, w)?)?,
+            Some(w) => witnesses.append(wall_witness_list(py, w, &mut shells)?)?,
         }
     }
     d.set_item("wall_witnesses", witnesses)?;
+    d.set_item("shells", shell_list(py, cs, &shells)?)?;
     Ok(d)
+}
+
+/// A closed shell a witness names: (whether it is the robot's, obstacle, index among the
+/// mesh's shells).
+type ShellKey = (bool, usize, usize);
+
+/// The shells the witnesses name, in the order they were first named, each a dict: `of`
+/// ("robot" or "obstacle"), `obstacle` (its index, for an obstacle's), `triangles`
+/// (n, 3, 3) in the robot's frame or the obstacle's.
+fn shell_list<'py>(py: Python<'py>, cs: &crate::roadmap::CSpace, keys: &[ShellKey]) -> PyResult<Bound<'py, PyList>> {
+    let out = PyList::empty(py);
+    let crate::roadmap::Obstacles::Exact(src) = &cs.obstacles else { return Ok(out) };
+    for &(of_robot, k, si) in keys {
+        let shell = &src.shells_of((!of_robot).then_some(k)).shells[si];
+        let sign = if of_robot { -1.0 } else { 1.0 };
+        let flat: Vec<f64> = shell.mesh.tris.iter().flat_map(|t| reflected(&t.p, sign).into_iter().flatten()).collect();
+        let d = PyDict::new(py);
+        d.set_item("of", if of_robot { "robot" } else { "obstacle" })?;
+        d.set_item("obstacle", k)?;
+        d.set_item("triangles", numpy::ndarray::Array3::from_shape_vec((shell.mesh.tris.len(), 3, 3), flat).expect("n x 3 x 3").into_pyarray(py))?;
+        out.append(d)?;
+    }
+    Ok(out)
+}
+
+/// A triangle's corners times `sign`, reordered when reflected (the robot's own triangle
+/// from `B = −R`'s).
+fn reflected(p: &[Vec3; 3], sign: f64) -> [[f64; 3]; 3] {
+    let order = if sign < 0.0 { [p[0], p[2], p[1]] } else { *p };
+    order.map(|v| (v * sign).to_array())
 }
 
 /// A wall leaf's witness as a list of dicts, one per part of its box, in the robot's
 /// terms (the C-space's `B` is the robot reflected): `kind` "triangles" (at every
 /// translation `t` of `box`, `robot_triangle + t` meets `obstacle_triangle`),
 /// "robot_vertex" (`vertex + t` lies in the solid obstacle), "obstacle_vertex" (`vertex`
-/// lies in the solid robot placed at `t`), "bounds" (`side`: beyond the bounds) or
-/// "primitive" (a convex primitive of the decomposition holds the box).
-fn wall_witness_list<'py>(py: Python<'py>, w: &crate::roadmap::WallWitness) -> PyResult<Bound<'py, PyList>> {
+/// lies in the solid robot placed at `t`), "robot_shell" (`point`, on the obstacle's
+/// `point_triangle`, lies in the odd region of the robot's closed shell `shell` placed at
+/// `t`, and the obstacle's `far_vertex`, connected to it, outside that shell's box),
+/// "obstacle_shell" (the robot's `point + t` in the odd region of the obstacle's shell,
+/// its `far_vertex + t` outside), "bounds" (`side`: beyond the bounds) or "primitive" (a
+/// convex primitive of the decomposition holds the box). `shells` collects the shells
+/// named (`shell` indexes it).
+fn wall_witness_list<'py>(py: Python<'py>, w: &crate::roadmap::WallWitness, shells: &mut Vec<ShellKey>) -> PyResult<Bound<'py, PyList>> {
     use crate::exact::BoxWitness;
     let out = PyList::empty(py);
     let parts = match w {
@@ -978,7 +1026,6 @@ fn wall_witness_list<'py>(py: Python<'py>, w: &crate::roadmap::WallWitness) -> P
         }
         crate::roadmap::WallWitness::Exact(parts) => parts,
     };
-    let corners = |p: &[Vec3; 3], sign: f64| -> Vec<[f64; 3]> { [p[0], p[2], p[1]].iter().map(|v| (*v * sign).to_array()).collect() };
     for (bx, why) in parts {
         let d = PyDict::new(py);
         d.set_item("box", vec![bx.min.to_array(), bx.max.to_array()])?;
@@ -987,7 +1034,7 @@ fn wall_witness_list<'py>(py: Python<'py>, w: &crate::roadmap::WallWitness) -> P
                 d.set_item("kind", "triangles")?;
                 d.set_item("obstacle", *k)?;
                 d.set_item("obstacle_triangle", vec![a[0].to_array(), a[1].to_array(), a[2].to_array()])?;
-                d.set_item("robot_triangle", corners(b, -1.0))?;
+                d.set_item("robot_triangle", reflected(b, -1.0))?;
             }
             BoxWitness::VertexOfB { k, v } => {
                 d.set_item("kind", "robot_vertex")?;
@@ -1002,6 +1049,21 @@ fn wall_witness_list<'py>(py: Python<'py>, w: &crate::roadmap::WallWitness) -> P
             BoxWitness::Wall { side } => {
                 d.set_item("kind", "bounds")?;
                 d.set_item("side", *side)?;
+            }
+            BoxWitness::Pierced { k, shell_of_b, shell, x, tri, y } => {
+                let key = (*shell_of_b, *k, *shell);
+                let index = shells.iter().position(|s| *s == key).unwrap_or_else(|| {
+                    shells.push(key);
+                    shells.len() - 1
+                });
+                // the shell's owner: B (the reflected robot) holds the obstacle's point
+                let sign = if *shell_of_b { 1.0 } else { -1.0 };
+                d.set_item("kind", if *shell_of_b { "robot_shell" } else { "obstacle_shell" })?;
+                d.set_item("obstacle", *k)?;
+                d.set_item("shell", index)?;
+                d.set_item("point", (*x * sign).to_array())?;
+                d.set_item("point_triangle", reflected(tri, sign))?;
+                d.set_item("far_vertex", (*y * sign).to_array())?;
             }
         }
         out.append(d)?;

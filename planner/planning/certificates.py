@@ -12,8 +12,18 @@ nothing of minkplan can confirm it, a robot translation ``t`` of the part at a t
 - ``"robot_vertex"``: ``vertex + t`` lies inside the solid ``obstacle``;
 - ``"obstacle_vertex"``: ``vertex`` (the obstacle's) lies inside the solid robot placed
   at ``t``;
+- ``"robot_shell"``: ``point`` (on the obstacle's ``point_triangle``) lies inside the
+  robot's closed shell ``shell`` placed at ``t`` (odd parity: the shell is closed mod 2,
+  orientation aside), and the obstacle's ``far_vertex``, in the same connected part of
+  its triangles, lies outside that shell's box: the part's surface crosses the shell;
+- ``"obstacle_shell"``: the same with the roles swapped (the robot's ``point + t`` inside
+  the obstacle's shell, its ``far_vertex + t`` outside);
 - ``"bounds"``: the part lies beyond the bounds' ``side`` (``2 · axis + upper``);
 - ``"primitive"``: (decomposition source) the convex primitive holds the box.
+
+The shells are listed once, under ``"shells"``: whose (``of``: ``"robot"`` or
+``"obstacle"`` with its name) and which of its triangles (``faces``: indices into the
+mesh as the scenario loads it).
 """
 
 from __future__ import annotations
@@ -23,6 +33,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import trimesh
+
+from planner.problem import Scenario
 
 __all__ = ["certificate_document"]
 
@@ -36,9 +49,41 @@ def _named(witnesses: list[dict[str, Any]] | None,
             for w in witnesses]
 
 
+def _face_indices(mesh: trimesh.Trimesh, triangles: np.ndarray) -> list[int]:
+    """The indices of ``mesh``'s faces with the corners ``triangles`` (n, 3, 3), matched
+    exactly (a face listed twice in the mesh is matched once per listing)."""
+    faces: dict[frozenset[tuple[float, ...]], list[int]] = {}
+    for i, corners in enumerate(np.asarray(mesh.vertices)[np.asarray(mesh.faces)].tolist()):
+        faces.setdefault(frozenset(map(tuple, corners)), []).append(i)
+    out = []
+    for corners in np.asarray(triangles, dtype=np.float64).tolist():
+        matches = faces.get(frozenset(map(tuple, corners)))
+        if not matches:
+            raise ValueError(f"a shell triangle {corners} is not a face of the mesh")
+        out.append(matches.pop())
+    return out
+
+
+def _shells(raw: list[dict[str, Any]], scenario: Scenario,
+            obstacle_of: Callable[[int], str]) -> list[dict[str, Any]]:
+    """The closed shells the witnesses name, as face indices of the scenario's meshes."""
+    meshes = {o.name: o.mesh for o in scenario.obstacles}
+    out = []
+    for shell in raw:
+        if shell["of"] == "robot":
+            entry: dict[str, Any] = {"of": "robot"}
+            mesh = scenario.robot.mesh
+        else:
+            name = obstacle_of(int(shell["obstacle"]))
+            entry, mesh = {"of": "obstacle", "obstacle": name}, meshes[name]
+        out.append({**entry, "faces": _face_indices(mesh, shell["triangles"])})
+    return out
+
+
 def certificate_document(cs, raw: dict[str, Any], ends: dict[str, np.ndarray], *, exact: bool,
                          source_kind: str, relative_to: str,
-                         obstacle_of: Callable[[int], str]) -> dict[str, Any]:
+                         obstacle_of: Callable[[int], str],
+                         scenario: Scenario) -> dict[str, Any]:
     """The certificate as stored: summary, the walled-off component and its wall cells
     with the primitive and obstacle verified for each (``raw``: the core's)."""
     prims = np.asarray(raw["wall_prims"], dtype=np.int64)
@@ -72,5 +117,6 @@ def certificate_document(cs, raw: dict[str, Any], ends: dict[str, np.ndarray], *
             for leaf, box, p, name, why in zip(leaves, boxes, prims, obstacles,
                                                raw["wall_witnesses"], strict=True)
         ],
+        "shells": _shells(raw.get("shells", []), scenario, obstacle_of),
         "component": {"leaves": component, "boxes": comp_boxes.tolist()},
     }

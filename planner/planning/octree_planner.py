@@ -383,7 +383,8 @@ class OctreePlanner:
         exact = source.exact and space.margin == 0
         certificate = certificate_document(
             space, result.certificate, ends.points, exact=exact, source_kind=source.kind,
-            relative_to=source.relative_to(self._parts), obstacle_of=self.obstacle_of)
+            relative_to=source.relative_to(self._parts), obstacle_of=self.obstacle_of,
+            scenario=self.scenario)
         kind = ("exact" if certificate["exact"] else
                 "relative to the convex hulls of the approximate decomposition")
         message = (f"no path: the {certificate['walled']} is walled off by "
@@ -402,7 +403,8 @@ class OctreePlanner:
         source = self._src
         certificate = certificate_document(
             proof.cspace, raw, points, exact=source.exact, source_kind=source.kind,
-            relative_to=source.relative_to(self._parts), obstacle_of=self.obstacle_of)
+            relative_to=source.relative_to(self._parts), obstacle_of=self.obstacle_of,
+            scenario=self.scenario)
         certificate["local"] = proof.summary
         beyond = certificate["wall_cells_by_obstacle"].get(WALL, 0)
         of_bounds = f", {beyond} of them beyond the bounds" if beyond else ""

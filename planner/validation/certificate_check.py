@@ -36,6 +36,8 @@ from typing import Any
 
 import fcl
 import numpy as np
+import scipy.sparse
+import scipy.sparse.csgraph
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
@@ -43,7 +45,8 @@ from planner.problem import Scenario
 
 from .fcl_checker import bvh_model
 
-__all__ = ["SLACK", "CertificateCheck", "box_in_solid", "check_certificate", "piece_holds"]
+__all__ = ["SLACK", "CertificateCheck", "box_in_solid", "check_certificate", "closed_mod_2",
+           "odd_parity", "piece_holds", "welded_ids"]
 
 SLACK = 1e-9
 """Relative rounding slack of the tests (a wall cell may touch its piece, cells meet on a
@@ -114,6 +117,7 @@ class _Parts:
         self._vertices: dict[int, set[tuple[float, ...]]] = {}
         self._triangles: dict[int, set[frozenset[tuple[float, ...]]]] = {}
         self.models: dict[int, fcl.BVHModel] = {}
+        self._parts: dict[int, dict[tuple[float, ...], int]] = {}
 
     def has_vertex(self, mesh: trimesh.Trimesh, v: np.ndarray) -> bool:
         key = id(mesh)
@@ -130,6 +134,25 @@ class _Parts:
         return frozenset(map(tuple, np.asarray(corners, dtype=np.float64).tolist())) \
             in self._triangles[key]
 
+    def part_of(self, mesh: trimesh.Trimesh, point: np.ndarray) -> int | None:
+        """The connected part (triangles sharing vertices, welded by coordinates) of the
+        mesh's vertex at ``point``, or ``None`` when no vertex lies there."""
+        key = id(mesh)
+        if key not in self._parts:
+            ids = welded_ids(np.asarray(mesh.vertices))
+            faces = ids[np.asarray(mesh.faces)]
+            n = int(ids.max()) + 1 if len(ids) else 0
+            graph = scipy.sparse.coo_matrix(
+                (np.ones(2 * len(faces)), (np.concatenate([faces[:, 0], faces[:, 0]]),
+                                           np.concatenate([faces[:, 1], faces[:, 2]]))),
+                shape=(n, n))
+            labels = scipy.sparse.csgraph.connected_components(graph, directed=False)[1]
+            used = np.unique(np.asarray(mesh.faces))
+            where = {tuple(p): int(labels[ids[i]])
+                     for p, i in zip(np.asarray(mesh.vertices)[used].tolist(), used, strict=True)}
+            self._parts[key] = where
+        return self._parts[key].get(tuple(np.asarray(point, dtype=np.float64).tolist()))
+
     def model(self, mesh: trimesh.Trimesh) -> fcl.BVHModel:
         key = id(mesh)
         if key not in self.models:
@@ -137,8 +160,100 @@ class _Parts:
         return self.models[key]
 
 
+_RAY_DIRECTIONS = np.array([[0.5773502691896258, 0.6180339887498948, 0.5320888862379561],
+                            [-0.381966011250105, 0.7071067811865475, -0.595241580617241],
+                            [0.2679491924311227, -0.8090169943749474, 0.5235987755982988],
+                            [-0.723606797749979, -0.223606797749979, 0.6524758424985279]])
+"""Generic ray directions for :func:`odd_parity`, tried in turn."""
+
+
+def welded_ids(vertices: np.ndarray) -> np.ndarray:
+    """Each vertex's id, equal for vertices of equal coordinates (``-0.0`` as ``0.0``)."""
+    _, ids = np.unique(np.asarray(vertices, dtype=np.float64) + 0.0, axis=0,
+                       return_inverse=True)
+    return ids.reshape(-1)
+
+
+def closed_mod_2(vertices: np.ndarray, faces: np.ndarray) -> bool:
+    """Whether every edge of the triangles (vertices welded) is used an even number of
+    times (degenerate edges aside)."""
+    ids = welded_ids(vertices)[np.asarray(faces)]
+    edges = np.concatenate([ids[:, [0, 1]], ids[:, [1, 2]], ids[:, [2, 0]]])
+    edges = np.sort(edges[edges[:, 0] != edges[:, 1]], axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool(np.all(counts % 2 == 0))
+
+
+def odd_parity(triangles: np.ndarray, q: np.ndarray, tol: float) -> bool | None:
+    """Whether a ray from ``q`` crosses an odd number of the triangles (n, 3, 3): by
+    Möller–Trumbore on each of a few generic directions until one passes no edge or
+    vertex within rounding; ``None`` when ``q`` lies on a triangle or every ray did."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    e1, e2 = b - a, c - a
+    s = q - a
+    for d in _RAY_DIRECTIONS:
+        p = np.cross(d, e2)
+        det = np.einsum("ij,ij->i", e1, p)
+        ok = np.abs(det) > 1e-12 * np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        u = np.einsum("ij,ij->i", s, p) * inv
+        qv = np.cross(s, e1)
+        v = (qv @ d) * inv
+        t = np.einsum("ij,ij->i", e2, qv) * inv
+        inside = ok & (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9)
+        if np.any(inside & (np.abs(t) <= tol)):
+            return None
+        hits = inside & (t > 0)
+        edge = (u <= 1e-9) | (v <= 1e-9) | (u + v >= 1 - 1e-9)
+        if np.any(hits & edge) or np.any(~ok & (np.abs(np.einsum("ij,ij->i", s, np.cross(
+                e1, e2))) <= tol * np.linalg.norm(np.cross(e1, e2), axis=1))):
+            continue  # through an edge, or along a triangle's plane: another direction
+        return bool(hits.sum() % 2 == 1)
+    return None
+
+
 def _fcl_model(mesh: trimesh.Trimesh) -> fcl.BVHModel:
     return bvh_model(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+
+
+def _box_free_of(box: np.ndarray, model: fcl.BVHModel) -> bool:
+    """Whether no triangle of ``model`` meets the box (grown by the rounding slack)."""
+    centre, half = box.mean(axis=0), (box[1] - box[0]) / 2
+    grown = fcl.Box(*(2 * half * (1 + SLACK) + 2 * SLACK))
+    return not fcl.collide(fcl.CollisionObject(grown, fcl.Transform(centre)),
+                           fcl.CollisionObject(model, fcl.Transform()),
+                           fcl.CollisionRequest(), fcl.CollisionResult())
+
+
+class _Shell:
+    """One closed shell a certificate names: its triangles, box, FCL model, and whether
+    it is closed mod 2."""
+
+    def __init__(self, entry: dict[str, Any], parts: _Parts) -> None:
+        self.of = entry["of"]
+        if self.of == "robot":
+            self.owner: str | None = None
+            mesh = parts.robot.mesh
+        elif self.of == "obstacle":
+            self.owner = str(entry["obstacle"])
+            mesh = parts.obstacles[self.owner].mesh
+        else:
+            raise ValueError(f"shell of = {self.of!r}: expected 'robot' or 'obstacle'")
+        faces = np.asarray(mesh.faces)[np.asarray(entry["faces"], dtype=np.int64)]
+        self.closed = len(faces) >= 4 and closed_mod_2(np.asarray(mesh.vertices), faces)
+        self.triangles = np.asarray(mesh.vertices, dtype=np.float64)[faces]
+        flat = self.triangles.reshape(-1, 3)
+        self.box = np.stack([flat.min(axis=0), flat.max(axis=0)])
+        self.model = bvh_model(flat, np.arange(len(flat)).reshape(-1, 3))
+
+    def holds_inside(self, box: np.ndarray, tol: float) -> bool:
+        """Whether ``box`` lies in the shell's odd region."""
+        return (self.closed and _box_free_of(box, self.model)
+                and odd_parity(self.triangles, box.mean(axis=0), tol) is True)
+
+    def misses(self, box: np.ndarray, tol: float) -> bool:
+        """Whether ``box`` misses the shell's box."""
+        return bool(np.any(box[0] > self.box[1] + tol) or np.any(box[1] < self.box[0] - tol))
 
 
 def box_in_solid(box: np.ndarray, solid: trimesh.Trimesh,
@@ -178,9 +293,10 @@ def check_certificate(certificate: dict[str, Any], scenario: Scenario) -> Certif
     for message in uncovered:
         out.fail(message)
     parts = _Parts(scenario)
+    shells = [_Shell(entry, parts) for entry in certificate.get("shells", [])]
     for wall in walls:
         out.walls += 1
-        _check_wall(wall, lo, hi, tol, parts, out)
+        _check_wall(wall, lo, hi, tol, parts, shells, out)
     out.seconds = time.perf_counter() - t0
     return out
 
@@ -255,7 +371,7 @@ def _lattice_problems(boxes: np.ndarray, tol: float) -> list[str]:
 
 
 def _check_wall(wall: dict[str, Any], lo: np.ndarray, hi: np.ndarray, tol: float,
-                parts: _Parts, out: CertificateCheck) -> None:
+                parts: _Parts, shells: list[_Shell], out: CertificateCheck) -> None:
     """Check one wall cell's witnesses (see the module documentation)."""
     box = _boxes([wall["box"]])[0]
     witnesses = wall.get("witnesses")
@@ -276,12 +392,12 @@ def _check_wall(wall: dict[str, Any], lo: np.ndarray, hi: np.ndarray, tol: float
         if kind == "primitive":
             out.unchecked += 1
             continue
-        if not _part_holds(kind, witness, sub, lo, hi, tol, parts):
+        if not _part_holds(kind, witness, sub, lo, hi, tol, parts, shells):
             out.fail(f"{name}: its {kind} witness does not hold for the box {sub.tolist()}")
 
 
 def _part_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, lo: np.ndarray,
-                hi: np.ndarray, tol: float, parts: _Parts) -> bool:
+                hi: np.ndarray, tol: float, parts: _Parts, shells: list[_Shell]) -> bool:
     """Whether one witness holds for its part ``sub`` of a wall cell, with its geometry
     the scenario's own (see the module documentation)."""
     if kind == "bounds":
@@ -289,6 +405,8 @@ def _part_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, lo: np.ndar
         if not 0 <= axis < 3:
             raise ValueError(f"side = {witness['side']!r}: expected 0 to 5")
         return bool(sub[0][axis] >= hi[axis] - tol if upper else sub[1][axis] <= lo[axis] + tol)
+    if kind in ("robot_shell", "obstacle_shell"):
+        return _shell_holds(kind, witness, sub, tol, parts, shells)
     obstacle = parts.obstacles.get(witness["obstacle"])
     if obstacle is None:
         return False
@@ -305,6 +423,39 @@ def _part_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, lo: np.ndar
         return (parts.robot.solid and parts.has_vertex(obstacle.mesh, v)
                 and box_in_solid(v - sub[::-1], parts.robot.mesh, parts.model(parts.robot.mesh)))
     raise ValueError(f"kind = {kind!r}: not a witness kind")
+
+
+def _shell_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, tol: float,
+                 parts: _Parts, shells: list[_Shell]) -> bool:
+    """A ``robot_shell`` or ``obstacle_shell`` witness (see the module documentation):
+    the point's box (over the part ``sub`` of translations) in the shell's odd region,
+    the far vertex's box off the shell's box, both of one connected part."""
+    index = int(witness["shell"])
+    if not 0 <= index < len(shells):
+        raise IndexError(f"shell = {index}: the certificate lists {len(shells)} shells")
+    shell, name = shells[index], str(witness["obstacle"])
+    if name not in parts.obstacles:
+        return False
+    robot_shell = kind == "robot_shell"
+    if robot_shell != (shell.owner is None) or (not robot_shell and shell.owner != name):
+        return False  # the shell is not the one this kind names
+    mesh = parts.obstacles[name].mesh if robot_shell else parts.robot.mesh
+    x = np.asarray(witness["point"], dtype=np.float64).reshape(3)
+    tri = np.asarray(witness["point_triangle"], dtype=np.float64).reshape(3, 3)
+    y = np.asarray(witness["far_vertex"], dtype=np.float64).reshape(3)
+    on_triangle = _point_triangle_distance(x, tri) <= tol
+    part = parts.part_of(mesh, tri[0])
+    same_part = part is not None and parts.part_of(mesh, y) == part
+    # robot at t: the obstacle's x inside the shell + t (x − t); the robot's x + t inside
+    moved = (lambda p: p - sub[::-1]) if robot_shell else (lambda p: p + sub)
+    return bool(parts.has_triangle(mesh, tri) and on_triangle and same_part
+                and shell.holds_inside(moved(x), tol) and shell.misses(moved(y), tol))
+
+
+def _point_triangle_distance(p: np.ndarray, tri: np.ndarray) -> float:
+    """The distance from ``p`` to the triangle ``tri`` (3, 3), by trimesh."""
+    closest = trimesh.triangles.closest_point(tri[None], p[None])[0]
+    return float(np.linalg.norm(p - closest))
 
 
 def _uncovered_faces(component: np.ndarray, walls: np.ndarray, tol: float) -> list[str]:

@@ -44,6 +44,9 @@ mod inside_grid;
 mod inside_grid_tests;
 mod mesh;
 mod piece;
+pub mod shells;
+#[cfg(test)]
+mod shells_tests;
 #[cfg(test)]
 mod surface_pair_tests;
 mod verify;
@@ -66,6 +69,7 @@ use crate::math::{Aabb, Vec3};
 use crate::octree::{merge_sorted, CellSource, Label};
 use crate::surface::planar::Cut;
 use inside_grid::InsideGrid;
+use shells::Shells;
 use std::sync::{Arc, OnceLock};
 
 /// Records at or above this are walls (`WALL + side`, side = 2 · axis + upper); below
@@ -147,6 +151,10 @@ pub struct ExactSource {
     grids: Vec<OnceLock<Arc<InsideGrid>>>,
     /// The inside grid of `B` when it is a solid, made when first asked.
     b_grid: OnceLock<Arc<InsideGrid>>,
+    /// The closed shells and connected parts of each obstacle, made when first asked.
+    shells: Vec<OnceLock<Arc<Shells>>>,
+    /// Those of `B`.
+    b_shells: OnceLock<Arc<Shells>>,
 }
 
 /// Why a cell or point is solid: which obstacle (or wall) and how.
@@ -161,7 +169,9 @@ pub enum Witness {
         /// Triangle of `B`.
         j: usize,
     },
-    /// One mesh contains the other (no surface contact) for obstacle `k`.
+    /// Deep in the C-obstacle of obstacle `k`, shown by one point: a vertex of one part
+    /// inside the other, solid, part, or a connected part of one crossing a closed shell of
+    /// the other ([`shells`]).
     Nested {
         /// Obstacle.
         k: usize,
@@ -271,7 +281,28 @@ impl ExactSource {
         let fbvh = Bvh::build(&boxes);
         let flat = if margin == 0.0 { facets.iter().map(Facet::flat_planes).collect() } else { Vec::new() };
         let grids = obstacles.iter().map(|_| OnceLock::new()).collect();
-        Ok((ExactSource { full_witness: walls.is_some(), obstacles, b, piece_pairs, margin, walls, aabb, max_piece, facets, fbvh, flat, grids, b_grid: OnceLock::new() }, taken))
+        let shells = obstacles.iter().map(|_| OnceLock::new()).collect();
+        let b_grid = OnceLock::new();
+        Ok((
+            ExactSource {
+                full_witness: walls.is_some(),
+                obstacles,
+                b,
+                piece_pairs,
+                margin,
+                walls,
+                aabb,
+                max_piece,
+                facets,
+                fbvh,
+                flat,
+                grids,
+                b_grid,
+                shells,
+                b_shells: OnceLock::new(),
+            },
+            taken,
+        ))
     }
 
     /// Whether `p` lies in facet `i` grown by `m` (its precomputed half-spaces when `m` is 0).
@@ -658,12 +689,13 @@ impl ExactSource {
     }
 
     /// Whether a vertex of one part lies inside the other, solid, part at every
-    /// translation of `cell` ([`ExactSource::vertex_nested`]): deep in a C-obstacle, where
+    /// translation of `cell` ([`ExactSource::vertex_nested`]), or a connected part of one
+    /// crosses a closed shell of the other ([`ExactSource::pierced`]): deep in a C-obstacle, where
     /// no single piece covers the cell (exact, and the walls of certificates of surfaces
     /// need it: their interiors are unions of pieces). For the planner's cells, and for
     /// the surface's above the finest level (it needs no FULL witness there).
     fn nested_full(&self, cell: &Aabb, finest: bool) -> bool {
-        (self.full_witness || !finest) && (0..self.obstacles.len()).any(|k| self.vertex_nested(k, cell))
+        (self.full_witness || !finest) && (0..self.obstacles.len()).any(|k| self.vertex_nested(k, cell) || self.pierced(k, cell).is_some())
     }
 
     /// Whether [`ExactSource::nested_full`] is asked before a cell's records are filtered,

@@ -12,6 +12,7 @@
 
 use super::inside_grid::{InsideGrid, Span, MAX_VOXELS};
 use super::mesh::TriMesh;
+use super::shells::Shells;
 use super::{ExactSource, Witness};
 use crate::math::{Aabb, Vec3};
 use std::sync::{Arc, OnceLock};
@@ -70,6 +71,25 @@ pub enum BoxWitness {
         /// Side.
         side: usize,
     },
+    /// At every `p` of the box, a connected part of one mesh crosses a closed shell of the
+    /// other ([`super::shells`]): the point `x` of that part (on its triangle `tri`) lies
+    /// in the shell's odd region and its vertex `y` outside the shell's box (`bx − x` in
+    /// the region, `bx − y` off the box).
+    Pierced {
+        /// Obstacle.
+        k: usize,
+        /// Whether the shell is `B`'s (then `x`, `y` are the obstacle's), else the
+        /// obstacle's (then `x`, `y` are `B`'s).
+        shell_of_b: bool,
+        /// The shell: index into the mesh's shells.
+        shell: usize,
+        /// The point inside.
+        x: Vec3,
+        /// Corners of the triangle holding `x`.
+        tri: [Vec3; 3],
+        /// The vertex outside.
+        y: Vec3,
+    },
 }
 
 impl BoxWitness {
@@ -77,7 +97,7 @@ impl BoxWitness {
     pub fn kind(&self) -> Witness {
         match *self {
             BoxWitness::Piece { k, i, j, .. } => Witness::Piece { k, i, j },
-            BoxWitness::VertexOfB { k, .. } | BoxWitness::VertexOfA { k, .. } => Witness::Nested { k },
+            BoxWitness::VertexOfB { k, .. } | BoxWitness::VertexOfA { k, .. } | BoxWitness::Pierced { k, .. } => Witness::Nested { k },
             BoxWitness::Wall { side } => Witness::Wall { side },
         }
     }
@@ -129,7 +149,30 @@ impl ExactSource {
         if let Some(Witness::Piece { k, i, j }) = self.piece_contains_box(bx) {
             return Some(BoxWitness::Piece { k, i, j, a: self.obstacles[k].tris[i].p, b: self.b.tris[j].p });
         }
-        (0..self.obstacles.len()).find_map(|k| self.nested_exactly(k, bx))
+        (0..self.obstacles.len()).find_map(|k| self.nested_exactly(k, bx).or_else(|| self.pierced(k, bx)))
+    }
+
+    /// A connected part of `B` or of the obstacle `k` crossing a closed shell of the other
+    /// at every translation of the box ([`super::shells`]), for pairs with a surface (two
+    /// solids have the nested-vertex test).
+    pub(super) fn pierced(&self, k: usize, bx: &Aabb) -> Option<BoxWitness> {
+        let a = &self.obstacles[k];
+        if a.solid && self.b.solid {
+            return None;
+        }
+        let (of_a, of_b) = (self.shells_of(Some(k)), self.shells_of(None));
+        let found = |shells: &Shells, other: &TriMesh, others: &Shells, shell_of_b: bool| {
+            shells.pierce(bx, other, others).map(|p| BoxWitness::Pierced { k, shell_of_b, shell: p.shell, x: p.x, tri: other.tris[p.tri].p, y: p.y })
+        };
+        found(of_b, a, of_a, true).or_else(|| found(of_a, &self.b, of_b, false))
+    }
+
+    /// The closed shells of obstacle `k` (or, `None`, of `B`), made when first asked.
+    pub fn shells_of(&self, k: Option<usize>) -> &Shells {
+        match k {
+            Some(k) => self.shells[k].get_or_init(|| Arc::new(Shells::of(&self.obstacles[k]))),
+            None => self.b_shells.get_or_init(|| Arc::new(Shells::of(&self.b))),
+        }
     }
 
     /// [`ExactSource::vertex_nested`], its vertex's box then tested exactly (the grid's

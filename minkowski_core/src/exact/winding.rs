@@ -83,6 +83,22 @@ impl TriMesh {
         self.winding(q).is_none_or(|w| w != 0)
     }
 
+    /// The parity of the number of faces a ray from `q` crosses (`true`: odd), or `None`
+    /// when `q` lies on a face or every ray passed within rounding of an edge. For a
+    /// surface closed mod 2 (every edge, vertices welded, used an even number of times:
+    /// see [`super::shells`]) it is the same for every ray, constant off the surface, and
+    /// changes across it; orientation does not matter.
+    pub fn parity(&self, q: Vec3) -> Option<bool> {
+        if !self.aabb.contains_point(q) {
+            return Some(false);
+        }
+        RAY_DIRS.iter().find_map(|&d| match self.ray(q, Vec3::from_array(d).normalize(), u32::MAX) {
+            Ray::Count(c) => Some(Some(c.rem_euclid(2) == 1)),
+            Ray::Surface => Some(None),
+            Ray::Degenerate(_) => None,
+        })?
+    }
+
     /// The winding number just in front of every face (on the side its normal points to):
     /// at points on the face, or just above it where those lie on other faces (bodies that
     /// share a plane); `None` where it could not be told. Degenerate faces get `Some(0)`:

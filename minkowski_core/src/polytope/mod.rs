@@ -11,4 +11,4 @@ mod polytope_tests;
 mod queries;
 
 pub use hull::{ConvexPolytope, PLANE_TOL_REL};
-pub use queries::{clip_planes, point_triangle_distance2};
+pub use queries::{clip_planes, closest_on_triangle, point_triangle_distance2};

@@ -95,6 +95,11 @@ pub fn clip_planes(planes: impl Iterator<Item = (Vec3, f64)>, a: Vec3, b: Vec3) 
 
 /// Squared distance from `p` to the triangle `abc`.
 pub fn point_triangle_distance2(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f64 {
+    (p - closest_on_triangle(p, a, b, c)).length_squared()
+}
+
+/// The point of the triangle `abc` nearest to `p`.
+pub fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     // Region tests on the barycentric coordinates (Ericson, Real-Time Collision Detection, 5.1.5).
     let ab = b - a;
     let ac = c - a;
@@ -102,37 +107,37 @@ pub fn point_triangle_distance2(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f64 {
     let d1 = ab.dot(ap);
     let d2 = ac.dot(ap);
     if d1 <= 0.0 && d2 <= 0.0 {
-        return ap.length_squared();
+        return a;
     }
     let bp = p - b;
     let d3 = ab.dot(bp);
     let d4 = ac.dot(bp);
     if d3 >= 0.0 && d4 <= d3 {
-        return bp.length_squared();
+        return b;
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let v = d1 / (d1 - d3);
-        return (p - (a + ab * v)).length_squared();
+        return a + ab * v;
     }
     let cp = p - c;
     let d5 = ab.dot(cp);
     let d6 = ac.dot(cp);
     if d6 >= 0.0 && d5 <= d6 {
-        return cp.length_squared();
+        return c;
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
         let w = d2 / (d2 - d6);
-        return (p - (a + ac * w)).length_squared();
+        return a + ac * w;
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
         let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (p - (b + (c - b) * w)).length_squared();
+        return b + (c - b) * w;
     }
     let denom = 1.0 / (va + vb + vc);
     let v = vb * denom;
     let w = vc * denom;
-    (p - (a + ab * v + ac * w)).length_squared()
+    a + ab * v + ac * w
 }
