@@ -657,8 +657,13 @@ impl ExactSource {
             if !bx.overlaps(cell) {
                 continue;
             }
-            let leaf = self.obstacles[k].nodes[a as usize].is_leaf() && self.b.nodes[b as usize].is_leaf();
-            if !leaf && bx.extent().max_element() > big {
+            let (na, nb) = (&self.obstacles[k].nodes[a as usize], &self.b.nodes[b as usize]);
+            let leaf = na.is_leaf() && nb.is_leaf();
+            // split while that can shrink the pair to the cell's size: a pair with one long
+            // leaf (a 35-unit strip of a pipe) is kept once the other node is that small,
+            // not split down to every triangle of it
+            let splittable = [na, nb].iter().filter(|n| !n.is_leaf()).map(|n| n.size()).fold(0.0f64, f64::max);
+            if !leaf && bx.extent().max_element() > big && splittable > 0.5 * big {
                 stack.extend(self.split(k, a, b).map(|[_, ca, cb]| [ca, cb]));
                 continue;
             }
