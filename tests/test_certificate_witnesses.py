@@ -20,7 +20,13 @@ import planner
 from planner.cli import main
 from planner.io import load_scenario
 from planner.problem import Body, PlannerSettings, Robot, Scenario
-from planner.validation.certificate_check import box_in_solid, check_certificate, piece_holds
+from planner.validation.certificate_check import (
+    box_in_solid,
+    check_certificate,
+    closed_mod_2,
+    odd_parity,
+    piece_holds,
+)
 
 
 def check_witnesses(outcome, scenario) -> dict[str, int]:
@@ -173,22 +179,47 @@ def test_a_decomposition_certificate_is_said_to_rest_on_primitives(tmp_path, cap
     assert "holds" not in said
 
 
-def frame_on_a_rod() -> Scenario:
-    """A square frame of four bars (closed boxes, subdivided, taken as a surface) around
-    a long open tube (a surface) that it cannot leave by translation."""
-    bars = [trimesh.creation.box(extents=e, transform=trimesh.transformations.translation_matrix(c))
-            for e, c in [([1, 6, 1], [2.5, 0, 0]), ([1, 6, 1], [-2.5, 0, 0]),
-                         ([4, 1, 1], [0, 2.5, 0]), ([4, 1, 1], [0, -2.5, 0])]]
+def frame_and_tube(centre=(0.0, 0.0, 0.0)) -> tuple[trimesh.Trimesh, trimesh.Trimesh]:
+    """A square frame of four bars (closed boxes, subdivided) about ``centre``, and a
+    long open tube (no caps) along z through its hole."""
+    placed = [([1, 6, 1], [2.5, 0, 0]), ([1, 6, 1], [-2.5, 0, 0]),
+              ([4, 1, 1], [0, 2.5, 0]), ([4, 1, 1], [0, -2.5, 0])]
+    move = trimesh.transformations.translation_matrix
+    bars = [trimesh.creation.box(extents=e, transform=move(np.add(c, centre))) for e, c in placed]
     frame = trimesh.util.concatenate([b.subdivide().subdivide() for b in bars])
     tube = trimesh.creation.box(extents=[0.6, 0.6, 30])
-    tube = trimesh.Trimesh(tube.vertices, tube.faces[np.abs(tube.face_normals[:, 2]) < 0.5],
-                           process=False)
+    tube = trimesh.Trimesh(tube.vertices + centre,
+                           tube.faces[np.abs(tube.face_normals[:, 2]) < 0.5], process=False)
+    return frame, tube
+
+
+def frame_on_a_rod() -> Scenario:
+    """The frame (the robot, a surface) around the tube (a surface) that it cannot leave
+    by translation."""
+    frame, tube = frame_and_tube()
     return Scenario(name="frame", units="m",
                     robot=Robot("frame", frame, "test", solid=False, kind_reason="test"),
                     obstacles=[Body("tube", tube, "test", solid=False, kind_reason="test")],
                     start=[0, 0, 0], goal=[9, 0, 0], orientation=np.eye(3),
                     bounds=(np.full(3, -12.0), np.full(3, 12.0)),
                     settings=PlannerSettings(time_limit=60))
+
+
+def test_witnesses_of_a_tube_in_a_frame_off_the_origins_include_the_frames_shells():
+    # the roles swapped (the tube moves, the frame's bars are the obstacle's shells), and
+    # neither part about its own origin, so that a sign or a reflection wrong would show
+    frame, tube = frame_and_tube((2.0, 3.0, 0.0))
+    tube.apply_translation([-1.3, 0.7, -0.4])  # the robot's frame off its middle
+    scenario = Scenario(name="tube", units="m",
+                        robot=Robot("tube", tube, "test", solid=False, kind_reason="test"),
+                        obstacles=[Body("frame", frame, "test", solid=False, kind_reason="test")],
+                        start=[1.3, -0.7, 0.4], goal=[10.3, -0.7, 0.4], orientation=np.eye(3),
+                        bounds=(np.full(3, -12.0), np.full(3, 14.0)),
+                        settings=PlannerSettings(time_limit=60))
+    outcome = planner.plan(scenario, progress=False)
+    assert outcome.status == "no_path", outcome.message
+    assert check_witnesses(outcome, scenario).get("obstacle_shell", 0) > 0
+    assert {shell["of"] for shell in outcome.certificate["shells"]} == {"obstacle"}
 
 
 def test_witnesses_of_a_frame_on_a_tube_include_its_closed_shells(tmp_path, capsys):
@@ -219,3 +250,14 @@ def test_witnesses_of_a_frame_on_a_tube_include_its_closed_shells(tmp_path, caps
         "the far vertex inside the shell's box, and no vertex"
     assert not tampered(lambda b, p: p.update(kind="obstacle_shell")), "the robot's shell " \
         "named as the obstacle's"
+
+
+def test_parity_ignores_zero_area_triangles_as_the_core_does():
+    # a flat triangle (three points on a line) kept in a shell crosses no ray's parity
+    cube = np.asarray(trimesh.creation.box(extents=[2, 2, 2]).triangles)
+    flat = np.array([[[-1.0, -1, -1], [0, -1, -1], [1, -1, -1]]])
+    shell = np.concatenate([cube, flat])
+    assert odd_parity(shell, np.zeros(3), 1e-9) is True
+    assert odd_parity(shell, np.array([3.0, 0, 0]), 1e-9) is False
+    assert closed_mod_2(shell.reshape(-1, 3), np.arange(len(shell) * 3).reshape(-1, 3)) is False
+    assert closed_mod_2(cube.reshape(-1, 3), np.arange(len(cube) * 3).reshape(-1, 3)) is True

@@ -972,8 +972,8 @@ fn certificate_dict<'py>(py: Python<'py>, cs: &crate::roadmap::CSpace, c: &crate
     Ok(d)
 }
 
-/// A closed shell a witness names: (whether it is the robot's, obstacle, index among the
-/// mesh's shells).
+/// A closed shell a witness names: (whether it is the robot's, its obstacle (0 for the
+/// robot's), index among the mesh's shells).
 type ShellKey = (bool, usize, usize);
 
 /// The shells the witnesses name, in the order they were first named, each a dict: `of`
@@ -1051,7 +1051,8 @@ fn wall_witness_list<'py>(py: Python<'py>, w: &crate::roadmap::WallWitness, shel
                 d.set_item("side", *side)?;
             }
             BoxWitness::Pierced { k, shell_of_b, shell, x, tri, y } => {
-                let key = (*shell_of_b, *k, *shell);
+                // a robot shell is one whichever obstacle crosses it
+                let key = (*shell_of_b, if *shell_of_b { 0 } else { *k }, *shell);
                 let index = shells.iter().position(|s| *s == key).unwrap_or_else(|| {
                     shells.push(key);
                     shells.len() - 1

@@ -137,7 +137,8 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
     bounds_faces = [bool(box[0][s // 2] <= lo[s // 2]) if s % 2 == 0 else
                     bool(box[1][s // 2] >= hi[s // 2]) for s in range(6)]
     side = float(np.max(box[1] - box[0]))
-    for label, robot in subsets(scenario.robot):
+    order = list(subsets(scenario.robot))
+    for label, robot in order:
         t_subset = time.perf_counter()
         subset = {"subset": label, "triangles": len(robot.mesh.faces)}
         if deadline.would_pass(deadline.cspace_pace * len(robot.mesh.faces)):
@@ -157,8 +158,8 @@ def prove_end_enclosed(scenario: Scenario, source: Source, checker: FclChecker,
         except ResourceLimitError:
             deadline.reached |= reached_before
             tried.append(_attempt(which, box, subset, "over the memory limit", t_subset))
-            if whole:
-                raise
+            if whole and label == order[-1][0]:
+                raise  # nothing smaller is left to try
             continue
         except TimeLimitError:
             deadline.reached = True

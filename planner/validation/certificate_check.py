@@ -19,8 +19,16 @@ both with independent libraries, from the scenario's meshes:
    triangles' corners (scipy's Qhull; the set of translations where they meet is that
    hull, so the corners decide); ``"robot_vertex"`` / ``"obstacle_vertex"``: the vertex's
    box lies in the solid (trimesh's containment of its centre, and FCL's box against the
-   solid's triangles: no contact); ``"bounds"``: the part lies beyond the bounds' face;
-   ``"primitive"`` (a decomposition's convex piece) is not checked here and is counted.
+   solid's triangles: no contact); ``"robot_shell"`` / ``"obstacle_shell"``: the shell
+   (faces of the scenario's mesh) is closed mod 2 (every edge, vertices welded by
+   coordinates, used an even number of times), the point lies on its triangle (the
+   nearest point of the triangle is tested) and the far vertex is a vertex of the same
+   connected part (triangles sharing welded vertices), the point's box lies in the
+   shell's odd region (FCL: no shell triangle meets it; the parity of crossings of a ray
+   from its centre, counted here with numpy, is odd) and the far vertex's box misses the
+   shell's box — so the part's connected surface crosses the shell at every translation
+   of the box; ``"bounds"``: the part lies beyond the bounds' face; ``"primitive"`` (a
+   decomposition's convex piece) is not checked here and is counted.
 
 Rounding: coordinates match within :data:`SLACK` of the scenario's size (never of the
 certificate's). The check speaks of the meshes as the scenario loads them (solids and
@@ -164,6 +172,7 @@ _RAY_DIRECTIONS = np.array([[0.5773502691896258, 0.6180339887498948, 0.532088886
                             [-0.381966011250105, 0.7071067811865475, -0.595241580617241],
                             [0.2679491924311227, -0.8090169943749474, 0.5235987755982988],
                             [-0.723606797749979, -0.223606797749979, 0.6524758424985279]])
+_RAY_DIRECTIONS /= np.linalg.norm(_RAY_DIRECTIONS, axis=1, keepdims=True)
 """Generic ray directions for :func:`odd_parity`, tried in turn."""
 
 
@@ -189,6 +198,11 @@ def odd_parity(triangles: np.ndarray, q: np.ndarray, tol: float) -> bool | None:
     Möller–Trumbore on each of a few generic directions until one passes no edge or
     vertex within rounding; ``None`` when ``q`` lies on a triangle or every ray did."""
     a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    normal = np.cross(b - a, c - a)
+    area = np.linalg.norm(normal, axis=1)
+    scale = float(np.ptp(triangles.reshape(-1, 3), axis=0).max()) if len(triangles) else 0.0
+    flat = area <= 1e-14 * scale * scale  # zero area: crossing it changes no parity
+    a, b, c, normal, area = a[~flat], b[~flat], c[~flat], normal[~flat], area[~flat]
     e1, e2 = b - a, c - a
     s = q - a
     for d in _RAY_DIRECTIONS:
@@ -205,8 +219,8 @@ def odd_parity(triangles: np.ndarray, q: np.ndarray, tol: float) -> bool | None:
             return None
         hits = inside & (t > 0)
         edge = (u <= 1e-9) | (v <= 1e-9) | (u + v >= 1 - 1e-9)
-        if np.any(hits & edge) or np.any(~ok & (np.abs(np.einsum("ij,ij->i", s, np.cross(
-                e1, e2))) <= tol * np.linalg.norm(np.cross(e1, e2), axis=1))):
+        if np.any(hits & edge) or np.any(~ok & (np.abs(np.einsum("ij,ij->i", s, normal))
+                                                <= tol * area)):
             continue  # through an edge, or along a triangle's plane: another direction
         return bool(hits.sum() % 2 == 1)
     return None
@@ -216,10 +230,11 @@ def _fcl_model(mesh: trimesh.Trimesh) -> fcl.BVHModel:
     return bvh_model(np.asarray(mesh.vertices), np.asarray(mesh.faces))
 
 
-def _box_free_of(box: np.ndarray, model: fcl.BVHModel) -> bool:
-    """Whether no triangle of ``model`` meets the box (grown by the rounding slack)."""
-    centre, half = box.mean(axis=0), (box[1] - box[0]) / 2
-    grown = fcl.Box(*(2 * half * (1 + SLACK) + 2 * SLACK))
+def _box_free_of(box: np.ndarray, model: fcl.BVHModel, grow: float = 0.0) -> bool:
+    """Whether no triangle of ``model`` meets the box (grown by ``grow`` and the relative
+    rounding slack)."""
+    centre, half = box.mean(axis=0), (box[1] - box[0]) / 2 + grow
+    grown = fcl.Box(*(2 * half * (1 + SLACK)))
     return not fcl.collide(fcl.CollisionObject(grown, fcl.Transform(centre)),
                            fcl.CollisionObject(model, fcl.Transform()),
                            fcl.CollisionRequest(), fcl.CollisionResult())
@@ -239,7 +254,11 @@ class _Shell:
             mesh = parts.obstacles[self.owner].mesh
         else:
             raise ValueError(f"shell of = {self.of!r}: expected 'robot' or 'obstacle'")
-        faces = np.asarray(mesh.faces)[np.asarray(entry["faces"], dtype=np.int64)]
+        try:
+            index = np.asarray(entry["faces"], dtype=np.int64).reshape(-1)
+        except OverflowError as e:
+            raise ValueError(f"shell faces: {e}") from e
+        faces = np.asarray(mesh.faces)[index]
         self.closed = len(faces) >= 4 and closed_mod_2(np.asarray(mesh.vertices), faces)
         self.triangles = np.asarray(mesh.vertices, dtype=np.float64)[faces]
         flat = self.triangles.reshape(-1, 3)
@@ -248,7 +267,7 @@ class _Shell:
 
     def holds_inside(self, box: np.ndarray, tol: float) -> bool:
         """Whether ``box`` lies in the shell's odd region."""
-        return (self.closed and _box_free_of(box, self.model)
+        return (self.closed and _box_free_of(box, self.model, tol)
                 and odd_parity(self.triangles, box.mean(axis=0), tol) is True)
 
     def misses(self, box: np.ndarray, tol: float) -> bool:
@@ -260,15 +279,9 @@ def box_in_solid(box: np.ndarray, solid: trimesh.Trimesh,
                  model: fcl.BVHModel | None = None) -> bool:
     """Whether the box lies inside the closed mesh ``solid``: its centre inside
     (trimesh), and no triangle meets it (FCL's box against the triangles)."""
-    centre, half = box.mean(axis=0), (box[1] - box[0]) / 2
-    if not solid.contains([centre])[0]:
+    if not solid.contains([box.mean(axis=0)])[0]:
         return False
-    model = model if model is not None else _fcl_model(solid)
-    grown = fcl.Box(*(2 * half * (1 + SLACK)))
-    result = fcl.CollisionResult()
-    return not fcl.collide(fcl.CollisionObject(grown, fcl.Transform(centre)),
-                           fcl.CollisionObject(model, fcl.Transform()),
-                           fcl.CollisionRequest(), result)
+    return _box_free_of(box, model if model is not None else _fcl_model(solid))
 
 
 def check_certificate(certificate: dict[str, Any], scenario: Scenario) -> CertificateCheck:
@@ -443,7 +456,9 @@ def _shell_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, tol: float
     x = np.asarray(witness["point"], dtype=np.float64).reshape(3)
     tri = np.asarray(witness["point_triangle"], dtype=np.float64).reshape(3, 3)
     y = np.asarray(witness["far_vertex"], dtype=np.float64).reshape(3)
-    on_triangle = _point_triangle_distance(x, tri) <= tol
+    nearest = trimesh.triangles.closest_point(tri[None], x[None])[0]
+    on_triangle = float(np.linalg.norm(x - nearest)) <= tol
+    x = nearest  # the box is tested about the triangle's own point
     part = parts.part_of(mesh, tri[0])
     same_part = part is not None and parts.part_of(mesh, y) == part
     # robot at t: the obstacle's x inside the shell + t (x − t); the robot's x + t inside
@@ -451,11 +466,6 @@ def _shell_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, tol: float
     return bool(parts.has_triangle(mesh, tri) and on_triangle and same_part
                 and shell.holds_inside(moved(x), tol) and shell.misses(moved(y), tol))
 
-
-def _point_triangle_distance(p: np.ndarray, tri: np.ndarray) -> float:
-    """The distance from ``p`` to the triangle ``tri`` (3, 3), by trimesh."""
-    closest = trimesh.triangles.closest_point(tri[None], p[None])[0]
-    return float(np.linalg.norm(p - closest))
 
 
 def _uncovered_faces(component: np.ndarray, walls: np.ndarray, tol: float) -> list[str]:

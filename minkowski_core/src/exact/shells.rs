@@ -21,7 +21,8 @@
 //!
 //! Shells: patches (triangles joined across edges used exactly twice), the closed ones as
 //! they are and the open ones summed mod 2 where their boundaries cancel (elimination over
-//! GF(2), smallest patches first), plus the sum of all of those. Each gets a lattice of
+//! GF(2), smallest patches first), plus the sum of all those sums (OMPL.app's ring whole,
+//! its shared caps cancelled). Each gets a lattice of
 //! points in its odd region with their distance to it (balls inside it), from which a
 //! box's `x` is found by walking the other mesh's BVH; the witness is then tested exactly
 //! (no triangle of the shell meets `bx − x`, the parity at its centre is odd).
@@ -361,7 +362,8 @@ fn parts(mesh: &TriMesh, welded: &[u32]) -> (Vec<u32>, Vec<[Vec3; 6]>) {
 }
 
 /// The triangle sets of the mesh's closed shells (mod 2): closed patches, and sums of
-/// open patches whose boundaries cancel, plus the sum of all those sums.
+/// open patches whose boundaries cancel, plus the sum of all those sums (not of the
+/// closed patches).
 fn shell_sets(faces: &[[u32; 3]], welded: &[u32]) -> Vec<Vec<u32>> {
     let nf = faces.len();
     // every (edge, triangle), edges as welded vertex pairs, sorted by edge
