@@ -65,3 +65,27 @@ def test_an_inner_block_keeps_the_earlier_deadline_and_gives_back_the_outer_one(
         with native_deadline(time.perf_counter() - 1.0), pytest.raises(TimeLimitError):
             torus_space()
         assert len(torus_space()) > 0  # the outer, far deadline is back
+
+
+def test_a_plan_whose_whole_bounds_cspace_passes_the_limit_ends_near_it():
+    # two dense spheres taken as surfaces (every triangle pair a boundary candidate): the
+    # whole bounds' C-space takes seconds to build, and the plan's one clock (started
+    # after loading) stops it from inside
+    import planner
+    from planner.planning import OctreeParams
+    from planner.problem import Body, PlannerSettings, Robot, Scenario
+
+    ball = trimesh.creation.icosphere(subdivisions=5, radius=1.0)
+    small = trimesh.creation.icosphere(subdivisions=4, radius=0.4)
+    scenario = Scenario(name="dense", units="m",
+                        robot=Robot("ball", small, "test", solid=False, kind_reason="test"),
+                        obstacles=[Body("sphere", ball, "test", solid=False, kind_reason="test")],
+                        start=[-2.5, 0, 0], goal=[2.5, 0, 0], orientation=np.eye(3),
+                        bounds=(BOUNDS[0], BOUNDS[1]), settings=PlannerSettings(time_limit=0.3))
+    skip = OctreeParams(local_first_pairs=10**12, direct_first_pairs=10**12)
+    t0 = time.perf_counter()
+    outcome = planner.plan(scenario, params=skip, progress=False)
+    seconds = time.perf_counter() - t0
+    assert outcome.status == "not_found" and outcome.reason == "time_limit", outcome.message
+    assert "while the C-space over the whole bounds was built" in outcome.message
+    assert seconds < 20, seconds  # loading and the checker, not the build's own time

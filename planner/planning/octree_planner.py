@@ -158,6 +158,7 @@ class OctreePlanner:
         self.local: LocalProof | None = None
         self._ready = False
         self.out_of_time = False
+        self.out_of_time_in = ""
 
     # ---------------------------------------------------------------- setup
 
@@ -182,6 +183,8 @@ class OctreePlanner:
                 self.margin = sc.settings.clearance + self._src.margin_deficit(self._parts)
         else:
             self.margin = sc.settings.clearance
+        # the time limit bounds the planning from here (not the decomposition)
+        self.deadline = Deadline(time.perf_counter() + sc.settings.time_limit)
         lo, hi = sc.bounds
         self.bounds = np.stack([lo, hi])
         diagonal = float(np.linalg.norm(hi - lo))
@@ -205,7 +208,14 @@ class OctreePlanner:
             return
         else:
             self.bar.show("minkplan: building the C-space")
-            self.cspace = self._build(self.margin)
+            try:
+                with self.deadline.native():
+                    self.cspace = self._build(self.margin)
+            except TimeLimitError:
+                self.deadline.reached = self.out_of_time = True
+                self.out_of_time_in = "while the C-space over the whole bounds was built"
+                self._direct_head()
+                return
         self._report_head()
 
     def _direct(self) -> Direct | None:
@@ -232,7 +242,7 @@ class OctreePlanner:
         if (self._src.kind != "exact" or self.margin > 0
                 or surface_pairs(sc) < self.params.local_first_pairs):
             return None
-        deadline = Deadline(time.perf_counter() + sc.settings.time_limit)
+        deadline = self.deadline
         attempts: list[dict[str, Any]] = []
         self.report["local_proof"] = {"proved": False, "attempts": attempts}
         for which in ("start", "goal"):
@@ -252,6 +262,7 @@ class OctreePlanner:
                                               "attempts": attempts}
                 return proof
         self.out_of_time = deadline.reached or deadline.would_pass()
+        self.out_of_time_in = "in the local proofs (no C-space over the whole bounds was built)"
         return None
 
     @property
@@ -333,10 +344,9 @@ class OctreePlanner:
             return self._local_no_path(self.local)
         if self.out_of_time:
             return self._finish(NOT_FOUND, "time_limit",
-                                "time limit reached in the local proofs (no C-space over "
-                                "the whole bounds was built)")
+                                f"time limit reached {self.out_of_time_in}")
         sc = self.scenario
-        deadline = time.perf_counter() + sc.settings.time_limit
+        deadline = self.deadline.at
         start = np.asarray(sc.start, dtype=np.float64)
         goal = np.asarray(sc.goal, dtype=np.float64)
         reach = self.params.escape_rel * max(self.delta, self.margin)
