@@ -1,4 +1,4 @@
-"""The ``minkplan verify`` command: a no-path certificate checked without the native core
+"""The ``minkplan verify`` command: a no-path certificate checked with independent libraries
 (:mod:`planner.validation.certificate_check`)."""
 
 from __future__ import annotations
@@ -18,11 +18,14 @@ def add_parser(sub, common) -> None:
         "verify", parents=[common],
         help="check a no-path certificate with independent libraries (FCL, trimesh, scipy)",
         description="Check DIR/certificate.json (written by minkplan plan for a proved no "
-        "path) against the scenario's meshes without minkplan's native core: the walled "
+        "path) against the scenario's meshes with independent libraries (the native core "
+        "only loads the scenario: it tells solids from surfaces): the walled "
         "point lies in the component, the component's cells are closed by its wall cells, "
         "and every wall cell's witnesses hold (a robot triangle meeting an obstacle "
-        "triangle: scipy's convex hulls; a vertex inside a solid: trimesh and FCL; the "
-        "bounds); the witnesses must be the scenario's own triangles and vertices, the "
+        "triangle: scipy's convex hulls; a vertex inside a solid: trimesh and FCL; a "
+        "connected part crossing a closed shell of the other part: the shell's closedness "
+        "and a ray's parity counted with numpy, FCL; the bounds); the witnesses must be "
+        "the scenario's own triangles and vertices, the "
         "walled point its start or goal. Exit 0: the certificate holds; 1: it does not "
         "(the failures are listed), or rests on a decomposition's primitives, which are not "
         "checked; 2: bad input.",
@@ -54,8 +57,7 @@ def cmd_verify(args) -> int:
     try:
         check = check_certificate(certificate, scenario)
     except (ValueError, KeyError, TypeError, IndexError, AttributeError) as exc:
-        return _fail(f"certificate: {path}: not a minkplan certificate ({type(exc).__name__}: "
-                     f"{exc})")
+        return _fail(f"certificate: {path}: not a minkplan certificate ({exc})")
     kinds = ", ".join(f"{n} {k}" for k, n in sorted(check.witnesses.items()))
     if check.valid and check.unchecked:
         sys.stdout.write(f"{path}: not checked: the {certificate['walled']} lies in a closed "
@@ -72,4 +74,6 @@ def cmd_verify(args) -> int:
     sys.stdout.write(f"{path}: does not hold: {check.n_failures} failures\n")
     for failure in check.failures:
         sys.stdout.write(f"  {failure}\n")
+    if check.n_failures > len(check.failures):
+        sys.stdout.write(f"  ... and {check.n_failures - len(check.failures)} more\n")
     return 1

@@ -261,3 +261,41 @@ def test_parity_ignores_zero_area_triangles_as_the_core_does():
     assert odd_parity(shell, np.array([3.0, 0, 0]), 1e-9) is False
     assert closed_mod_2(shell.reshape(-1, 3), np.arange(len(shell) * 3).reshape(-1, 3)) is False
     assert closed_mod_2(cube.reshape(-1, 3), np.arange(len(cube) * 3).reshape(-1, 3)) is True
+
+
+def test_malformed_shell_witnesses_are_refused_naming_the_field():
+    scenario = frame_on_a_rod()
+    outcome = planner.plan(scenario, progress=False)
+    certificate = outcome.certificate
+    index = next(i for i, w in enumerate(certificate["walls"])
+                 if any(p["kind"] == "robot_shell" for p in w["witnesses"]))
+
+    def refused(change) -> str:
+        broken = copy.deepcopy(certificate)
+        change(broken, next(p for p in broken["walls"][index]["witnesses"]
+                            if p["kind"] == "robot_shell"))
+        try:
+            check_certificate(broken, scenario)
+        except ValueError as exc:
+            return str(exc)
+        raise AssertionError("accepted")
+
+    assert refused(lambda b, p: p.update(shell="0")).startswith(f"walls[{index}]: shell = '0'")
+    assert "face = -1" in refused(lambda b, p: b["shells"][0]["faces"].__setitem__(0, -1))
+    assert "face = 7.5" in refused(lambda b, p: b["shells"][0]["faces"].__setitem__(0, 7.5))
+    assert refused(lambda b, p: b["walls"][index].update(leaf="x")).startswith(
+        f"walls[{index}]: leaf = 'x'")
+    assert "missing 'point'" in refused(lambda b, p: p.pop("point"))
+    assert "kind = 'nested'" in refused(lambda b, p: p.update(kind="nested"))
+    assert "schema = 'minkplan/certificate/9'" in refused(
+        lambda b, p: b.update(schema="minkplan/certificate/9"))
+
+
+def test_a_certificate_checked_at_another_orientation_says_so():
+    scenario = frame_on_a_rod()
+    certificate = planner.plan(scenario, progress=False).certificate
+    assert np.allclose(certificate["robot_orientation"], np.eye(3))
+    turned = copy.deepcopy(certificate)
+    turned["robot_orientation"] = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]
+    check = check_certificate(turned, scenario)
+    assert not check.valid and "another orientation" in check.failures[0]

@@ -101,6 +101,7 @@ def certificate_document(cs, raw: dict[str, Any], ends: dict[str, np.ndarray], *
         "verified": bool(raw["verified"]),
         "walled": walled,
         "walled_point": ends[walled].tolist(),
+        "robot_orientation": np.asarray(scenario.orientation, dtype=np.float64).tolist(),
         "component_cells": len(component),
         "component_volume": volume,
         "start_component_cells": int(raw["start_component_size"]),

@@ -1,4 +1,4 @@
-"""A no-path certificate checked without the native core: what ``minkplan verify`` runs.
+"""A no-path certificate checked with independent libraries: what ``minkplan verify`` runs.
 
 A certificate (``certificate.json``) claims that the walled point (the start or the goal)
 lies in a *component* of cells that no translation leaves without entering a *wall* cell,
@@ -31,8 +31,12 @@ both with independent libraries, from the scenario's meshes:
    decomposition's convex piece) is not checked here and is counted.
 
 Rounding: coordinates match within :data:`SLACK` of the scenario's size (never of the
-certificate's). The check speaks of the meshes as the scenario loads them (solids and
-surfaces, as the loader classified them), as the certificate does. Malformed certificates
+certificate's). The check speaks of the meshes as the scenario loads them, as the
+certificate does, at the robot's orientation it records. What it takes from the loader
+(which uses the native core): which meshes are solids — their winding number never
+negative, computed exactly by the core; here a solid a witness rests on is checked again
+to be closed and outward (every edge used as often in each direction, positive volume),
+not for the winding number's sign. The shell witnesses need no solid. Malformed certificates
 raise (``ValueError``, ``KeyError``, ``TypeError``, ``IndexError``).
 """
 
@@ -49,12 +53,13 @@ import scipy.sparse.csgraph
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
+from planner.output import schema_id
 from planner.problem import Scenario
 
 from .fcl_checker import bvh_model
 
-__all__ = ["SLACK", "CertificateCheck", "box_in_solid", "check_certificate", "closed_mod_2",
-           "odd_parity", "piece_holds", "welded_ids"]
+__all__ = ["SLACK", "CertificateCheck", "box_in_solid", "check_certificate",
+           "closed_and_oriented", "closed_mod_2", "odd_parity", "piece_holds", "welded_ids"]
 
 SLACK = 1e-9
 """Relative rounding slack of the tests (a wall cell may touch its piece, cells meet on a
@@ -126,6 +131,7 @@ class _Parts:
         self._triangles: dict[int, set[frozenset[tuple[float, ...]]]] = {}
         self.models: dict[int, fcl.BVHModel] = {}
         self._parts: dict[int, dict[tuple[float, ...], int]] = {}
+        self._solid: dict[int, bool] = {}
 
     def has_vertex(self, mesh: trimesh.Trimesh, v: np.ndarray) -> bool:
         key = id(mesh)
@@ -161,6 +167,15 @@ class _Parts:
             self._parts[key] = where
         return self._parts[key].get(tuple(np.asarray(point, dtype=np.float64).tolist()))
 
+    def is_solid(self, body: Any) -> bool:
+        """Whether ``body`` was loaded as a solid and its mesh is closed and outward
+        (:func:`closed_and_oriented`, checked here once per mesh)."""
+        key = id(body.mesh)
+        if key not in self._solid:
+            self._solid[key] = bool(body.solid) and closed_and_oriented(
+                np.asarray(body.mesh.vertices), np.asarray(body.mesh.faces))
+        return self._solid[key]
+
     def model(self, mesh: trimesh.Trimesh) -> fcl.BVHModel:
         key = id(mesh)
         if key not in self.models:
@@ -191,6 +206,24 @@ def closed_mod_2(vertices: np.ndarray, faces: np.ndarray) -> bool:
     edges = np.sort(edges[edges[:, 0] != edges[:, 1]], axis=1)
     _, counts = np.unique(edges, axis=0, return_counts=True)
     return bool(np.all(counts % 2 == 0))
+
+
+def closed_and_oriented(vertices: np.ndarray, faces: np.ndarray) -> bool:
+    """Whether every edge (vertices welded) is used as often in one direction as in the
+    other, and the enclosed signed volume is positive: what a solid's mesh must be
+    (the sign of its winding number inside is the loader's test, with the core)."""
+    ids = welded_ids(vertices)[np.asarray(faces)]
+    directed = np.concatenate([ids[:, [0, 1]], ids[:, [1, 2]], ids[:, [2, 0]]])
+    directed = directed[directed[:, 0] != directed[:, 1]]
+    forward = directed[:, 0] < directed[:, 1]
+    keys = np.sort(directed, axis=1)
+    edges, inverse = np.unique(keys, axis=0, return_inverse=True)
+    balance = np.bincount(inverse.reshape(-1), weights=np.where(forward, 1.0, -1.0),
+                          minlength=len(edges))
+    triangles = np.asarray(vertices, dtype=np.float64)[np.asarray(faces)]
+    volume = np.einsum("ij,ij->i", triangles[:, 0],
+                       np.cross(triangles[:, 1], triangles[:, 2])).sum() / 6.0
+    return bool(np.all(balance == 0) and volume > 0)
 
 
 def odd_parity(triangles: np.ndarray, q: np.ndarray, tol: float) -> bool | None:
@@ -254,10 +287,12 @@ class _Shell:
             mesh = parts.obstacles[self.owner].mesh
         else:
             raise ValueError(f"shell of = {self.of!r}: expected 'robot' or 'obstacle'")
-        try:
-            index = np.asarray(entry["faces"], dtype=np.int64).reshape(-1)
-        except OverflowError as e:
-            raise ValueError(f"shell faces: {e}") from e
+        listed = entry["faces"]
+        if not isinstance(listed, list):
+            raise TypeError("faces: expected a list of face indices")
+        index = np.asarray([_index(f, "face") for f in listed], dtype=np.int64)
+        if len(index) and index.max() >= len(mesh.faces):
+            raise IndexError(f"face {int(index.max())}: the mesh has {len(mesh.faces)} faces")
         faces = np.asarray(mesh.faces)[index]
         self.closed = len(faces) >= 4 and closed_mod_2(np.asarray(mesh.vertices), faces)
         self.triangles = np.asarray(mesh.vertices, dtype=np.float64)[faces]
@@ -293,11 +328,19 @@ def check_certificate(certificate: dict[str, Any], scenario: Scenario) -> Certif
     """
     t0 = time.perf_counter()
     out = CertificateCheck()
-    component = _boxes(certificate["component"]["boxes"])
+    if not isinstance(certificate, dict):
+        raise TypeError("the certificate is not a JSON object")
+    if certificate.get("schema", schema_id("certificate")) != schema_id("certificate"):
+        raise ValueError(f"schema = {certificate['schema']!r}: expected "
+                         f"{schema_id('certificate')!r}")
+    component = _within("component.boxes", lambda: _boxes(certificate["component"]["boxes"]))
     walls = certificate["walls"]
-    wall_boxes = _boxes([w["box"] for w in walls])
+    if not isinstance(walls, list):
+        raise TypeError("walls: expected a list")
+    wall_boxes = _within("walls", lambda: _boxes([w["box"] for w in walls]))
     lo, hi = (np.asarray(b, dtype=np.float64) for b in scenario.bounds)
     tol = SLACK * _scene_size(scenario)  # from the scenario, never from the certificate
+    _check_orientation(certificate, scenario, out)
     _check_ends(certificate, scenario, component, tol, out)
     for message in _lattice_problems(np.concatenate([component, wall_boxes]), tol):
         out.fail(message)
@@ -306,12 +349,53 @@ def check_certificate(certificate: dict[str, Any], scenario: Scenario) -> Certif
     for message in uncovered:
         out.fail(message)
     parts = _Parts(scenario)
-    shells = [_Shell(entry, parts) for entry in certificate.get("shells", [])]
-    for wall in walls:
+    entries = certificate.get("shells", [])
+    if not isinstance(entries, list):
+        raise TypeError("shells: expected a list")
+    shells = [_within(f"shells[{i}]", lambda entry=entry: _Shell(entry, parts))
+              for i, entry in enumerate(entries)]
+    for i, shell in enumerate(shells):
+        if not shell.closed:
+            whose = "the robot's" if shell.owner is None else f"obstacle {shell.owner}'s"
+            out.fail(f"shell {i} ({whose}) is not closed mod 2: some edge is used an odd "
+                     f"number of times")
+    for i, wall in enumerate(walls):
         out.walls += 1
-        _check_wall(wall, lo, hi, tol, parts, shells, out)
+        _within(f"walls[{i}]", lambda wall=wall: _check_wall(wall, lo, hi, tol, parts, shells, out))
     out.seconds = time.perf_counter() - t0
     return out
+
+
+def _within(where: str, step: Any) -> Any:
+    """``step()``, its malformed-input errors re-raised as a ``ValueError`` naming
+    ``where`` (the certificate's field)."""
+    try:
+        return step()
+    except KeyError as exc:
+        raise ValueError(f"{where}: missing {exc.args[0]!r}") from exc
+    except (ValueError, TypeError, IndexError, AttributeError, OverflowError) as exc:
+        raise ValueError(f"{where}: {exc}") from exc
+
+
+def _index(value: Any, what: str) -> int:
+    """``value`` as an index: an integer (not a bool, not a float) at least 0."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ValueError(f"{what} = {value!r}: expected an integer >= 0")
+    return value
+
+
+def _check_orientation(certificate: dict[str, Any], scenario: Scenario,
+                       out: CertificateCheck) -> None:
+    """The robot's orientation the certificate was made for is the scenario's (as loaded,
+    with the same ``--hold-orientation``)."""
+    if "robot_orientation" not in certificate:
+        return  # certificates written before it was recorded
+    given = np.asarray(certificate["robot_orientation"], dtype=np.float64)
+    if given.shape != (3, 3):
+        raise ValueError("robot_orientation: expected a 3 x 3 matrix")
+    if not np.allclose(given, np.asarray(scenario.orientation), rtol=0.0, atol=1e-9):
+        out.fail("the certificate is for the robot at another orientation than the "
+                 "scenario's as loaded (plan and verify with the same --hold-orientation)")
 
 
 def _boxes(rows: Any) -> np.ndarray:
@@ -388,7 +472,7 @@ def _check_wall(wall: dict[str, Any], lo: np.ndarray, hi: np.ndarray, tol: float
     """Check one wall cell's witnesses (see the module documentation)."""
     box = _boxes([wall["box"]])[0]
     witnesses = wall.get("witnesses")
-    name = f"wall cell {wall['leaf']}"
+    name = f"wall cell {_index(wall['leaf'], 'leaf')}"
     if not witnesses:
         out.fail(f"{name} has no witness")
         return
@@ -401,6 +485,8 @@ def _check_wall(wall: dict[str, Any], lo: np.ndarray, hi: np.ndarray, tol: float
         out.fail(f"{name}: its witnesses' parts do not tile its box")
     for witness, sub in zip(witnesses, boxes, strict=True):
         kind = witness["kind"]
+        if kind not in _KINDS:
+            raise ValueError(f"kind = {kind!r}: expected one of {', '.join(_KINDS)}")
         out.witnesses[kind] = out.witnesses.get(kind, 0) + 1
         if kind == "primitive":
             out.unchecked += 1
@@ -409,12 +495,17 @@ def _check_wall(wall: dict[str, Any], lo: np.ndarray, hi: np.ndarray, tol: float
             out.fail(f"{name}: its {kind} witness does not hold for the box {sub.tolist()}")
 
 
+_KINDS = ("triangles", "robot_vertex", "obstacle_vertex", "robot_shell", "obstacle_shell",
+          "bounds", "primitive")
+"""The witness kinds a certificate may hold."""
+
+
 def _part_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, lo: np.ndarray,
                 hi: np.ndarray, tol: float, parts: _Parts, shells: list[_Shell]) -> bool:
     """Whether one witness holds for its part ``sub`` of a wall cell, with its geometry
     the scenario's own (see the module documentation)."""
     if kind == "bounds":
-        axis, upper = divmod(int(witness["side"]), 2)
+        axis, upper = divmod(_index(witness["side"], "side"), 2)
         if not 0 <= axis < 3:
             raise ValueError(f"side = {witness['side']!r}: expected 0 to 5")
         return bool(sub[0][axis] >= hi[axis] - tol if upper else sub[1][axis] <= lo[axis] + tol)
@@ -430,10 +521,10 @@ def _part_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, lo: np.ndar
                 and piece_holds(sub, o, r))
     v = np.asarray(witness["vertex"], dtype=np.float64).reshape(3)
     if kind == "robot_vertex":
-        return (obstacle.solid and parts.has_vertex(parts.robot.mesh, v)
+        return (parts.is_solid(obstacle) and parts.has_vertex(parts.robot.mesh, v)
                 and box_in_solid(sub + v, obstacle.mesh, parts.model(obstacle.mesh)))
     if kind == "obstacle_vertex":
-        return (parts.robot.solid and parts.has_vertex(obstacle.mesh, v)
+        return (parts.is_solid(parts.robot) and parts.has_vertex(obstacle.mesh, v)
                 and box_in_solid(v - sub[::-1], parts.robot.mesh, parts.model(parts.robot.mesh)))
     raise ValueError(f"kind = {kind!r}: not a witness kind")
 
@@ -443,8 +534,8 @@ def _shell_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, tol: float
     """A ``robot_shell`` or ``obstacle_shell`` witness (see the module documentation):
     the point's box (over the part ``sub`` of translations) in the shell's odd region,
     the far vertex's box off the shell's box, both of one connected part."""
-    index = int(witness["shell"])
-    if not 0 <= index < len(shells):
+    index = _index(witness["shell"], "shell")
+    if index >= len(shells):
         raise IndexError(f"shell = {index}: the certificate lists {len(shells)} shells")
     shell, name = shells[index], str(witness["obstacle"])
     if name not in parts.obstacles:

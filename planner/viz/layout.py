@@ -175,6 +175,13 @@ DISPLAY_MAX_CELLS = 4_000_000
 memory limit is smaller (:func:`display_max_cells`)."""
 
 
+DISPLAY_MAX_SURFACE_PAIRS = 5_000_000
+"""Most triangle pairs of an obstacle and the robot, one of them a surface, whose
+C-obstacle a scene draws: every pair's piece is a boundary candidate there, so a picture
+of OMPL.app's escape (15,744 × 32,796 triangles) took minutes and gigabytes before it was
+refused; such an obstacle is left out with a note (the plan does not need the drawing)."""
+
+
 def display_max_cells() -> int | None:
     """The cell budget of one drawn surface: :data:`DISPLAY_MAX_CELLS`, or ``None`` (what
     the memory limit allows, :mod:`planner.budget`) when that is less."""
@@ -208,7 +215,14 @@ def compute_c_obstacles(scenario, *, source=None, eps: float | None = None,
                             cache_dir=cache_dir, progress=progress)
     eps = display_eps(scenario) if eps is None else eps
     surfaces = {}
+    robot = scenario.robot
     for body in scenario.obstacles:
+        pairs = len(body.mesh.faces) * len(robot.mesh.faces)
+        if not (body.solid and robot.solid) and pairs > DISPLAY_MAX_SURFACE_PAIRS:
+            log.warning("the scene leaves out the C-obstacle of %s: %d triangle pairs with a "
+                        "surface (more than %d) are too many to draw", body.name, pairs,
+                        DISPLAY_MAX_SURFACE_PAIRS)
+            continue
         try:  # a picture's complex cells are no warning
             surfaces[body.name] = c_obstacle(
                 body, scenario.robot, eps=eps, progress=progress, source=source,
