@@ -24,7 +24,9 @@
 //! Solids and surfaces: a mesh is a *solid* ([`TriMesh::new`]: closed, and its winding
 //! number never negative, see [`winding`]) or a *surface* ([`TriMesh::surface`]: any
 //! triangles, no inside, as FCL sees a mesh). Containment counts only for solids: the
-//! nesting test above asks a solid. A pair with a surface has no reduced convolution; every
+//! nesting test above asks a solid. A surface's closed shells (mod 2) still show cells
+//! FULL: a connected part of the other mesh inside one and reaching out of it crosses it
+//! ([`shells`]). A pair with a surface has no reduced convolution; every
 //! one of its pieces is a boundary candidate, kept per cell as pairs of BVH nodes that are
 //! split as the cells shrink (see `root_records`), so no `n·m` list is built.
 //!

@@ -6,9 +6,11 @@
 //! inside — and the facets are complete only for solids that are what they claim to be.
 //! [`ExactSource::verify_box`] shows a box blocked from the triangles alone: every part of
 //! it lies in a wall slab, in one triangle-pair piece `T_i ⊕ S_j` (a contact: always in the
-//! sum), or in the region where a vertex of one mesh lies inside the other, solid, mesh
+//! sum), in the region where a vertex of one mesh lies inside the other, solid, mesh
 //! (a solid mesh containing a box: no triangle meets the box, the winding number at its
-//! centre is not zero). Boxes none of these shows are split into octants, a few times.
+//! centre is not zero), or where a connected part of one mesh crosses a closed shell of
+//! the other ([`super::shells`]: surfaces too). Boxes none of these shows are split into
+//! octants, a few times.
 
 use super::inside_grid::{InsideGrid, Span, MAX_VOXELS};
 use super::mesh::TriMesh;
