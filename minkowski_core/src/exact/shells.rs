@@ -57,6 +57,9 @@ const BLOCK: usize = 4;
 /// BVH nodes of the other mesh visited per shell and box at most.
 const MAX_VISITS: usize = 4096;
 
+/// Lattice points tried against the other mesh's triangles per shell and box at most.
+const MAX_POINT_TESTS: usize = 4096;
+
 /// A closed shell (mod 2) of a mesh, with balls inside its odd region.
 #[derive(Debug)]
 pub struct Shell {
@@ -124,13 +127,25 @@ impl Shells {
         let slack = 1e-9 * (other.aabb.diagonal() + c.abs().max_element() + bx.extent().max_element());
         self.shells.iter().enumerate().filter(|(_, s)| s.lattice.largest > r).find_map(|(si, s)| {
             let outside = |y: Vec3| !Aabb::new(bx.min - y, bx.max - y).inflated(slack).overlaps(&s.mesh.aabb);
-            let found = s.lattice.search(other, c, r, |x, tri| {
-                let probe = Aabb::new(bx.min - x, bx.max - x).inflated(slack);
-                if s.mesh.meets_box(&probe) || s.mesh.parity(probe.center()) != Some(true) {
-                    return None;
-                }
-                others.far[others.part[tri] as usize].into_iter().find(|&y| outside(y))
-            })?;
+            // each part's vertex outside first (cheap): a part with none is not searched
+            let far: Vec<Option<Vec3>> = others.far.iter().map(|f| f.iter().copied().find(|&y| outside(y))).collect();
+            if far.iter().all(Option::is_none) {
+                return None;
+            }
+            let far_of = |tri: usize| far[others.part[tri] as usize];
+            let found = s.lattice.search(
+                other,
+                c,
+                r,
+                |tri| far_of(tri).is_some(),
+                |x, tri| {
+                    let probe = Aabb::new(bx.min - x, bx.max - x).inflated(slack);
+                    if s.mesh.meets_box(&probe) || s.mesh.parity(probe.center()) != Some(true) {
+                        return None;
+                    }
+                    far_of(tri)
+                },
+            )?;
             Some(Pierce { shell: si, x: found.0, tri: found.1, y: found.2 })
         })
     }
@@ -207,59 +222,83 @@ impl Lattice {
         Some(out)
     }
 
-    /// The largest radius of the blocks that hold the index ranges `r`.
-    fn largest_in(&self, r: &[[usize; 2]; 3]) -> f64 {
-        let mut best = 0.0f32;
-        for z in r[2][0] / BLOCK..=r[2][1] / BLOCK {
-            for y in r[1][0] / BLOCK..=r[1][1] / BLOCK {
-                for x in r[0][0] / BLOCK..=r[0][1] / BLOCK {
-                    best = best.max(self.block_radius[x + self.block_dims[0] * (y + self.block_dims[1] * z)]);
+    /// Calls `f` on each block of lattice points within the index ranges `range` whose
+    /// points can hold a box of half-diagonal `r` moved by a point of `moved` (the box
+    /// `c − x` over the other mesh's points `x` at hand): its largest radius above `r`, and
+    /// within that radius less `r` of `moved`. Stops when `f` says so; whether it did.
+    fn blocks(&self, range: &[[usize; 2]; 3], moved: &Aabb, r: f64, mut f: impl FnMut([usize; 3]) -> bool) -> bool {
+        for z in range[2][0] / BLOCK..=range[2][1] / BLOCK {
+            for y in range[1][0] / BLOCK..=range[1][1] / BLOCK {
+                for x in range[0][0] / BLOCK..=range[0][1] / BLOCK {
+                    let rad = self.block_radius[x + self.block_dims[0] * (y + self.block_dims[1] * z)] as f64;
+                    if rad > r && box_gap(&self.block_box([x, y, z]), moved) + r <= rad && f([x, y, z]) {
+                        return true;
+                    }
                 }
             }
         }
-        best as f64
+        false
     }
 
-    /// A point `x` of `other` (on its triangle `tri`) and a lattice point `m` with
-    /// `|c − x − m| + r ≤ radius(m)` (the box of half-diagonal `r` about `c`, moved by
-    /// `−x`, inside the ball about `m`) that `accept` takes, returning its vertex `y`.
-    fn search(&self, other: &TriMesh, c: Vec3, r: f64, accept: impl Fn(Vec3, usize) -> Option<Vec3>) -> Option<(Vec3, usize, Vec3)> {
+    /// The box of the lattice points of block `b`.
+    fn block_box(&self, b: [usize; 3]) -> Aabb {
+        let lo = b.map(|v| (v * BLOCK) as f64);
+        let hi = [0, 1, 2].map(|a| ((b[a] * BLOCK + BLOCK).min(self.dims[a]) - 1) as f64);
+        Aabb::new(self.origin + Vec3::from_array(lo) * self.step, self.origin + Vec3::from_array(hi) * self.step)
+    }
+
+    /// A point `x` of `other` (on its triangle `tri`, one that is `usable`) and a lattice
+    /// point `m` with `|c − x − m| + r ≤ radius(m)` (the box of half-diagonal `r` about
+    /// `c`, moved by `−x`, inside the ball about `m`) that `accept` takes, returning its
+    /// vertex `y`. At
+    /// most [`MAX_VISITS`] nodes and [`MAX_POINT_TESTS`] lattice points are tried.
+    fn search(&self, other: &TriMesh, c: Vec3, r: f64, usable: impl Fn(usize) -> bool, accept: impl Fn(Vec3, usize) -> Option<Vec3>) -> Option<(Vec3, usize, Vec3)> {
         let mut stack = vec![0u32];
-        let mut visits = 0usize;
+        let (mut visits, mut tests) = (0usize, 0usize);
         while let Some(ni) = stack.pop() {
             visits += 1;
-            if visits > MAX_VISITS {
+            if visits > MAX_VISITS || tests > MAX_POINT_TESTS {
                 return None;
             }
             let node = &other.nodes[ni as usize];
-            // lattice points m within reach: c − x − m within (largest − r) for x in the node
-            let reach = self.largest - r;
-            let Some(range) = self.range(&Aabb::new(c - node.aabb.max, c - node.aabb.min).inflated(reach)) else { continue };
-            if self.largest_in(&range) <= r {
-                continue;
-            }
+            // where c − x lies for the node's points x, and the lattice points in reach
+            let moved = Aabb::new(c - node.aabb.max, c - node.aabb.min);
+            let Some(range) = self.range(&moved.inflated(self.largest - r)) else { continue };
             if !node.is_leaf() {
-                stack.extend([node.left + 1, node.left]);
+                if self.blocks(&range, &moved, r, |_| true) {
+                    stack.extend([node.left + 1, node.left]);
+                }
                 continue;
             }
-            let t = &other.tris[node.tri as usize];
-            if let Some(found) = self.at_triangle(t.p, &range, c, r).and_then(|x| accept(x, node.tri as usize).map(|y| (x, node.tri as usize, y))) {
-                return Some(found);
+            let (tri, p) = (node.tri as usize, other.tris[node.tri as usize].p);
+            if !usable(tri) {
+                continue;
+            }
+            let mut found = None;
+            self.blocks(&range, &moved, r, |b| {
+                found = self.in_block(b, &range, p, c, r, &mut tests).and_then(|x| accept(x, tri).map(|y| (x, tri, y)));
+                found.is_some() || tests > MAX_POINT_TESTS
+            });
+            if found.is_some() {
+                return found;
             }
         }
         None
     }
 
     /// The point of the triangle `p` nearest `c − m` for the first lattice point `m` of
-    /// `range` whose ball holds the box moved there.
-    fn at_triangle(&self, p: [Vec3; 3], range: &[[usize; 2]; 3], c: Vec3, r: f64) -> Option<Vec3> {
-        for z in range[2][0]..=range[2][1] {
-            for y in range[1][0]..=range[1][1] {
-                for x in range[0][0]..=range[0][1] {
+    /// block `b` (within `range`) whose ball holds the box moved there; `tests` counts the
+    /// points tried.
+    fn in_block(&self, b: [usize; 3], range: &[[usize; 2]; 3], p: [Vec3; 3], c: Vec3, r: f64, tests: &mut usize) -> Option<Vec3> {
+        let span = |a: usize| (b[a] * BLOCK).max(range[a][0])..=(b[a] * BLOCK + BLOCK - 1).min(range[a][1]);
+        for z in span(2) {
+            for y in span(1) {
+                for x in span(0) {
                     let rad = self.radius[x + self.dims[0] * (y + self.dims[1] * z)] as f64;
                     if rad <= r {
                         continue;
                     }
+                    *tests += 1;
                     let m = self.origin + Vec3::new(x as f64, y as f64, z as f64) * self.step;
                     let target = c - m;
                     let near = closest_on_triangle(target, p[0], p[1], p[2]);
@@ -271,6 +310,11 @@ impl Lattice {
         }
         None
     }
+}
+
+/// The distance between two boxes (0 when they overlap).
+fn box_gap(a: &Aabb, b: &Aabb) -> f64 {
+    (a.min - b.max).max(b.min - a.max).max(Vec3::ZERO).length()
 }
 
 /// The distance from `q` to the nearest triangle of `mesh` (its BVH, nearer nodes first).
