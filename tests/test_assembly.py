@@ -163,7 +163,7 @@ def test_contact_tolerance_is_used_everywhere():
     assert assembly.settings.contact_tolerance == 0.001
     result = plan_assembly(assembly)
     assert result.sequence_json()["contact_tolerance"] == 0.001
-    assert result.removal[0].validation["contact_tolerance"] == 0.001
+    assert result.removal[0].validation["tolerance"] == 0.001
 
 
 @pytest.mark.parametrize("text, expected", [

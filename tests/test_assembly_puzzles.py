@@ -153,7 +153,7 @@ def test_an_interference_tolerance_plans_the_overlapping_pair(tmp_path):
     assert result.found and result.order == ["block", "cap"]
     (step,) = result.removal
     assert step.direction == "+z"
-    assert step.validation["contact_tolerance"] == pytest.approx(assembly.tolerance)
+    assert step.validation["tolerance"] == pytest.approx(assembly.tolerance)
     _revalidate(result)  # FCL, allowing the contact plus the interference tolerance
     # ... and no more: the start is invalid at the contact tolerance alone
     parts = {p.name: p for p in assembly.parts}

@@ -64,7 +64,7 @@ def test_the_nut_comes_off_within_the_interference_it_was_given(tmp_path, capsys
     assert result.found and result.order == ["bolt", "nut"], result.message
     (step,) = result.removal
     assert step.part == "nut" and step.validation["valid"]
-    assert step.validation["contact_tolerance"] == pytest.approx(assembly.tolerance)
+    assert step.validation["tolerance"] == pytest.approx(assembly.tolerance)
     sequence = result.sequence_json()
     assert sequence["interference"] == NUT_INTERFERENCE
     assert sequence["overlaps"][0]["other"] == "nut"

@@ -68,12 +68,12 @@ log = logging.getLogger(__name__)
 
 def validate_removal(part: Part, others: list[Part], path: np.ndarray, delta: float) -> dict:
     """FCL's check of a removal path with ``others`` present, allowing a penetration of
-    ``delta`` (the contact tolerance, plus the interference tolerance if one was given)."""
+    ``delta`` (the contact tolerance, plus the interference tolerance if one was given;
+    reported as ``tolerance``, as ``sequence.json`` names that sum)."""
     checker = FclChecker.for_parts(part, others, contact_tolerance=delta)
     check = checker.check_path(path)
     return {"valid": bool(check.valid), "min_clearance": check.min_clearance,
-            "n_checks": check.n_checks, "contact_tolerance": delta,
-            "obstacle": check.obstacle}
+            "n_checks": check.n_checks, "tolerance": delta, "obstacle": check.obstacle}
 
 
 def _planner_validation(outcome, delta: float) -> dict | None:
@@ -84,7 +84,7 @@ def _planner_validation(outcome, delta: float) -> dict | None:
     if not (fcl.get("valid") is True and fcl.get("contact_tolerance") == delta):
         return None
     return {"valid": True, "min_clearance": fcl["min_clearance"], "n_checks": fcl["checks"],
-            "contact_tolerance": delta, "obstacle": None, "by": "planner"}
+            "tolerance": delta, "obstacle": None, "by": "planner"}
 
 
 GOAL_SIDE = "+z"
