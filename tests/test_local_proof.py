@@ -124,6 +124,7 @@ def test_spirelli_held_at_the_start_orientation_is_walled_off_near_the_start():
     assert np.any(np.all((boxes[:, 0] <= start) & (start <= boxes[:, 1]), axis=1))
 
 
+@pytest.mark.assets
 def test_escape_held_at_the_start_orientation_is_walled_off_by_the_rings_shells():
     # the ring (a surface: eight tube segments sharing their caps, seven inside out) is
     # linked with the pipe; the wall cells are translations where the pipe's connected
