@@ -157,8 +157,7 @@ class OctreePlanner:
         self.direct: Direct | None = None
         self.local: LocalProof | None = None
         self._ready = False
-        self.out_of_time = False
-        self.out_of_time_in = ""
+        self.out_of_time = ""  # where the time limit was reached ("": it was not)
 
     # ---------------------------------------------------------------- setup
 
@@ -212,8 +211,8 @@ class OctreePlanner:
                 with self.deadline.native():
                     self.cspace = self._build(self.margin)
             except TimeLimitError:
-                self.deadline.reached = self.out_of_time = True
-                self.out_of_time_in = "while the C-space over the whole bounds was built"
+                self.deadline.reached = True
+                self.out_of_time = "while the C-space over the whole bounds was built"
                 self._direct_head()
                 return
         self._report_head()
@@ -261,8 +260,8 @@ class OctreePlanner:
                 self.report["local_proof"] = {"proved": True, **proof.summary,
                                               "attempts": attempts}
                 return proof
-        self.out_of_time = deadline.reached or deadline.would_pass()
-        self.out_of_time_in = "in the local proofs (no C-space over the whole bounds was built)"
+        if deadline.reached or deadline.would_pass():
+            self.out_of_time = "in the local proofs (no C-space over the whole bounds was built)"
         return None
 
     @property
@@ -344,7 +343,7 @@ class OctreePlanner:
             return self._local_no_path(self.local)
         if self.out_of_time:
             return self._finish(NOT_FOUND, "time_limit",
-                                f"time limit reached {self.out_of_time_in}")
+                                f"time limit reached {self.out_of_time}")
         sc = self.scenario
         deadline = self.deadline.at
         start = np.asarray(sc.start, dtype=np.float64)
