@@ -40,6 +40,31 @@ const SLAB: u32 = 1 << 31;
 const SLAB_FRONT: u32 = 1 << 30;
 /// The triangle index of a record.
 const INDEX: u32 = SLAB_FRONT - 1;
+/// Record of no triangle: the cell misses `∂P` and lies inside `P`. A cell that misses
+/// `∂P` keeps one of the two side records, so that its descendants (which miss it too)
+/// take their side from it instead of casting a ray each.
+const SIDE_IN: u32 = INDEX;
+/// Record of no triangle: the cell misses `∂P` and lies outside `P` (see [`SIDE_IN`]).
+const SIDE_OUT: u32 = INDEX - 1;
+
+/// The side of `P` a side record gives (`Some(true)`: inside); `None` for a triangle's.
+fn side_of(rec: u32) -> Option<bool> {
+    match rec {
+        SIDE_IN => Some(true),
+        SIDE_OUT => Some(false),
+        _ => None,
+    }
+}
+
+thread_local! {
+    /// Per thread, a cell's kept records with their distances (see `classify`).
+    static KEPT: std::cell::RefCell<Vec<(f64, u32)>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The triangle records of `recs` (side records left out).
+fn triangles(recs: &[u32]) -> impl Iterator<Item = u32> + '_ {
+    recs.iter().copied().filter(|&r| side_of(r).is_none())
+}
 
 /// The offset of a closed solid by a radius (see the module documentation).
 pub struct OffsetSource<'a> {
@@ -62,7 +87,7 @@ impl<'a> OffsetSource<'a> {
     /// `mesh` is no solid.
     pub fn new(mesh: &'a TriMesh, r: f64) -> Self {
         assert!(r.is_finite() && r != 0.0, "offset radius {r}");
-        assert!(mesh.tris.len() <= INDEX as usize, "{} triangles: records address at most 2^30", mesh.tris.len());
+        assert!(mesh.tris.len() < SIDE_OUT as usize, "{} triangles: records address fewer than 2^30 - 2", mesh.tris.len());
         debug_assert!(mesh.solid, "the offset of a surface");
         let grow = r > 0.0;
         let aabb = if grow { mesh.aabb.inflated(r * (1.0 + 1e-9)) } else { mesh.aabb };
@@ -134,42 +159,60 @@ impl CellSource for OffsetSource<'_> {
     fn classify(&self, cell: &Aabb, cand: &[u32], _finest: bool, out: &mut Vec<u32>) -> Label {
         let centre = cell.center();
         let half = cell.half().length();
-        for &t in cand {
-            let t = t & INDEX;
-            if self.distance(t, centre) - half > self.radius {
-                continue;
+        // the kept records by their distance from the centre, nearest first: a segment's
+        // intervals skip more records once a near one is seen (`boundary_intervals`)
+        let kept = KEPT.with(|kept| {
+            let mut kept = kept.borrow_mut();
+            kept.clear();
+            for t in triangles(cand) {
+                let t = t & INDEX;
+                let d = self.distance(t, centre);
+                if d - half > self.radius {
+                    continue;
+                }
+                if (0..8).all(|k| self.distance(t, corner(cell, k)) <= self.radius) {
+                    return None; // the cell lies in one neighbourhood
+                }
+                if let Some(rec) = self.slab_record(t, cell) {
+                    kept.push((d, rec));
+                }
             }
-            let corners_near = (0..8).all(|k| self.distance(t, corner(cell, k)) <= self.radius);
-            if corners_near {
-                out.clear();
-                return if self.grow { Label::Full } else { Label::Empty };
-            }
-            out.extend(self.slab_record(t, cell));
+            kept.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+            out.extend(kept.iter().map(|&(_, rec)| rec));
+            Some(kept.first().map_or(f64::INFINITY, |&(d, _)| d))
+        });
+        let Some(nearest) = kept else {
+            out.clear();
+            return if self.grow { Label::Full } else { Label::Empty };
+        };
+        // the parent's side, when it missed `∂P` (then so does this cell)
+        let inherited = cand.iter().rev().find_map(|&r| side_of(r));
+        let side = || inherited.unwrap_or_else(|| self.inside_far(centre));
+        if out.is_empty() {
+            return if side() { Label::Full } else { Label::Empty };
         }
-        if !out.is_empty() {
+        if nearest > half {
             // no boundary triangle meets the cell: it lies on one side of `∂P`, and on the
             // side the neighbourhoods do not change (inside a grown, outside an eroded solid)
             // it is decided by that side alone
-            let misses_boundary = out.iter().all(|&t| self.distance(t, centre) > half);
-            if misses_boundary && self.inside_far(centre) == self.grow {
+            let inside = side();
+            if inside == self.grow {
                 out.clear();
                 return if self.grow { Label::Full } else { Label::Empty };
             }
-            return Label::Mixed;
+            out.push(if inside { SIDE_IN } else { SIDE_OUT });
         }
-        if self.inside_far(centre) {
-            Label::Full
-        } else {
-            Label::Empty
-        }
+        Label::Mixed
     }
 
     fn cell_contains(&self, cand: &[u32], p: Vec3) -> bool {
-        // the first record within the radius decides (the nearest one need not be found)
+        // the first record within the radius decides (the nearest one need not be found);
+        // the side of `P` from the cell's side record when it has one
+        let side = || cand.iter().rev().find_map(|&r| side_of(r)).unwrap_or_else(|| self.inside_far(p));
         if self.grow {
-            cand.iter().any(|&t| self.distance(t, p) <= self.radius) || self.inside_far(p)
+            triangles(cand).any(|t| self.distance(t, p) <= self.radius) || side()
         } else {
-            cand.iter().all(|&t| self.distance(t, p) >= self.radius) && self.inside_far(p)
+            triangles(cand).all(|t| self.distance(t, p) >= self.radius) && side()
         }
     }
 
@@ -177,7 +220,7 @@ impl CellSource for OffsetSource<'_> {
     /// most three planes.
     fn plane_cut(&self, own: &[u32]) -> Option<Cut> {
         let mut cut = Cut::new();
-        for &rec in own {
+        for rec in triangles(own) {
             if rec & SLAB == 0 {
                 return None;
             }
@@ -194,9 +237,27 @@ impl CellSource for OffsetSource<'_> {
 
     fn boundary_intervals(&self, cand: &[u32], a: Vec3, b: Vec3, out: &mut Vec<(f64, f64)>) {
         out.clear();
-        for &t in cand {
-            match self.near_interval(t, a, b) {
+        // A record is skipped when its distance at the segment's midpoint shows that no
+        // point of the segment is within the radius of it, or that every point is nearer
+        // an earlier record (distances change by at most the half length along it), so
+        // its interval lies in that record's: most of a cell's records are skipped so.
+        let (mid, half_len) = ((a + b) * 0.5, 0.5 * (b - a).length());
+        let mut nearest = f64::INFINITY; // from the midpoint to an earlier record
+        for t in triangles(cand) {
+            let at_mid = self.distance(t, mid);
+            if at_mid + half_len <= self.radius {
                 // one neighbourhood holds the whole segment: so does the union
+                out.clear();
+                out.push((0.0, 1.0));
+                return;
+            }
+            let skip = at_mid - half_len > self.radius.min(nearest + half_len);
+            nearest = nearest.min(at_mid);
+            if skip {
+                continue;
+            }
+
+            match self.near_interval(t, a, b) {
                 Some((s0, s1)) if s0 <= 0.0 && s1 >= 1.0 => {
                     out.clear();
                     out.push((0.0, 1.0));
@@ -241,23 +302,28 @@ const SLIVER: f64 = 1e-9;
 
 /// A triangle's face: unit normal `n` and unit in-plane edge normals `m[k]` (of the edge
 /// from corner `k` to corner `k + 1`, pointing into the triangle); all zero for a sliver.
+/// With them, for the distance, the edges `e[k]` and the inverses of their squared
+/// lengths (zero for an edge of no length).
 #[derive(Clone, Copy, Debug)]
 pub struct Face {
     n: Vec3,
     m: [Vec3; 3],
+    e: [Vec3; 3],
+    inv: [f64; 3],
 }
 
 impl Face {
     /// The face of the triangle with corners `p`.
     pub fn new(p: [Vec3; 3]) -> Face {
         let e = [p[1] - p[0], p[2] - p[1], p[0] - p[2]];
+        let inv = e.map(|x| if x.length_squared() > 0.0 { 1.0 / x.length_squared() } else { 0.0 });
         let cross = e[0].cross(e[1]);
         let longest = e.iter().map(|x| x.length_squared()).fold(0.0, f64::max);
         if cross.length() <= SLIVER * longest {
-            return Face { n: Vec3::ZERO, m: [Vec3::ZERO; 3] };
+            return Face { n: Vec3::ZERO, m: [Vec3::ZERO; 3], e, inv };
         }
         let n = cross.normalize();
-        Face { n, m: e.map(|x| n.cross(x).normalize()) }
+        Face { n, m: e.map(|x| n.cross(x).normalize()), e, inv }
     }
 
     /// Whether the point's projection on the plane lies in the triangle (`false` for a
@@ -267,12 +333,24 @@ impl Face {
     }
 
     /// The distance from `x` to the triangle with corners `p`: to its plane when `x` lies
-    /// over it, else to its nearest edge.
+    /// over it, else to its nearest edge. That edge is one whose half-plane `x` lies
+    /// outside of (the nearest point is on the boundary, where `x − q` points out of the
+    /// triangle), so only those are measured; all three for a sliver.
     pub fn distance(&self, p: [Vec3; 3], x: Vec3) -> f64 {
-        if self.over(p, x) {
-            return (x - p[0]).dot(self.n).abs();
+        let sliver = self.n == Vec3::ZERO;
+        let w = [x - p[0], x - p[1], x - p[2]];
+        let out = [w[0].dot(self.m[0]) < 0.0, w[1].dot(self.m[1]) < 0.0, w[2].dot(self.m[2]) < 0.0];
+        if !sliver && !out[0] && !out[1] && !out[2] {
+            return w[0].dot(self.n).abs();
         }
-        (0..3).map(|k| (closest_on_segment(x, p[k], p[(k + 1) % 3]) - x).length_squared()).fold(f64::INFINITY, f64::min).sqrt()
+        let mut least = f64::INFINITY;
+        for k in 0..3 {
+            if sliver || out[k] {
+                let s = (w[k].dot(self.e[k]) * self.inv[k]).clamp(0.0, 1.0);
+                least = least.min((w[k] - self.e[k] * s).length_squared());
+            }
+        }
+        least.sqrt()
     }
 }
 
@@ -352,16 +430,6 @@ fn clip(iv: (f64, f64), g0: f64, g1: f64, lim: f64) -> Option<(f64, f64)> {
     (lo <= hi).then_some((lo, hi))
 }
 
-/// The point of segment `ab` nearest `p`.
-fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
-    let ab = b - a;
-    let len2 = ab.length_squared();
-    if len2 == 0.0 {
-        return a;
-    }
-    a + ab * ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
-}
-
 fn corner(cell: &Aabb, k: usize) -> Vec3 {
     Vec3::new(if k & 1 == 0 { cell.min.x } else { cell.max.x }, if k & 2 == 0 { cell.min.y } else { cell.max.y }, if k & 4 == 0 { cell.min.z } else { cell.max.z })
 }
@@ -370,6 +438,16 @@ fn corner(cell: &Aabb, k: usize) -> Vec3 {
 mod tests {
     use super::*;
     use crate::union::{approximate_solid, UnionParams};
+
+    /// The point of segment `ab` nearest `p`.
+    fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
+        let ab = b - a;
+        let len2 = ab.length_squared();
+        if len2 == 0.0 {
+            return a;
+        }
+        a + ab * ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    }
 
     fn unit_cube() -> TriMesh {
         let v: Vec<Vec3> = (0..8).map(|k| Vec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64)).collect();
@@ -519,6 +597,110 @@ mod tests {
             }
         }
         assert!(met > 500 && missed > 500, "{met} met, {missed} missed");
+    }
+
+    /// A small xorshift generator of numbers in `[-1, 1)` for the randomized tests.
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    /// The distance measuring only the edges a point lies outside of is the distance to
+    /// the nearest of all three edges (or to the plane over the triangle), on random
+    /// triangles, slivers among them.
+    #[test]
+    fn the_distance_measures_the_right_edges() {
+        let mut rand = uniform(0x9e37_79b9_7f4a_7c15);
+        for k in 0..20_000 {
+            let mut p = [0; 3].map(|_| Vec3::new(rand(), rand(), rand()));
+            if k % 7 == 0 {
+                p[2] = p[0] + (p[1] - p[0]) * rand(); // collinear: a sliver
+            }
+            let face = Face::new(p);
+            let x = Vec3::new(2.0 * rand(), 2.0 * rand(), 2.0 * rand());
+            let edges = (0..3).map(|j| (closest_on_segment(x, p[j], p[(j + 1) % 3]) - x).length()).fold(f64::INFINITY, f64::min);
+            let plane = face.n.dot(x - p[0]).abs();
+            let reference = if face.over(p, x) { plane } else { edges };
+            let d = face.distance(p, x);
+            assert!((d - reference).abs() <= 1e-12, "case {k}: {d} vs {reference}");
+        }
+    }
+
+    /// The segment's intervals with records skipped (by their distance at its midpoint)
+    /// are the union of every record's interval, on the grown and eroded cube and a
+    /// tetrahedron, for random segments of many lengths.
+    #[test]
+    fn skipping_records_keeps_the_union_of_the_intervals() {
+        let cube = unit_cube();
+        let mut rand = uniform(0x2545_f491_4f6c_dd1d);
+        let mut compared = 0;
+        for r in [0.3, -0.2, 0.05] {
+            let src = OffsetSource::new(&cube, r);
+            let all = src.root_records();
+            for _ in 0..3000 {
+                let a = Vec3::new(0.5 + 0.9 * rand(), 0.5 + 0.9 * rand(), 0.5 + 0.9 * rand());
+                let len = 0.5 * rand().abs().powi(3);
+                let b = a + Vec3::new(rand(), rand(), rand()) * len;
+                let mut fast = Vec::new();
+                src.boundary_intervals(&all, a, b, &mut fast);
+                let mut every: Vec<(f64, f64)> = all.iter().filter_map(|&t| src.near_interval(t, a, b)).collect();
+                merge_sorted(&mut every);
+                if every.iter().any(|&(s0, s1)| s0 <= 0.0 && s1 >= 1.0) {
+                    every = vec![(0.0, 1.0)];
+                }
+                assert_eq!(fast.len(), every.len(), "{a:?} → {b:?}: {fast:?} vs {every:?}");
+                for (x, y) in fast.iter().zip(&every) {
+                    assert!((x.0 - y.0).abs() < 1e-12 && (x.1 - y.1).abs() < 1e-12, "{fast:?} vs {every:?}");
+                }
+                compared += (!every.is_empty()) as usize;
+            }
+        }
+        assert!(compared > 1000, "{compared} segments met a neighbourhood");
+    }
+
+    /// A cell that misses the boundary carries its side to its children: their labels
+    /// and point answers are those a ray gives, on the grown and the eroded cube.
+    #[test]
+    fn side_records_answer_as_the_rays_do() {
+        let cube = unit_cube();
+        let mut sides = 0;
+        for r in [0.1, -0.1] {
+            let src = OffsetSource::new(&cube, r);
+            let all = src.root_records();
+            // cells of 0.1 around the cube, inside and out
+            for i in 0..16 {
+                for j in 0..16 {
+                    for k in 0..16 {
+                        let lo = Vec3::new(-0.3 + 0.1 * i as f64, -0.3 + 0.1 * j as f64, -0.3 + 0.1 * k as f64);
+                        let cell = Aabb { min: lo, max: lo + Vec3::splat(0.1) };
+                        let mut own = Vec::new();
+                        let label = src.classify(&cell, &all, false, &mut own);
+                        let side = own.iter().find_map(|&rec| side_of(rec));
+                        sides += side.is_some() as usize;
+                        if let Some(inside) = side {
+                            assert_eq!(inside, cube.contains(cell.center()), "side of {cell:?}");
+                            assert_eq!(label, Label::Mixed);
+                        }
+                        if label == Label::Mixed {
+                            // only a MIXED cell is split
+                            let child = Aabb { min: lo, max: lo + Vec3::splat(0.05) };
+                            let mut grand = Vec::new();
+                            let child_label = src.classify(&child, &own, false, &mut grand);
+                            let mut fresh = Vec::new();
+                            assert_eq!(child_label, src.classify(&child, &all, false, &mut fresh), "child of {cell:?}");
+                            for q in [lo, lo + Vec3::splat(0.05), lo + Vec3::new(0.1, 0.0, 0.07)] {
+                                assert_eq!(src.cell_contains(&own, q), src.cell_contains(&all, q), "{q:?}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(sides > 100, "{sides} cells carry a side");
     }
 
     fn signed_volume(v: &[Vec3], f: &[[u32; 3]]) -> f64 {
