@@ -130,8 +130,8 @@ def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
                       "libigl": [50, 100, 200, 300], "manifold": [1, 2, 3, 4]})
         gear = classify(planner.load_mesh(GEAR), name="gear", kind="solid").mesh
         cases.append({"name": "gear: IndustReal small gear (CAD, 20k triangles)",
-                      "mesh": gear, "r": 0.001, "ours": [0.001, 0.0005, 0.00025],
-                      "libigl": [100, 200, 300], "manifold": [1]})
+                      "mesh": gear, "r": 0.001, "ours": [0.002, 0.001, 0.0005, 0.00025],
+                      "libigl": [50, 75, 100, 150, 200], "manifold": [1]})
     else:
         log(f"skipping the CAD part: {HOLE} is absent (../shared/assets not laid out)")
     if only:
