@@ -156,8 +156,8 @@ def bound_by_region(surf: dict) -> dict[str, float]:
 
 
 SURFACE_STATS = ("band_cells", "h", "refinements", "planar_cells", "planar_pieces",
-                 "planes_fallback_edges", "bound_by_region", "holes_closed", "sheets_unzipped",
-                 "sheets_apart")
+                 "planar_regions", "planar_fanned", "planes_fallback_edges",
+                 "bound_by_region", "holes_closed", "sheets_unzipped", "sheets_apart")
 """The statistics every extracted surface reports (sums, C-obstacles, offsets)."""
 
 _FLOAT_STATS = ("h", "sheets_apart")

@@ -20,6 +20,7 @@
 
 pub mod planar;
 mod reach;
+pub mod regions;
 mod resolve;
 #[cfg(test)]
 mod resolve_tests;
@@ -91,6 +92,9 @@ pub struct Surface {
     pub planar_cells: usize,
     /// Exact polygons those cells gave.
     pub planar_pieces: usize,
+    /// How the pieces' planes were triangulated: merged into regions, or fanned piece by
+    /// piece ([`regions`]).
+    pub regions: regions::RegionStats,
     /// How far the true boundary may lie from those polygons: 0 where they are exact, the
     /// gap of nearly coincident facet planes taken as one where there were such, or how far
     /// the fill of a small hole closed where they met may lie from it (its diameter and
@@ -281,7 +285,7 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -
     s.planar_pieces = planar.polys.len();
     s.planar_deviation = planar.deviation;
     if !planar.polys.is_empty() {
-        stitch::join(&mut s, &planar.polys, STITCH_TOL * oct.h, (oct.origin, oct.h));
+        s.regions = stitch::join(&mut s, &planar.polys, &planar.planes, STITCH_TOL * oct.h, (oct.origin, oct.h));
         // a fill point is within its loop's diameter of a loop vertex, and that within the
         // weld and the polygons' deviation of the boundary (a band vertex is on it, unless
         // its edge's crossings were inconsistent: then within half the edge); holes up to
@@ -299,6 +303,7 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -
         }
         // (a sheet unzipped from the rest may be a sliver: a triangle and its reverse)
         s.slivers_dropped = stitch::drop_slivers(&mut s, 2.0 * oct.h, 1e-4 * oct.h.powi(3));
+        s.sheets_unzipped += stitch::part_coincident_vertices(&mut s, oct.h);
         if s.sheets_unzipped > 0 || s.slivers_dropped > 0 {
             (open, pinched) = open_or_pinched(&s.faces);
         }
@@ -379,6 +384,7 @@ fn planar_polygons<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCell
             let k = (l.level, key(l.ijk[0], l.ijk[1], l.ijk[2]));
             out.with_surface.insert(k);
             out.polys.extend(cell.polys);
+            out.planes.extend(cell.planes);
         }
     }
     out
@@ -429,6 +435,8 @@ impl ResolvedCells {
 struct PlanarPolygons {
     /// Their exact polygons, outward.
     polys: Vec<Vec<Vec3>>,
+    /// Per polygon, its outward plane.
+    planes: Vec<regions::PlaneKey>,
     /// The cells with some.
     with_surface: PlanarSet,
     /// How many cells were resolved by planes.

@@ -13,6 +13,7 @@
 //! Entry point: [`resolve_cell`].
 
 use super::planar::{Cut, Piece};
+use super::regions::{plane_key, PlaneKey};
 use crate::math::{Aabb, Vec3};
 use crate::octree::{CellSource, Label};
 
@@ -35,6 +36,8 @@ const CARRY_WORDS: usize = 256;
 pub struct CellSurface {
     /// Polygons, outward (counter-clockwise seen from outside).
     pub polys: Vec<Vec<Vec3>>,
+    /// Per polygon, its outward plane ([`super::regions`] merges the polygons of one).
+    pub planes: Vec<PlaneKey>,
     /// How far the boundary may lie from them ([`Piece::deviation`]).
     pub deviation: f64,
 }
@@ -66,6 +69,7 @@ pub fn resolve_cell<S: CellSource + ?Sized>(src: &S, cell: &Aabb, recs: &[u32], 
         let part = resolve_cell(src, &child, &own, sub_levels - 1, Some(known))?;
         out.deviation = out.deviation.max(part.deviation);
         out.polys.extend(part.polys);
+        out.planes.extend(part.planes);
     }
     Some(out)
 }
@@ -93,9 +97,10 @@ fn cut_surface<S: CellSource + ?Sized>(src: &S, recs: &[u32], cut: &Cut, pieces:
     let mut out = CellSurface::default();
     for p in pieces {
         let (front, behind) = (inside(p.sides[0]), inside(p.sides[1]));
-        let polygon = match (front, behind) {
-            (false, true) => p.polygon,
-            (true, false) => p.polygon.into_iter().rev().collect(),
+        // the polygon facing out of the solid, and its plane as it faces
+        let (polygon, out_normal) = match (front, behind) {
+            (false, true) => (p.polygon, p.normal),
+            (true, false) => (p.polygon.into_iter().rev().collect(), -p.normal),
             _ => {
                 // the same on both sides: no boundary there, unless a sheet thinner than
                 // the planes taken as this one lies between them
@@ -105,6 +110,8 @@ fn cut_surface<S: CellSource + ?Sized>(src: &S, recs: &[u32], cut: &Cut, pieces:
                 continue;
             }
         };
+        let (n, w) = cut.planes[p.plane];
+        out.planes.push(if n.dot(out_normal) > 0.0 { plane_key(n, w) } else { plane_key(-n, -w) });
         out.deviation = out.deviation.max(p.deviation);
         out.polys.push(polygon);
     }

@@ -12,6 +12,7 @@
 //!
 //! Entry points: [`join`], [`open_edges`].
 
+use super::regions::{self, PlaneKey, RegionStats};
 use super::Surface;
 use crate::bvh::Bvh;
 use crate::math::{Aabb, Vec3};
@@ -27,9 +28,9 @@ pub const SHEETS_APART_MAX: f64 = 0.05;
 /// Add the convex polygons `polys` (each counter-clockwise about its outward normal) to
 /// `s`, welding corners within `tol` and splitting edges at T-junctions (see the module
 /// docs).
-pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], tol: f64, lattice: (Vec3, f64)) {
+pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], planes: &[PlaneKey], tol: f64, lattice: (Vec3, f64)) -> RegionStats {
     if polys.is_empty() {
-        return;
+        return RegionStats::default();
     }
     // the band's own open edges end where the polygons begin: weld to their vertices
     let mut grid = Grid::new(4.0 * tol);
@@ -38,27 +39,19 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], tol: f64, lattice: (Vec3, f64)
             grid.insert(v, s.vertices[v as usize]);
         }
     }
-    for poly in polys {
-        let ids: Vec<u32> = poly.iter().map(|&p| grid.weld(p, tol, &mut s.vertices)).collect();
-        let c = poly.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / poly.len() as f64;
-        let centre = s.vertices.len() as u32;
-        s.vertices.push(c);
-        for i in 0..ids.len() {
-            let (a, b) = (ids[i], ids[(i + 1) % ids.len()]);
-            if a != b {
-                s.faces.push([centre, a, b]);
-            }
-        }
-    }
+    let welded: Vec<Vec<u32>> = polys.iter().map(|poly| poly.iter().map(|&p| grid.weld(p, tol, &mut s.vertices)).collect()).collect();
+    let (faces, stats) = regions::triangulate(&mut s.vertices, &welded, planes, tol);
+    s.faces.extend(faces);
     // a triangle two of whose corners welded into one is a segment: no area, and its edges
     // would count as used twice
-    let mut dropped = drop_degenerate(&mut s.faces);
+    drop_degenerate(&mut s.faces);
     split_t_junctions(s, tol);
     fill_face_gaps(s, tol, lattice);
-    dropped += drop_degenerate(&mut s.faces);
-    if cancel_opposite_twins(&mut s.faces) > 0 || dropped > 0 {
-        drop_unused_vertices(s);
-    }
+    drop_degenerate(&mut s.faces);
+    cancel_opposite_twins(&mut s.faces);
+    // (the corners inside merged regions are no triangle's now)
+    drop_unused_vertices(s);
+    stats
 }
 
 /// Remove the triangles with a corner twice (segments, of no area). Returns how many went.
@@ -260,6 +253,45 @@ pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>, h: f64) -> usize
         s.sheets_apart = s.sheets_apart.max(step);
     }
     copies
+}
+
+/// Move apart distinct vertices at one place (to float32, as a reader welding by position
+/// sees them): two sheets of the surface closed over the same loop from either side (the
+/// fills of a crevice's holes) meet there without sharing a vertex. Each moves into its
+/// own triangles as [`unzip_touching_sheets`] moves a copy, and `s.sheets_apart` records
+/// the largest move. Returns how many vertices moved.
+pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
+    let key = |p: Vec3| [p.x as f32, p.y as f32, p.z as f32].map(f32::to_bits);
+    let mut at: FastMap<[u32; 3], Vec<u32>> = FastMap::default();
+    let used: FastSet<u32> = s.faces.iter().flatten().copied().collect();
+    for &v in &used {
+        at.entry(key(s.vertices[v as usize])).or_default().push(v);
+    }
+    let mut moving: Vec<u32> = at.into_values().filter(|ids| ids.len() > 1).flatten().collect();
+    if moving.is_empty() {
+        return 0;
+    }
+    moving.sort_unstable();
+    let mut star: FastMap<u32, Vec<usize>> = moving.iter().map(|&v| (v, Vec::new())).collect();
+    for (i, f) in s.faces.iter().enumerate() {
+        for v in f {
+            if let Some(tris) = star.get_mut(v) {
+                tris.push(i);
+            }
+        }
+    }
+    let before = s.vertices.clone();
+    for &v in &moving {
+        let place = before[v as usize];
+        let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).min(SHEETS_APART_MAX * h);
+        let tris = &star[&v];
+        let lowest = tris.iter().map(|&t| height_over_opposite_edge(s.faces[t].map(|c| before[c as usize]), s.faces[t].iter().position(|&c| c == v))).fold(f64::INFINITY, f64::min);
+        let step = wanted.min(lowest / 6.0);
+        let into = tris.iter().map(|&t| s.faces[t].iter().fold(Vec3::ZERO, |acc, &c| acc + before[c as usize]) / 3.0 - place).fold(Vec3::ZERO, |acc, d| acc + d);
+        s.vertices[v as usize] = place + into.normalize_or_zero() * step;
+        s.sheets_apart = s.sheets_apart.max(step);
+    }
+    moving.len()
 }
 
 /// The distance of corner `at` (0 when `None`) of the triangle with corners `p` from the
@@ -645,8 +677,12 @@ mod tests {
         let top = vec![v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)];
         let left = vec![v(0.0, 0.0), v(0.0, 1.0), v(0.5, 1.0), v(0.5, 0.0)];
         let right = vec![v(0.5, 0.0), v(0.5, 1.0), v(1.0, 1.0), v(1.0, 0.0)];
-        join(&mut s, &[top, left, right], 1e-9, (Vec3::splat(0.25), 1.0));
+        let (up, down) = (regions::plane_key(Vec3::Z, 0.0), regions::plane_key(-Vec3::Z, 0.0));
+        let stats = join(&mut s, &[top, left, right], &[up, down, down], 1e-9, (Vec3::splat(0.25), 1.0));
         assert!(open_edges(&s.faces).is_empty(), "{:?}", open_edges(&s.faces));
+        // top and bottom are sheets through the same points, facing each other: fanned
+        // about their own centres, not merged (they would share diagonals)
+        assert_eq!(stats, RegionStats { merged_planes: 0, fanned_planes: 2 });
     }
 
     #[test]
@@ -694,6 +730,31 @@ mod tests {
             s.faces.extend(quads.iter().flat_map(|q| [[corner[q[0]], corner[q[1]], corner[q[2]]], [corner[q[0]], corner[q[2]], corner[q[3]]]]));
         }
         s
+    }
+
+    /// Two closed tetrahedra with a corner at the same place but not shared (distinct
+    /// vertices): each corner moves into its own tetrahedron, so float32 tells them apart,
+    /// and the move is recorded.
+    #[test]
+    fn coincident_vertices_are_parted_into_their_own_triangles() {
+        let tet = |apex_dir: f64, base: u32| -> (Vec<Vec3>, Vec<[u32; 3]>) {
+            let v = vec![Vec3::ZERO, Vec3::new(1.0, 0.0, apex_dir), Vec3::new(0.0, 1.0, apex_dir), Vec3::new(1.0, 1.0, 2.0 * apex_dir)];
+            let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]].into_iter().map(|t: [u32; 3]| t.map(|c| c + base)).collect();
+            (v, f)
+        };
+        let (mut vertices, mut faces) = tet(1.0, 0);
+        let (v2, f2) = tet(-1.0, 4);
+        vertices.extend(v2);
+        faces.extend(f2);
+        let mut s = Surface { vertices, faces, ..Default::default() };
+        let h = 0.1;
+        assert_eq!(part_coincident_vertices(&mut s, h), 2);
+        let (a, b) = (s.vertices[0], s.vertices[4]);
+        assert!(a.to_array().map(|x| x as f32) != b.to_array().map(|x| x as f32), "{a:?} {b:?}");
+        assert!(a.z > 0.0 && b.z < 0.0, "each into its own tetrahedron: {a:?} {b:?}");
+        assert!(s.sheets_apart > 0.0 && s.sheets_apart <= SHEETS_APART_MAX * h);
+        assert!((a - b).length() <= 2.0 * s.sheets_apart + 1e-15);
+        assert_eq!(part_coincident_vertices(&mut s, h), 0, "nothing left to part");
     }
 
     #[test]
