@@ -43,6 +43,8 @@ from typing import Any
 import numpy as np
 import trimesh
 
+from .meshes.closest import mesh_distance
+
 __all__ = ["MAX_FACES", "MAX_POINTS", "convex_hull", "convex_offset", "hull_mesh",
            "representatives", "rounding_allowance", "unit_ball"]
 
@@ -228,8 +230,7 @@ def _gap(corners: np.ndarray, smaller: trimesh.Trimesh) -> float:
     ``smaller`` inside it (their Hausdorff distance)."""
     if len(corners) == 0:
         return 0.0
-    _, distance, _ = trimesh.proximity.closest_point(smaller, corners)
-    return float(np.max(distance))
+    return float(np.max(mesh_distance(smaller.vertices, smaller.faces, corners)))
 
 
 def _eroded(hull: _Hull, r: float, rounding: float) -> tuple[trimesh.Trimesh, float]:

@@ -252,6 +252,27 @@ def test_witnesses_of_a_frame_on_a_tube_include_its_closed_shells(tmp_path, caps
         "named as the obstacle's"
 
 
+def test_shell_witnesses_of_a_part_a_millimetre_across_hold():
+    # the frame on its rod scaled to a tenth of a millimetre a bar, in metres: the check
+    # must not depend on scale (trimesh's closest point and FCL's box test did, and
+    # failed valid certificates of parts this size)
+    scenario = frame_on_a_rod()
+    k = 1e-4
+    robot = scenario.robot.mesh.copy()
+    robot.apply_scale(k)
+    tube = scenario.obstacles[0].mesh.copy()
+    tube.apply_scale(k)
+    small = Scenario(name="frame-mm", units="m",
+                     robot=Robot("frame", robot, "test", solid=False, kind_reason="test"),
+                     obstacles=[Body("tube", tube, "test", solid=False, kind_reason="test")],
+                     start=[0, 0, 0], goal=[9 * k, 0, 0], orientation=np.eye(3),
+                     bounds=(np.full(3, -12.0 * k), np.full(3, 12.0 * k)),
+                     settings=PlannerSettings(time_limit=60))
+    outcome = planner.plan(small, progress=False)
+    assert outcome.status == "no_path", outcome.message
+    assert check_witnesses(outcome, small).get("robot_shell", 0) > 0
+
+
 def test_parity_ignores_zero_area_triangles_as_the_core_does():
     # a flat triangle (three points on a line) kept in a shell crosses no ray's parity
     cube = np.asarray(trimesh.creation.box(extents=[2, 2, 2]).triangles)

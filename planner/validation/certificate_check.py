@@ -42,6 +42,7 @@ raise (``ValueError``, ``KeyError``, ``TypeError``, ``IndexError``).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -53,6 +54,7 @@ import scipy.sparse.csgraph
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
+from planner.meshes.closest import closest_points_on_triangles
 from planner.output import schema_id
 from planner.problem import Scenario
 
@@ -132,6 +134,7 @@ class _Parts:
         self.models: dict[int, fcl.BVHModel] = {}
         self._parts: dict[int, dict[tuple[float, ...], int]] = {}
         self._solid: dict[int, bool] = {}
+        self.unit = _fcl_unit(scenario)
 
     def has_vertex(self, mesh: trimesh.Trimesh, v: np.ndarray) -> bool:
         key = id(mesh)
@@ -179,7 +182,7 @@ class _Parts:
     def model(self, mesh: trimesh.Trimesh) -> fcl.BVHModel:
         key = id(mesh)
         if key not in self.models:
-            self.models[key] = _fcl_model(mesh)
+            self.models[key] = _fcl_model(mesh, self.unit)
         return self.models[key]
 
 
@@ -259,14 +262,28 @@ def odd_parity(triangles: np.ndarray, q: np.ndarray, tol: float) -> bool | None:
     return None
 
 
-def _fcl_model(mesh: trimesh.Trimesh) -> fcl.BVHModel:
-    return bvh_model(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+def _fcl_unit(scenario: Scenario) -> float:
+    """The power of two nearest the scene's extent: FCL's models and boxes are given in
+    it, so that they are about unit size (FCL's box-against-triangles test has fixed
+    tolerances, and reports a box a tenth of a millimetre across, in metres, as meeting
+    triangles it is clear of). A power of two scales coordinates without rounding."""
+    lo, hi = scenario.bounds
+    extents = [np.ptp(np.asarray([lo, hi], dtype=np.float64), axis=0).max(),
+               np.ptp(scenario.robot.mesh.bounds, axis=0).max(),
+               *(np.ptp(o.mesh.bounds, axis=0).max() for o in scenario.obstacles)]
+    size = float(max(extents))
+    return 2.0 ** round(math.log2(size)) if size > 0 and math.isfinite(size) else 1.0
 
 
-def _box_free_of(box: np.ndarray, model: fcl.BVHModel, grow: float = 0.0) -> bool:
-    """Whether no triangle of ``model`` meets the box (grown by ``grow`` and the relative
-    rounding slack)."""
-    centre, half = box.mean(axis=0), (box[1] - box[0]) / 2 + grow
+def _fcl_model(mesh: trimesh.Trimesh, unit: float = 1.0) -> fcl.BVHModel:
+    return bvh_model(np.asarray(mesh.vertices) / unit, np.asarray(mesh.faces))
+
+
+def _box_free_of(box: np.ndarray, model: fcl.BVHModel, grow: float = 0.0,
+                 unit: float = 1.0) -> bool:
+    """Whether no triangle of ``model`` (in coordinates divided by ``unit``) meets the box
+    (grown by ``grow`` and the relative rounding slack)."""
+    centre, half = box.mean(axis=0) / unit, ((box[1] - box[0]) / 2 + grow) / unit
     grown = fcl.Box(*(2 * half * (1 + SLACK)))
     return not fcl.collide(fcl.CollisionObject(grown, fcl.Transform(centre)),
                            fcl.CollisionObject(model, fcl.Transform()),
@@ -298,11 +315,12 @@ class _Shell:
         self.triangles = np.asarray(mesh.vertices, dtype=np.float64)[faces]
         flat = self.triangles.reshape(-1, 3)
         self.box = np.stack([flat.min(axis=0), flat.max(axis=0)])
-        self.model = bvh_model(flat, np.arange(len(flat)).reshape(-1, 3))
+        self.unit = parts.unit
+        self.model = bvh_model(flat / self.unit, np.arange(len(flat)).reshape(-1, 3))
 
     def holds_inside(self, box: np.ndarray, tol: float) -> bool:
         """Whether ``box`` lies in the shell's odd region."""
-        return (self.closed and _box_free_of(box, self.model, tol)
+        return (self.closed and _box_free_of(box, self.model, tol, self.unit)
                 and odd_parity(self.triangles, box.mean(axis=0), tol) is True)
 
     def misses(self, box: np.ndarray, tol: float) -> bool:
@@ -311,12 +329,13 @@ class _Shell:
 
 
 def box_in_solid(box: np.ndarray, solid: trimesh.Trimesh,
-                 model: fcl.BVHModel | None = None) -> bool:
+                 model: fcl.BVHModel | None = None, unit: float = 1.0) -> bool:
     """Whether the box lies inside the closed mesh ``solid``: its centre inside
-    (trimesh), and no triangle meets it (FCL's box against the triangles)."""
+    (trimesh), and no triangle meets it (FCL's box against the triangles; ``model``, if
+    given, in coordinates divided by ``unit``: :func:`_fcl_unit`)."""
     if not solid.contains([box.mean(axis=0)])[0]:
         return False
-    return _box_free_of(box, model if model is not None else _fcl_model(solid))
+    return _box_free_of(box, model if model is not None else _fcl_model(solid, unit), 0.0, unit)
 
 
 def check_certificate(certificate: dict[str, Any], scenario: Scenario) -> CertificateCheck:
@@ -522,10 +541,11 @@ def _part_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, lo: np.ndar
     v = np.asarray(witness["vertex"], dtype=np.float64).reshape(3)
     if kind == "robot_vertex":
         return (parts.is_solid(obstacle) and parts.has_vertex(parts.robot.mesh, v)
-                and box_in_solid(sub + v, obstacle.mesh, parts.model(obstacle.mesh)))
+                and box_in_solid(sub + v, obstacle.mesh, parts.model(obstacle.mesh), parts.unit))
     if kind == "obstacle_vertex":
         return (parts.is_solid(parts.robot) and parts.has_vertex(obstacle.mesh, v)
-                and box_in_solid(v - sub[::-1], parts.robot.mesh, parts.model(parts.robot.mesh)))
+                and box_in_solid(v - sub[::-1], parts.robot.mesh, parts.model(parts.robot.mesh),
+                                 parts.unit))
     raise ValueError(f"kind = {kind!r}: not a witness kind")
 
 
@@ -547,7 +567,7 @@ def _shell_holds(kind: str, witness: dict[str, Any], sub: np.ndarray, tol: float
     x = np.asarray(witness["point"], dtype=np.float64).reshape(3)
     tri = np.asarray(witness["point_triangle"], dtype=np.float64).reshape(3, 3)
     y = np.asarray(witness["far_vertex"], dtype=np.float64).reshape(3)
-    nearest = trimesh.triangles.closest_point(tri[None], x[None])[0]
+    nearest = closest_points_on_triangles(tri[None], x[None])[0]
     on_triangle = float(np.linalg.norm(x - nearest)) <= tol
     x = nearest  # the box is tested about the triangle's own point
     part = parts.part_of(mesh, tri[0])
