@@ -628,8 +628,35 @@ def _memory_limit(args) -> str | None:
     return None
 
 
+NUMBER_OPTIONS = ("-r", "--radius")
+"""Options whose value may be negative: argparse takes ``-4e-4`` or ``-inf`` after them for
+an option of its own (it knows only ``-4`` and ``-0.4`` as numbers)."""
+
+
+def _negative_values_joined(argv: list[str]) -> list[str]:
+    """``argv`` with ``-r -4e-4`` written ``-r=-4e-4`` (see :data:`NUMBER_OPTIONS`)."""
+    out: list[str] = []
+    k = 0
+    while k < len(argv):
+        token = argv[k]
+        value = argv[k + 1] if k + 1 < len(argv) else None
+        if token in NUMBER_OPTIONS and value is not None and value.startswith("-"):
+            try:
+                float(value)
+            except ValueError:
+                pass
+            else:
+                out.append(f"{token}={value}")
+                k += 2
+                continue
+        out.append(token)
+        k += 1
+    return out
+
+
 def _main(argv: list[str] | None) -> int:
-    args = _parser().parse_args(argv)
+    args = _parser().parse_args(_negative_values_joined(sys.argv[1:] if argv is None
+                                                        else list(argv)))
     level = (
         logging.WARNING
         if args.verbose == 0

@@ -110,7 +110,18 @@ def _tolerance(tolerance, size: float) -> float:
     if not (math.isfinite(value) and value > 0.0):
         raise InvalidParameterError(f"tolerance = {tolerance!r}: must be a positive finite "
                                     "number")
+    floor = FINEST_TOLERANCE * size
+    if value < floor:
+        raise InvalidParameterError(
+            f"tolerance = {tolerance!r}: below {FINEST_TOLERANCE:g} of the pair's size "
+            f"({size:.4g}); each tenfold finer costs about ten times the cells (1e-8 of it "
+            f"took minutes); use at least {floor:.3g}")
     return value
+
+
+FINEST_TOLERANCE = 1e-6
+"""The finest interval width :func:`penetration_depth` takes, as a fraction of the pair's
+size: the search's cells grow about tenfold per decade of it."""
 
 
 def _fcl_check(a: Part, b: Part, translation: np.ndarray, separated: bool, distance: float,

@@ -34,6 +34,7 @@ Entry points: :func:`offset`, :func:`opening`, :func:`closing` -> :class:`Offset
 from __future__ import annotations
 
 import math
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -86,10 +87,52 @@ def _solid(obj, name: str) -> trimesh.Trimesh:
 
 
 def _radius(r: float) -> float:
-    value = float(r)
+    try:
+        value = float(r)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"radius = {r!r}: must be a non-zero finite number") \
+            from None
     if not (math.isfinite(value) and value != 0.0):
         raise InvalidParameterError(f"radius = {r!r}: must be a non-zero finite number")
     return value
+
+
+RADIUS_RANGE = (1e-9, 1e6)
+"""The radii an offset takes, as fractions of the solid's diagonal: below, the offset is
+the solid to the rounding of its coordinates; above, a ball about it to the rounding of
+the radius (and its hull's arithmetic overflows)."""
+
+
+def _check_radius_scale(radius: float, diagonal: float, name: str) -> None:
+    """Refuse a radius outside :data:`RADIUS_RANGE` of the solid's ``diagonal``."""
+    low, high = (f * diagonal for f in RADIUS_RANGE)
+    if abs(radius) < low:
+        raise InvalidParameterError(
+            f"radius = {radius:g}: below {RADIUS_RANGE[0]:g} of {name}'s size "
+            f"({diagonal:.4g}), where its coordinates' rounding decides; use at least "
+            f"{low:.3g}")
+    if abs(radius) > high:
+        raise InvalidParameterError(
+            f"radius = {radius:g}: more than {RADIUS_RANGE[1]:g} times {name}'s size "
+            f"({diagonal:.4g}); the offset is a ball about it to rounding; use at most "
+            f"{high:.3g}")
+
+
+def _check_boundary_is_every_triangle(solid: trimesh.Trimesh, name: str) -> None:
+    """Refuse to erode a solid some of whose triangles lie inside it (shells that touch
+    or overlap, as a part modelled as several bodies is): the erosion keeps away from its
+    boundary, which those triangles are not part of, and they are all it is given."""
+    from ._minkowski_core import front_windings  # noqa: PLC0415
+
+    fronts = front_windings(np.asarray(solid.vertices, dtype=np.float64),
+                            np.asarray(solid.faces, dtype=np.int64))
+    inner = int((fronts != 0).sum())
+    if inner:
+        raise InvalidParameterError(
+            f"{name}: {inner} of its {len(fronts)} triangles face into the solid (shells "
+            f"that touch or overlap), so they are not all its boundary; an erosion needs "
+            f"its boundary alone: merge the shells into one first (a mesh union, e.g. "
+            f"manifold3d's)")
 
 
 METHODS = ("auto", "hull", "ball", "cells")
@@ -127,8 +170,13 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     radius = _radius(r)
     if method not in METHODS:
         raise InvalidParameterError(f"method = {method!r}: must be one of {', '.join(METHODS)}")
+    if name == "mesh" and isinstance(mesh, (str, os.PathLike)):
+        name = os.fspath(mesh)
     solid = _solid(mesh, name)
     extent = np.ptp(np.asarray(solid.bounds), axis=0)
+    _check_radius_scale(radius, float(np.linalg.norm(extent)), name)
+    if radius < 0:
+        _check_boundary_is_every_triangle(solid, name)
     diagonal = float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
     step = checked_eps(eps, diagonal)
     verb = "growing" if radius > 0 else "eroding"
@@ -206,8 +254,11 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
               kind: str, progress: bool | None, method: str) -> OffsetResult:
     one = offset(mesh, first, eps=eps, max_cells=max_cells, name=name, progress=progress,
                  method=method)
+    # the second stage by the first's method: their errors then largely cancel (an
+    # opening inside its input, a closing around it), where mixing a grid and a ball
+    # leaves each stage's error in full, on opposite sides
     two = offset(one.mesh, second, eps=eps, max_cells=max_cells, name=f"{name} ({kind})",
-                 progress=progress, method=method)
+                 progress=progress, method=_second_method(method, one.stats["method"]))
     stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
              "method": f"{one.stats['method']} then {two.stats['method']}",
              "stage_bounds": [one.error_bound, two.error_bound],
@@ -215,11 +266,25 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
 
 
+def _positive_radius(r: float, what: str) -> float:
+    radius = _radius(r)
+    if radius < 0:
+        raise InvalidParameterError(f"radius = {r!r}: {what}'s radius must be positive")
+    return radius
+
+
+def _second_method(asked: str, first: str) -> str:
+    """The method of a composition's second stage: the first's under ``auto`` (but a
+    convex body's hull leaves ``auto`` to choose again: the second stage's input is the
+    first's tessellated output)."""
+    return first if asked == "auto" and first != "hull" else asked
+
+
 def opening(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
             name: str = "mesh", progress: bool | None = None,
             method: str = "auto") -> OffsetResult:
     """Erode by ``r`` then grow by ``r`` (``r > 0``): features thinner than ``2 r`` go."""
-    radius = abs(_radius(r))
+    radius = _positive_radius(r, "an opening")
     return _composed(mesh, -radius, radius, eps, max_cells, name, "eroded", progress, method)
 
 
@@ -227,5 +292,5 @@ def closing(mesh, r: float, *, eps: float | None = None, max_cells: int | None =
             name: str = "mesh", progress: bool | None = None,
             method: str = "auto") -> OffsetResult:
     """Grow by ``r`` then erode by ``r`` (``r > 0``): gaps narrower than ``2 r`` close."""
-    radius = abs(_radius(r))
+    radius = _positive_radius(r, "a closing")
     return _composed(mesh, radius, -radius, eps, max_cells, name, "grown", progress, method)

@@ -218,7 +218,7 @@ def test_bad_input_is_refused():
 
 def test_a_small_cell_budget_still_gives_a_proved_interval(caplog):
     peg, block = _peg_and_block(0.15)
-    r = planner.penetration_depth(peg, block, tolerance=1e-6, max_cells=20)
+    r = planner.penetration_depth(peg, block, tolerance=1e-5, max_cells=20)
     assert r.lower <= 0.15 <= r.upper
     assert not r.converged and "stopped" in caplog.text
 
@@ -259,3 +259,9 @@ def test_a_real_peg_pushed_into_its_cad_hole_is_read_as_the_assembly_reads_it():
         broken = planner.load_mesh(hole_path)
         broken.faces = broken.faces[:-40]
         planner.penetration_depth(peg, broken)
+
+
+def test_a_tolerance_finer_than_the_search_resolves_is_refused_naming_the_floor():
+    peg, block = _peg_and_block(0.15)
+    with pytest.raises(InvalidParameterError, match="use at least"):
+        planner.penetration_depth(peg, block, tolerance=1e-300)

@@ -580,3 +580,56 @@ def test_an_eps_past_the_finest_ball_is_left_to_the_cells():
         planner.offset(l_bracket(), r, eps=eps, method="ball")
     with pytest.raises(ResourceLimitError, match="octree needs more than .* use a larger eps"):
         planner.offset(l_bracket(), r, eps=eps)
+
+
+def test_radii_out_of_scale_and_wrong_types_are_clear_errors():
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    with pytest.raises(InvalidParameterError, match="more than 1e\\+06 times"):
+        planner.offset(box, 1e100)
+    with pytest.raises(InvalidParameterError, match="below 1e-09"):
+        planner.offset(box, -1e-100)
+    with pytest.raises(InvalidParameterError, match="non-zero finite"):
+        planner.offset(box, None)
+    with pytest.raises(InvalidParameterError, match="must be positive"):
+        planner.opening(box, -0.1)
+    with pytest.raises(InvalidParameterError, match="must be positive"):
+        planner.closing(box, -0.1)
+
+
+def test_eroding_touching_shells_is_refused_and_growing_them_is_their_union():
+    # a peg standing on a block, two closed shells touching over the peg's foot: its
+    # foot faces into the block, so the triangles are not all the solid's boundary
+    block = trimesh.creation.box([2.0, 2.0, 1.0])
+    peg = trimesh.creation.box([0.5, 0.5, 1.0])
+    peg.apply_translation([0.0, 0.0, 1.0])
+    part = trimesh.util.concatenate([block, peg])
+    with pytest.raises(InvalidParameterError, match="face into the solid"):
+        planner.offset(part, -0.1, eps=0.05)
+    with pytest.raises(InvalidParameterError, match="face into the solid"):
+        planner.opening(part, 0.1, eps=0.05)
+    grown = planner.offset(part, 0.1, eps=0.05)
+    assert grown.mesh.is_watertight and grown.mesh.body_count == 1
+
+
+def test_the_command_takes_a_negative_radius_in_scientific_notation(tmp_path, capsys):
+    part = tmp_path / "box.stl"
+    trimesh.creation.box([1.0, 1.0, 1.0]).export(part)
+    out = tmp_path / "shrunk.stl"
+    assert main(["offset", str(part), "-r", "-1e-1", "-o", str(out)]) == 0
+    assert trimesh.load(out).volume == pytest.approx(0.8 ** 3, rel=1e-6)
+    assert main(["offset", str(part), "-r", "-inf", "-o", str(out)]) == 2
+    assert "radius" in capsys.readouterr().err
+
+
+def test_an_opening_takes_one_method_for_both_stages_and_stays_inside():
+    # IndustReal's gear base: the eroded stage (by the ball) has many small triangles,
+    # which alone would send the growing stage to the cells; the two grids' errors then
+    # fell on opposite sides and the opening stuck out of its input by 0.4 mm
+    from conftest import asset
+
+    base = planner.load_mesh(asset("assemblies/industreal_gears/meshes/industreal_gear_base.obj"))
+    opened = planner.opening(base, 0.002, name="base")
+    first, second = opened.stats["method"].split(" then ")
+    assert first == second
+    solid = planner.meshes.validate_solid(base)
+    assert opened.mesh.volume < solid.volume
