@@ -34,7 +34,6 @@ from scipy.spatial import ConvexHull, QhullError
 from .decompose_cache import FORMAT_VERSION, SUFFIX, load_entry, store_entry
 from .errors import GeometryError, InvalidParameterError
 from .meshes import split_solid, validate_solid
-from .meshes.closest import mesh_distance
 from .progress import StatusLine
 from .tolerances import scale_of, tol
 from .values import check_seed
@@ -385,7 +384,8 @@ def _measure(solid, approx, approx_bodies, all_pieces) -> tuple[float, float]:
     outside = ~_inside_solid(solid, samples)
     excess = 0.0
     if outside.any():
-        excess = float(mesh_distance(solid.vertices, solid.faces, samples[outside]).max())
+        _, distance, _ = trimesh.proximity.closest_point(solid, samples[outside])
+        excess = float(distance.max())
 
     # deficit: solid surface samples outside every hull, distance to the nearest hull
     points, _ = trimesh.sample.sample_surface(
@@ -405,7 +405,7 @@ def _measure(solid, approx, approx_bodies, all_pieces) -> tuple[float, float]:
         lost = points[uncovered]
         for piece_index in np.unique(nearest):
             hull = trimesh.convex.convex_hull(all_pieces[piece_index])
-            d = mesh_distance(hull.vertices, hull.faces, lost[nearest == piece_index])
+            _, d, _ = trimesh.proximity.closest_point(hull, lost[nearest == piece_index])
             deficit = max(deficit, float(d.max()))
     return excess, deficit
 

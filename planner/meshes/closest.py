@@ -88,7 +88,10 @@ def _degenerate_fixed(tri, p, out, den) -> np.ndarray:
 def mesh_distance(vertices, faces, points, chunk: int = 200_000) -> np.ndarray:
     """``(n,)`` unsigned distances from the ``(n, 3)`` points to the triangles of the mesh,
     exact to rounding: each point's nearest vertex bounds its distance from above, and
-    only the triangles whose bounding spheres come within that bound are measured."""
+    only the triangles whose bounding spheres come within that bound are measured (the
+    few largest triangles, which would widen every point's search, against every point).
+    Meant for small meshes or few points: a mesh of many long triangles (a CAD part's
+    strips) gives each point thousands of candidates."""
     v = np.asarray(vertices, dtype=np.float64)
     f = np.asarray(faces, dtype=np.int64)
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
@@ -97,11 +100,17 @@ def mesh_distance(vertices, faces, points, chunk: int = 200_000) -> np.ndarray:
     tri = v[f]
     centre = tri.mean(axis=1)
     radius = np.linalg.norm(tri - centre[:, None], axis=2).max(axis=1)
-    upper, _ = cKDTree(v).query(p)
-    near = cKDTree(centre).query_ball_point(p, upper + radius.max())
-    best = upper.copy()
-    pairs = [(i, t) for i, ts in enumerate(near) for t in ts]
-    index = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    best, _ = cKDTree(v).query(p)
+    large = radius > np.quantile(radius, 0.99) if len(radius) > 100 else np.ones(len(f), bool)
+    pairs = [np.stack(np.meshgrid(np.arange(len(p)), np.flatnonzero(large),
+                                  indexing="ij"), axis=-1).reshape(-1, 2)]
+    small = np.flatnonzero(~large)
+    if len(small):
+        reach = best + radius[small].max()
+        near = cKDTree(centre[small]).query_ball_point(p, reach)
+        pairs += [np.column_stack([np.full(len(ts), i), small[ts]])
+                  for i, ts in enumerate(near) if ts]
+    index = np.concatenate(pairs).astype(np.int64)
     for s in range(0, len(index), chunk):
         i, t = index[s:s + chunk, 0], index[s:s + chunk, 1]
         d = np.linalg.norm(closest_points_on_triangles(tri[t], p[i]) - p[i], axis=1)
