@@ -55,8 +55,8 @@ def _add_offset_parser(sub, common) -> None:
                    "inscribed in the ball; cells: exact distances cell by cell; auto (default): "
                    "the first that applies")
     morph = o.add_mutually_exclusive_group()
-    morph.add_argument("--opening", action="store_true", help="erode then grow by |r|")
-    morph.add_argument("--closing", action="store_true", help="grow then erode by |r|")
+    morph.add_argument("--opening", action="store_true", help="erode then grow by r (r > 0)")
+    morph.add_argument("--closing", action="store_true", help="grow then erode by r (r > 0)")
     o.add_argument("--no-progress", action="store_true", help="no progress line")
 
 

@@ -33,6 +33,7 @@ Entry points: :func:`offset`, :func:`opening`, :func:`closing` -> :class:`Offset
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import time
@@ -257,8 +258,15 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     # the second stage by the first's method: their errors then largely cancel (an
     # opening inside its input, a closing around it), where mixing a grid and a ball
     # leaves each stage's error in full, on opposite sides
-    two = offset(one.mesh, second, eps=eps, max_cells=max_cells, name=f"{name} ({kind})",
-                 progress=progress, method=_second_method(method, one.stats["method"]))
+    then = _second_method(method, one.stats["method"])
+    stage = functools.partial(offset, one.mesh, second, eps=eps, max_cells=max_cells,
+                              name=f"{name} ({kind})", progress=progress)
+    try:
+        two = stage(method=then)
+    except InvalidParameterError:
+        if then == method:
+            raise
+        two = stage(method=method)  # the first's method does not apply: auto chooses
     stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
              "method": f"{one.stats['method']} then {two.stats['method']}",
              "stage_bounds": [one.error_bound, two.error_bound],

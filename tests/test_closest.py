@@ -56,3 +56,23 @@ def test_mesh_distance_is_the_exact_distance_to_a_box():
     inside = np.min(half - np.abs(pts), axis=1)
     exact = np.where(outside > 0, outside, inside)
     assert np.allclose(mesh_distance(box.vertices, box.faces, pts), exact, rtol=0, atol=1e-15)
+
+
+def test_triangles_of_nearly_collinear_corners_are_measured_by_their_edges():
+    # corners on a line but not exactly in binary: the region test's quantities are
+    # rounding, and dividing them placed points anywhere on the line (0.55 off here)
+    rng = np.random.default_rng(5)
+    a, d = rng.random((5000, 3)), rng.random((5000, 3)) - 0.5
+    b = a + d * rng.random((5000, 1))
+    c = a + d * (1 + rng.random((5000, 1))) * 1.0000000001
+    tri = np.stack([a, b, c], axis=1)
+    p = a + d * rng.random((5000, 1)) * 1.5 + (rng.random((5000, 3)) - 0.5) * 0.3
+
+    def on_segment(s0, s1):
+        e = s1 - s0
+        t = np.clip(np.einsum("ij,ij->i", p - s0, e) / np.einsum("ij,ij->i", e, e), 0, 1)
+        return np.linalg.norm(s0 + e * t[:, None] - p, axis=1)
+
+    edges = np.min([on_segment(tri[:, i], tri[:, (i + 1) % 3]) for i in range(3)], axis=0)
+    got = np.linalg.norm(closest_points_on_triangles(tri, p) - p, axis=1)
+    assert np.abs(got - edges).max() < 1e-12

@@ -57,13 +57,21 @@ def closest_points_on_triangles(triangles, points) -> np.ndarray:
     v, w = ratio(vb, den), ratio(vc, den)
     face = a + ab * v[:, None] + ac * w[:, None]
     take(np.ones(len(p), dtype=bool), face)                          # the face
-    return _degenerate_fixed(tri, p, out, den)
+    # den is |ab x ac|^2: near zero relative to |ab|^2 |ac|^2 the region test divides
+    # rounding by rounding, and the triangle is measured as its edges instead
+    flat = ~(den > FLAT * dot(ab, ab) * dot(ac, ac))
+    return _flat_measured_by_edges(tri, p, out, flat)
 
 
-def _degenerate_fixed(tri, p, out, den) -> np.ndarray:
-    """Where a triangle has no area (``den`` zero), its nearest point is on one of its
+FLAT = 1e-12
+"""Triangles whose squared cross product is below this fraction of ``|ab|^2 |ac|^2`` (an
+angle under about 1e-6 radians at ``a``, or no area) are measured by their edges: they lie
+within that of them."""
+
+
+def _flat_measured_by_edges(tri, p, out, flat) -> np.ndarray:
+    """Where a triangle is flat (``flat``), its nearest point is taken on one of its
     edges: the nearest of the three segments' nearest points."""
-    flat = den == 0.0
     if not flat.any():
         return out
     best = np.full(int(flat.sum()), np.inf)
