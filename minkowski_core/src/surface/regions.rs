@@ -355,22 +355,24 @@ fn is_ear(p: &[[f64; 2]], left: &[usize], t: [usize; 3], tol: f64) -> bool {
 mod tests {
     use super::*;
 
+    /// The index of `p` in `vertices`, appended if it is not there.
+    fn intern(vertices: &mut Vec<Vec3>, p: Vec3) -> u32 {
+        match vertices.iter().position(|&q| q == p) {
+            Some(i) => i as u32,
+            None => {
+                vertices.push(p);
+                vertices.len() as u32 - 1
+            }
+        }
+    }
+
     /// Unit squares of a 2x2 grid and a 2x2 square beside them on `z = 0` (facing up),
     /// its side split at the grid's corner there only in the grid's polygons: one region,
     /// an outline of 9 corners (five straight), triangulated once into 7 triangles.
     #[test]
     fn squares_on_a_plane_become_one_region() {
         let mut vertices: Vec<Vec3> = Vec::new();
-        let mut id = |x: f64, y: f64| -> u32 {
-            let p = Vec3::new(x, y, 0.0);
-            match vertices.iter().position(|&q| q == p) {
-                Some(i) => i as u32,
-                None => {
-                    vertices.push(p);
-                    vertices.len() as u32 - 1
-                }
-            }
-        };
+        let mut id = |x: f64, y: f64| intern(&mut vertices, Vec3::new(x, y, 0.0));
         let mut polys = Vec::new();
         for (x, y) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
             polys.push(vec![id(x, y), id(x + 1.0, y), id(x + 1.0, y + 1.0), id(x, y + 1.0)]);
@@ -396,16 +398,7 @@ mod tests {
     #[test]
     fn a_holed_region_keeps_its_polygons() {
         let mut vertices: Vec<Vec3> = Vec::new();
-        let mut id = |x: f64, y: f64, z: f64| -> u32 {
-            let p = Vec3::new(x, y, z);
-            match vertices.iter().position(|&q| q == p) {
-                Some(i) => i as u32,
-                None => {
-                    vertices.push(p);
-                    vertices.len() as u32 - 1
-                }
-            }
-        };
+        let mut id = |x: f64, y: f64, z: f64| intern(&mut vertices, Vec3::new(x, y, z));
         let mut polys = Vec::new();
         let mut keys = Vec::new();
         for x in 0..3 {

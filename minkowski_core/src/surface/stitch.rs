@@ -202,14 +202,7 @@ pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>, h: f64) -> usize
         return 0;
     }
     // the triangles about each of those vertices
-    let mut star: FastMap<u32, Vec<usize>> = at.iter().map(|&v| (v, Vec::new())).collect();
-    for (i, f) in s.faces.iter().enumerate() {
-        for v in f {
-            if let Some(tris) = star.get_mut(v) {
-                tris.push(i);
-            }
-        }
-    }
+    let star = stars(&s.faces, &at);
     // fans are found on the surface as unzipped so far (a hair-thin edge's second end
     // splits once its first has); directions and heights use the places as they were
     let before = s.vertices.clone();
@@ -259,7 +252,8 @@ pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>, h: f64) -> usize
 /// sees them): two sheets of the surface closed over the same loop from either side (the
 /// fills of a crevice's holes) meet there without sharing a vertex. Each moves into its
 /// own triangles as [`unzip_touching_sheets`] moves a copy, and `s.sheets_apart` records
-/// the largest move. Returns how many vertices moved.
+/// the largest move. Returns how many vertices moved to a float32 place of their own (a
+/// move held below float32's step by thin triangles about the vertex counts none).
 pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
     let key = |p: Vec3| [p.x as f32, p.y as f32, p.z as f32].map(f32::to_bits);
     let mut at: FastMap<[u32; 3], Vec<u32>> = FastMap::default();
@@ -272,15 +266,9 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
         return 0;
     }
     moving.sort_unstable();
-    let mut star: FastMap<u32, Vec<usize>> = moving.iter().map(|&v| (v, Vec::new())).collect();
-    for (i, f) in s.faces.iter().enumerate() {
-        for v in f {
-            if let Some(tris) = star.get_mut(v) {
-                tris.push(i);
-            }
-        }
-    }
+    let star = stars(&s.faces, &moving);
     let before = s.vertices.clone();
+    let mut parted = 0;
     for &v in &moving {
         let place = before[v as usize];
         let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).min(SHEETS_APART_MAX * h);
@@ -290,8 +278,22 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
         let into = tris.iter().map(|&t| s.faces[t].iter().fold(Vec3::ZERO, |acc, &c| acc + before[c as usize]) / 3.0 - place).fold(Vec3::ZERO, |acc, d| acc + d);
         s.vertices[v as usize] = place + into.normalize_or_zero() * step;
         s.sheets_apart = s.sheets_apart.max(step);
+        parted += (key(s.vertices[v as usize]) != key(place)) as usize;
     }
-    moving.len()
+    parted
+}
+
+/// The triangles about each of the vertices `at` (indices into `faces`).
+fn stars(faces: &[[u32; 3]], at: &[u32]) -> FastMap<u32, Vec<usize>> {
+    let mut star: FastMap<u32, Vec<usize>> = at.iter().map(|&v| (v, Vec::new())).collect();
+    for (i, f) in faces.iter().enumerate() {
+        for v in f {
+            if let Some(tris) = star.get_mut(v) {
+                tris.push(i);
+            }
+        }
+    }
+    star
 }
 
 /// The distance of corner `at` (0 when `None`) of the triangle with corners `p` from the
