@@ -34,6 +34,7 @@ Entry points: :func:`offset`, :func:`opening`, :func:`closing` -> :class:`Offset
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import os
 import time
@@ -51,6 +52,8 @@ from .offsets_ball import ball_offset
 from .offsets_convex import convex_offset
 from .operands import as_mesh
 from .progress import StatusLine
+
+log = logging.getLogger(__name__)
 
 __all__ = ["METHODS", "OffsetResult", "closing", "offset", "opening"]
 
@@ -209,6 +212,10 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
                             f"thickest part is thinner than {2 * -radius:g})")
     stats["method"] = used
     stats["seconds"] = time.perf_counter() - t0
+    if bound >= abs(radius):
+        log.warning("%s offset by %g: the error bound %.3g is not below the radius, so the "
+                    "result need not even lie %s the solid; use eps below %.3g", name, radius,
+                    bound, "around" if radius > 0 else "inside", step * abs(radius) / bound)
     return OffsetResult(surface, radius, bound, step, stats)
 
 

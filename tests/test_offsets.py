@@ -633,3 +633,14 @@ def test_an_opening_takes_one_method_for_both_stages_and_stays_inside():
     assert first == second
     solid = planner.meshes.validate_solid(base)
     assert opened.mesh.volume < solid.volume
+
+
+def test_a_bound_not_below_the_radius_is_warned_of(caplog):
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    with caplog.at_level("WARNING", logger="planner.offsets"):
+        planner.offset(box, 0.001, eps=0.05, method="cells")
+    assert "is not below the radius" in caplog.text and "use eps below" in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="planner.offsets"):
+        planner.offset(box, 0.2, eps=0.05, method="cells")
+    assert "is not below the radius" not in caplog.text

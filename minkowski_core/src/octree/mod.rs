@@ -336,7 +336,7 @@ impl Octree {
             return Err(CoreError::ResourceLimit {
                 budget: max_cells,
                 cell_size: h,
-                detail: format!("the region is {n:.0} cells wide; the lattice addresses at most 2^{MAX_DEPTH}"),
+                detail: format!("the region is {n:.3e} cells wide; the lattice addresses at most 2^{MAX_DEPTH}"),
             });
         }
         let ctx = Ctx {
