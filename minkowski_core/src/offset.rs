@@ -56,11 +56,6 @@ fn side_of(rec: u32) -> Option<bool> {
     }
 }
 
-thread_local! {
-    /// Per thread, a cell's kept records with their distances (see `classify`).
-    static KEPT: std::cell::RefCell<Vec<(f64, u32)>> = const { std::cell::RefCell::new(Vec::new()) };
-}
-
 /// The triangle records of `recs` (side records left out).
 fn triangles(recs: &[u32]) -> impl Iterator<Item = u32> + '_ {
     recs.iter().copied().filter(|&r| side_of(r).is_none())
@@ -159,32 +154,22 @@ impl CellSource for OffsetSource<'_> {
     fn classify(&self, cell: &Aabb, cand: &[u32], _finest: bool, out: &mut Vec<u32>) -> Label {
         let centre = cell.center();
         let half = cell.half().length();
-        // the kept records by their distance from the centre, nearest first: a segment's
-        // intervals skip more records once a near one is seen (`boundary_intervals`)
-        let kept = KEPT.with(|kept| {
-            let mut kept = kept.borrow_mut();
-            kept.clear();
-            for t in triangles(cand) {
-                let t = t & INDEX;
-                let d = self.distance(t, centre);
-                if d - half > self.radius {
-                    continue;
-                }
-                if (0..8).all(|k| self.distance(t, corner(cell, k)) <= self.radius) {
-                    return None; // the cell lies in one neighbourhood
-                }
-                if let Some(rec) = self.slab_record(t, cell) {
-                    kept.push((d, rec));
-                }
+        let mut nearest = f64::INFINITY; // from the centre to a kept record
+        for t in triangles(cand) {
+            let t = t & INDEX;
+            let d = self.distance(t, centre);
+            if d - half > self.radius {
+                continue;
             }
-            kept.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
-            out.extend(kept.iter().map(|&(_, rec)| rec));
-            Some(kept.first().map_or(f64::INFINITY, |&(d, _)| d))
-        });
-        let Some(nearest) = kept else {
-            out.clear();
-            return if self.grow { Label::Full } else { Label::Empty };
-        };
+            if (0..8).all(|k| self.distance(t, corner(cell, k)) <= self.radius) {
+                out.clear(); // the cell lies in one neighbourhood
+                return if self.grow { Label::Full } else { Label::Empty };
+            }
+            if let Some(rec) = self.slab_record(t, cell) {
+                out.push(rec);
+                nearest = nearest.min(d);
+            }
+        }
         // the parent's side, when it missed `∂P` (then so does this cell)
         let inherited = cand.iter().rev().find_map(|&r| side_of(r));
         let side = || inherited.unwrap_or_else(|| self.inside_far(centre));
