@@ -47,6 +47,7 @@ import trimesh
 from planner.errors import GeometryError, InvalidParameterError, ResourceLimitError
 
 from .meshes.kinds import classify
+from .meshes.solids import FACES_INSIDE
 from .minkowski import checked_eps, surface_stats
 from .offsets_ball import ball_offset
 from .offsets_convex import convex_offset
@@ -125,15 +126,17 @@ def _check_radius_scale(radius: float, diagonal: float, name: str) -> None:
 def _check_boundary_is_every_triangle(solid: trimesh.Trimesh, name: str) -> None:
     """Refuse to erode a solid some of whose triangles lie inside it (shells that touch
     or overlap, as a part modelled as several bodies is): the erosion keeps away from its
-    boundary, which those triangles are not part of, and they are all it is given."""
-    from ._minkowski_core import front_windings  # noqa: PLC0415
+    boundary, which those triangles are not part of, and they are all it is given. The
+    count comes with the checked solid (:data:`~planner.meshes.solids.FACES_INSIDE`)."""
+    inner = solid.metadata.get(FACES_INSIDE)
+    if inner is None:  # checked elsewhere: count them here
+        from ._minkowski_core import front_windings  # noqa: PLC0415
 
-    fronts = front_windings(np.asarray(solid.vertices, dtype=np.float64),
-                            np.asarray(solid.faces, dtype=np.int64))
-    inner = int((fronts != 0).sum())
+        inner = int((front_windings(np.asarray(solid.vertices, dtype=np.float64),
+                                    np.asarray(solid.faces, dtype=np.int64)) != 0).sum())
     if inner:
         raise InvalidParameterError(
-            f"{name}: {inner} of its {len(fronts)} triangles face into the solid (shells "
+            f"{name}: {inner} of its {len(solid.faces)} triangles face into the solid (shells "
             f"that touch or overlap), so they are not all its boundary; an erosion needs "
             f"its boundary alone: merge the shells into one first (a mesh union, e.g. "
             f"manifold3d's)")

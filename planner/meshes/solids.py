@@ -126,13 +126,14 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
             f"opposite ways overlap); typically polygons triangulated wrongly by the "
             f"exporter{obj_hint(mesh)}"
         )
-    _check_winding(vertices, faces, label)
+    faces_inside = _check_winding(vertices, faces, label)
     if report["flipped_shells"]:  # said once the result is a solid
         log.info("%s: %d of %d closed shell(s) were inside out; flipped them", label,
                  report["flipped_shells"], report["shells"])
     result = trimesh.Trimesh(vertices, faces, process=False)
     result.metadata.update(getattr(mesh, "metadata", {}) or {})
     result.metadata["name"] = name
+    result.metadata[FACES_INSIDE] = faces_inside
     if report["merged_vertices"] or report["removed_faces"]:
         log.debug(
             "%s: merged %d vertices, removed %d faces",
@@ -152,10 +153,17 @@ def obj_hint(mesh) -> str:
     return " or loader (an OBJ with n-gons: read it with planner.meshes.load_obj)"
 
 
-def _check_winding(vertices: np.ndarray, faces: np.ndarray, label: str) -> None:
+FACES_INSIDE = "faces_inside"
+"""Key of a solid's ``metadata`` (from :func:`validate_solid`): how many of its faces have
+the solid in front of them too (winding number above 0 there: shells that touch or
+overlap), so are not part of its boundary."""
+
+
+def _check_winding(vertices: np.ndarray, faces: np.ndarray, label: str) -> int:
     """Raise unless the closed, consistently wound surface bounds a solid: its exact
     winding number (the core's) is never negative, neither in front of a face nor where
-    faces cross (see the module's conventions)."""
+    faces cross (see the module's conventions). Returns how many faces have the solid in
+    front of them too (:data:`FACES_INSIDE`)."""
     from planner._minkowski_core import crossing_windings, front_windings  # noqa: PLC0415
 
     untold = np.iinfo(np.int64).min
@@ -165,7 +173,7 @@ def _check_winding(vertices: np.ndarray, faces: np.ndarray, label: str) -> None:
     inverted_wedges = int(((wedges < 0) & (wedges != untold)).sum())
     unknown = int((fronts == untold).sum() + (wedges == untold).sum())
     if not (inverted or inverted_wedges or unknown):
-        return
+        return int((fronts != 0).sum())
     told = np.concatenate([fronts[fronts != untold], wedges[wedges != untold]])
     detail = []
     if inverted or inverted_wedges:

@@ -21,8 +21,8 @@
 //!
 //! Entry point: [`triangulate`].
 
-use crate::bvh::Bvh;
-use crate::math::{Aabb, Vec3};
+use super::stitch;
+use crate::math::Vec3;
 use crate::util::FastMap;
 use rayon::prelude::*;
 
@@ -187,38 +187,18 @@ fn region_triangles<'a>(vertices: &[Vec3], polys: impl Iterator<Item = &'a [u32]
 /// on its plane (so that the edges it shares with them cancel) or across a crease (so that
 /// the triangles on either side of it share their vertices).
 fn with_corners_on_edges(vertices: &[Vec3], polys: &[Vec<u32>], tol: f64) -> Vec<Vec<u32>> {
-    let at = |v: u32| vertices[v as usize];
     let edges: Vec<(u32, u32)> = polys.iter().flat_map(|p| (0..p.len()).map(move |i| (p[i], p[(i + 1) % p.len()]))).collect();
-    let boxes: Vec<Aabb> = edges.iter().map(|&(a, b)| Aabb::from_points(&[at(a), at(b)]).inflated(tol)).collect();
-    let bvh = Bvh::build(&boxes);
     let mut corners: Vec<u32> = polys.iter().flatten().copied().collect();
     corners.sort_unstable();
     corners.dedup();
-    let mut on: FastMap<usize, Vec<(f64, u32)>> = FastMap::default();
-    for &c in &corners {
-        let p = at(c);
-        bvh.for_each_at_point(p, |i| {
-            let (a, b) = edges[i];
-            if c == a || c == b || a == b {
-                return;
-            }
-            let (pa, d) = (at(a), at(b) - at(a));
-            let t = (p - pa).dot(d) / d.length_squared();
-            if t > 0.0 && t < 1.0 && (pa + d * t - p).length() <= tol {
-                on.entry(i).or_default().push((t, c));
-            }
-        });
-    }
+    let on = stitch::points_on_edges(vertices, &edges, &corners, tol);
     let mut out = Vec::with_capacity(polys.len());
     let mut e = 0usize;
     for p in polys {
         let mut ids = Vec::with_capacity(p.len());
         for &a in p {
             ids.push(a);
-            if let Some(mid) = on.get_mut(&e) {
-                mid.sort_by(|x, y| x.0.total_cmp(&y.0));
-                ids.extend(mid.iter().map(|&(_, c)| c));
-            }
+            ids.extend(on.get(&e).into_iter().flatten());
             e += 1;
         }
         ids.dedup();

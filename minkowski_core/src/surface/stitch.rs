@@ -215,16 +215,12 @@ pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>, h: f64) -> usize
         }
         let was = |c: u32| before[copied_from.get((c as usize).wrapping_sub(before.len())).copied().unwrap_or(c) as usize];
         let place = before[v as usize];
-        let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).min(SHEETS_APART_MAX * h);
-        // no triangle flips: its corners each moved less than a sixth of their heights
-        // over the opposite edges change its area by less than 7/12 of it
-        let lowest = star[&v].iter().map(|&t| height_over_opposite_edge(s.faces[t].map(was), s.faces[t].iter().position(|&c| c == v))).fold(f64::INFINITY, f64::min);
-        let step = wanted.min(lowest / 6.0);
+        let step = apart_step(place, h, star[&v].iter().map(|&t| (s.faces[t].map(was), s.faces[t].iter().position(|&c| c == v))));
         let moves: Vec<(Vec<usize>, Vec3)> = fans
             .into_iter()
             .map(|fan| {
-                let into = fan.iter().map(|&t| s.faces[t].iter().fold(Vec3::ZERO, |acc, &c| acc + was(c)) / 3.0 - place).fold(Vec3::ZERO, |acc, d| acc + d);
-                (fan, place + into.normalize_or_zero() * step)
+                let into = into_fan(place, fan.iter().map(|&t| s.faces[t].map(was)));
+                (fan, place + into * step)
             })
             .collect();
         for (k, (fan, moved)) in moves.into_iter().enumerate() {
@@ -271,16 +267,30 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
     let mut parted = 0;
     for &v in &moving {
         let place = before[v as usize];
-        let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).min(SHEETS_APART_MAX * h);
-        let tris = &star[&v];
-        let lowest = tris.iter().map(|&t| height_over_opposite_edge(s.faces[t].map(|c| before[c as usize]), s.faces[t].iter().position(|&c| c == v))).fold(f64::INFINITY, f64::min);
-        let step = wanted.min(lowest / 6.0);
-        let into = tris.iter().map(|&t| s.faces[t].iter().fold(Vec3::ZERO, |acc, &c| acc + before[c as usize]) / 3.0 - place).fold(Vec3::ZERO, |acc, d| acc + d);
-        s.vertices[v as usize] = place + into.normalize_or_zero() * step;
+        let corners = |t: usize| s.faces[t].map(|c| before[c as usize]);
+        let step = apart_step(place, h, star[&v].iter().map(|&t| (corners(t), s.faces[t].iter().position(|&c| c == v))));
+        s.vertices[v as usize] = place + into_fan(place, star[&v].iter().map(|&t| corners(t))) * step;
         s.sheets_apart = s.sheets_apart.max(step);
         parted += (key(s.vertices[v as usize]) != key(place)) as usize;
     }
     parted
+}
+
+/// How far a vertex at `place` moves where sheets part: [`SHEETS_APART`] of `h`, at least
+/// 16 float32 steps of its coordinates, at most [`SHEETS_APART_MAX`] of `h`, and less than
+/// a sixth of its lowest height over the opposite edge in its triangles `star` (their
+/// corners, and which is the vertex). No triangle flips: its corners each moved less than
+/// a sixth of their heights over the opposite edges change its area by less than 7/12 of it.
+fn apart_step(place: Vec3, h: f64, star: impl Iterator<Item = ([Vec3; 3], Option<usize>)>) -> f64 {
+    let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).min(SHEETS_APART_MAX * h);
+    let lowest = star.map(|(p, at)| height_over_opposite_edge(p, at)).fold(f64::INFINITY, f64::min);
+    wanted.min(lowest / 6.0)
+}
+
+/// The unit direction from `place` into the triangles `fan` (their corners): towards the
+/// sum of their centroids; zero when that is `place`.
+fn into_fan(place: Vec3, fan: impl Iterator<Item = [Vec3; 3]>) -> Vec3 {
+    fan.map(|p| (p[0] + p[1] + p[2]) / 3.0 - place).fold(Vec3::ZERO, |acc, d| acc + d).normalize_or_zero()
 }
 
 /// The triangles about each of the vertices `at` (indices into `faces`).
@@ -392,28 +402,10 @@ fn split_t_junctions(s: &mut Surface, tol: f64) {
     if open.is_empty() {
         return;
     }
-    let boxes: Vec<Aabb> = open.iter().map(|&(a, b)| Aabb::from_points(&[s.vertices[a as usize], s.vertices[b as usize]]).inflated(tol)).collect();
-    let bvh = Bvh::build(&boxes);
     let mut ends: Vec<u32> = open.iter().flat_map(|&(a, b)| [a, b]).collect();
     ends.sort_unstable();
     ends.dedup();
-    // per open edge: (parameter, vertex) of the points on it
-    let mut on: FastMap<(u32, u32), Vec<(f64, u32)>> = FastMap::default();
-    for &v in &ends {
-        let p = s.vertices[v as usize];
-        bvh.for_each_at_point(p, |i| {
-            let (a, b) = open[i];
-            if v == a || v == b {
-                return;
-            }
-            let (pa, pb) = (s.vertices[a as usize], s.vertices[b as usize]);
-            let d = pb - pa;
-            let t = (p - pa).dot(d) / d.length_squared();
-            if t > 0.0 && t < 1.0 && (pa + d * t - p).length() <= tol {
-                on.entry((a, b)).or_default().push((t, v));
-            }
-        });
-    }
+    let on: FastMap<(u32, u32), Vec<u32>> = points_on_edges(&s.vertices, &open, &ends, tol).into_iter().map(|(i, pts)| (open[i], pts)).collect();
     if on.is_empty() {
         return;
     }
@@ -428,10 +420,7 @@ fn split_t_junctions(s: &mut Surface, tol: f64) {
         let mut ring = Vec::new();
         for e in edges {
             ring.push(e.0);
-            if let Some(pts) = on.get_mut(&e) {
-                pts.sort_by(|x, y| x.0.total_cmp(&y.0));
-                ring.extend(pts.iter().map(|&(_, v)| v));
-            }
+            ring.extend(on.get(&e).into_iter().flatten());
         }
         let c = (s.vertices[f[0] as usize] + s.vertices[f[1] as usize] + s.vertices[f[2] as usize]) / 3.0;
         let centre = s.vertices.len() as u32;
@@ -441,6 +430,35 @@ fn split_t_junctions(s: &mut Surface, tol: f64) {
         }
     }
     s.faces = faces;
+}
+
+/// Per edge (by index in `edges`) the `points` that lie on it within `tol`, strictly
+/// between its ends, in order from its first end; edges with none are left out.
+pub(super) fn points_on_edges(vertices: &[Vec3], edges: &[(u32, u32)], points: &[u32], tol: f64) -> FastMap<usize, Vec<u32>> {
+    let at = |v: u32| vertices[v as usize];
+    let boxes: Vec<Aabb> = edges.iter().map(|&(a, b)| Aabb::from_points(&[at(a), at(b)]).inflated(tol)).collect();
+    let bvh = Bvh::build(&boxes);
+    let mut on: FastMap<usize, Vec<(f64, u32)>> = FastMap::default();
+    for &v in points {
+        let p = at(v);
+        bvh.for_each_at_point(p, |i| {
+            let (a, b) = edges[i];
+            if v == a || v == b || a == b {
+                return;
+            }
+            let (pa, d) = (at(a), at(b) - at(a));
+            let t = (p - pa).dot(d) / d.length_squared();
+            if t > 0.0 && t < 1.0 && (pa + d * t - p).length() <= tol {
+                on.entry(i).or_default().push((t, v));
+            }
+        });
+    }
+    on.into_iter()
+        .map(|(i, mut pts)| {
+            pts.sort_by(|x, y| x.0.total_cmp(&y.0));
+            (i, pts.into_iter().map(|(_, v)| v).collect())
+        })
+        .collect()
 }
 
 /// A lattice plane: the axis it is normal to and its index along it.
