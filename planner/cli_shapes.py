@@ -57,6 +57,12 @@ def _add_offset_parser(sub, common) -> None:
     morph = o.add_mutually_exclusive_group()
     morph.add_argument("--opening", action="store_true", help="erode then grow by r (r > 0)")
     morph.add_argument("--closing", action="store_true", help="grow then erode by r (r > 0)")
+    o.add_argument("--kind", choices=("solid", "surface", "auto"), default="solid",
+                   help="solid (default): a closed solid, else an error; surface: grow its "
+                   "triangles as they are (an open mesh, as FCL sees it; hollow where the "
+                   "part is thicker than 2r; no erosion); auto: a solid when it is one")
+    o.add_argument("--repair", action="store_true",
+                   help="fill holes to make a solid (says what it changed)")
     o.add_argument("--no-progress", action="store_true", help="no progress line")
 
 
@@ -76,10 +82,11 @@ def cmd_offset(args) -> int:
         planner.offset
     result = how(planner.load_mesh(args.mesh, name=args.mesh), args.radius, eps=args.eps,
                  name=args.mesh, progress=False if args.no_progress else None,
-                 method=args.method)
+                 method=args.method, kind=args.kind, repair=args.repair)
     write_mesh(result.mesh, out)
+    of = "" if result.stats.get("kind", "solid") == "solid" else ", of its triangles"
     sys.stdout.write(f"wrote {out}: {result.stats['triangles']} triangles, error bound "
-                     f"{result.error_bound:.4g} ({result.stats['method']}), "
+                     f"{result.error_bound:.4g} ({result.stats['method']}{of}), "
                      f"{result.stats['seconds']:.2f} s\n")
     return 0
 

@@ -20,6 +20,9 @@ ball when ``P`` has many triangles, small for ``eps``: :data:`FINE_FACETS`):
   in the column over one face are cut by its offset plane at their size
   (``stats["planar_pieces"]``), only the round parts are sampled, at ``eps``.
 
+An open mesh (a triangle soup) is offset as its triangles when asked (``kind``): grown,
+``{x : dist(x, triangles) <= r}`` by the cells; it has no erosion, opening or closing.
+
 ``opening(P, r)`` erodes then grows (removing features thinner than ``2 r``),
 ``closing(P, r)`` grows then erodes (filling gaps narrower than ``2 r``). Their
 ``error_bound`` is ``inf``: an erosion is not continuous in its input (a neck a hair
@@ -44,9 +47,14 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from planner.errors import GeometryError, InvalidParameterError, ResourceLimitError
+from planner.errors import (
+    GeometryError,
+    InvalidMeshError,
+    InvalidParameterError,
+    ResourceLimitError,
+)
 
-from .meshes.kinds import classify
+from .meshes.kinds import KINDS, Classified, classify
 from .meshes.solids import FACES_INSIDE
 from .minkowski import checked_eps, surface_stats
 from .offsets_ball import ball_offset
@@ -85,10 +93,19 @@ class OffsetResult:
     stats: dict[str, Any] = field(default_factory=dict)
 
 
-def _solid(obj, name: str) -> trimesh.Trimesh:
-    """The operand as a checked solid, made one as a part's mesh is (T-junctions split:
-    :func:`planner.meshes.kinds.classify`), else the reason it is none."""
-    return classify(as_mesh(obj, name), name=name, kind="solid").mesh
+def _operand(obj, name: str, kind: str, repair: bool) -> Classified:
+    """The operand as the ``kind`` it is asked to be (:func:`planner.meshes.kinds.classify`:
+    a solid made one as a part's mesh is, T-junctions split, with ``repair`` holes filled;
+    a surface its triangles as they are); a solid that is none says how to grow it anyway."""
+    if kind not in KINDS:
+        raise InvalidParameterError(f"kind = {kind!r}: must be one of {', '.join(KINDS)}")
+    try:
+        return classify(as_mesh(obj, name), name=name, kind=kind, repair=repair)
+    except InvalidMeshError as error:
+        if kind != "solid":
+            raise
+        raise InvalidMeshError(f"{error}; or grow its triangles as they are (a surface, as "
+                               f"FCL sees it): kind='surface' (--kind surface)") from None
 
 
 def _radius(r: float) -> float:
@@ -152,7 +169,7 @@ solid of small triangles, :data:`FINE_FACETS`)."""
 
 def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
            name: str = "mesh", progress: bool | None = None,
-           method: str = "auto") -> OffsetResult:
+           method: str = "auto", kind: str = "solid", repair: bool = False) -> OffsetResult:
     """The offset of the closed solid ``mesh`` (a trimesh, ``(V, F)`` or a mesh file) by
     ``r``: grown for ``r > 0``, eroded for ``r < 0``.
 
@@ -164,11 +181,19 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
         progress: a status line on stderr while the surface is built
             (:mod:`planner.progress`; ``None``: only when stderr is a terminal).
         method: one of :data:`METHODS`; ``stats["method"]`` says which was used.
+        kind: what ``mesh`` is taken for (:data:`planner.meshes.kinds.KINDS`): ``"solid"``
+            (the default: a closed solid, else an error); ``"surface"``, its triangles as
+            they are (an open triangle soup, as FCL sees it), grown as ``{x : dist(x,
+            triangles) <= r}`` by the cells (no erosion: it has no inside; where the part
+            is thicker than ``2 r`` the result is hollow); ``"auto"``, a solid when it is
+            one, else a surface. ``stats["kind"]`` says which it was.
+        repair: a solid may have holes filled (:func:`planner.meshes.repair_mesh`).
 
     Raises:
-        InvalidMeshError: ``mesh`` is not a closed solid.
+        InvalidMeshError: ``mesh`` is not a closed solid (``kind="solid"``).
         InvalidParameterError: ``r`` zero or not finite, ``eps`` not positive, an unknown
-            ``method``, or ``"hull"`` for a solid that is not convex within ``eps``.
+            ``method`` or ``kind``, ``"hull"`` for a solid that is not convex within
+            ``eps``, or an erosion, ``"hull"`` or ``"ball"`` of a surface.
         ResourceLimitError: the grid for ``eps`` would not fit the cell budget.
         GeometryError: an erosion that leaves nothing (``|r|`` past the solid's
             thickness).
@@ -179,33 +204,23 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
         raise InvalidParameterError(f"method = {method!r}: must be one of {', '.join(METHODS)}")
     if name == "mesh" and isinstance(mesh, (str, os.PathLike)):
         name = os.fspath(mesh)
-    solid = _solid(mesh, name)
+    part = _operand(mesh, name, kind, repair)
+    solid = part.mesh
     extent = np.ptp(np.asarray(solid.bounds), axis=0)
     _check_radius_scale(radius, float(np.linalg.norm(extent)), name)
-    if radius < 0:
+    if not part.solid:
+        _check_surface_offset(radius, method, name, part.reason)
+    elif radius < 0:
         _check_boundary_is_every_triangle(solid, name)
     diagonal = float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
     step = checked_eps(eps, diagonal)
     verb = "growing" if radius > 0 else "eroding"
     with StatusLine(progress) as line:
         line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
-        done, used = None, method
-        if method in ("auto", "hull"):
-            done, used = convex_offset(solid, radius, step), "hull"
-            if done is None and method == "hull":
-                raise InvalidParameterError(f"method = 'hull': {name} is not convex within "
-                                            f"eps {step:.3g} (or its hull is too large or "
-                                            f"too thin for qhull)")
-        if done is None and method == "auto" and _fine_facets(solid, step):
-            done, used = _cell_offset(solid, radius, step, max_cells, name), "cells"
-        if done is None and method in ("auto", "ball"):
-            done, used = ball_offset(solid, radius, step, name=name, max_cells=max_cells,
-                                     progress=progress), "ball"
-            if done is None and method == "ball":
-                raise InvalidParameterError(f"method = 'ball': eps {step:.3g} is finer than "
-                                            f"the finest icosphere of radius {abs(radius):g}")
-        if done is None:
-            done, used = _cell_offset(solid, radius, step, max_cells, name), "cells"
+        if part.solid:
+            done, used = _by_method(solid, radius, step, method, max_cells, name, progress)
+        else:
+            done, used = _cell_offset(solid, radius, step, max_cells, name, solid=False), "cells"
     surface, bound, stats = done
     if len(surface.faces) == 0:
         if not math.isfinite(bound):
@@ -214,12 +229,51 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
         raise GeometryError(f"{name}: nothing is left of it eroded by {-radius:g} (its "
                             f"thickest part is thinner than {2 * -radius:g})")
     stats["method"] = used
+    stats["kind"] = "solid" if part.solid else "surface"
     stats["seconds"] = time.perf_counter() - t0
     if bound >= abs(radius):
         log.warning("%s offset by %g: the error bound %.3g is not below the radius, so the "
                     "result need not even lie %s the solid; use eps below %.3g", name, radius,
                     bound, "around" if radius > 0 else "inside", step * abs(radius) / bound)
     return OffsetResult(surface, radius, bound, step, stats)
+
+
+def _check_surface_offset(radius: float, method: str, name: str, reason: str) -> None:
+    """Refuse what a surface's offset cannot be: an erosion (it has no inside), or by the
+    hull or the ball (they take a solid)."""
+    if radius < 0:
+        raise InvalidParameterError(f"{name}: an erosion needs a closed solid, and it is a "
+                                    f"surface ({reason})")
+    if method in ("hull", "ball"):
+        raise InvalidParameterError(f"method = {method!r}: needs a closed solid, and {name} "
+                                    f"is a surface ({reason}); use 'cells' or 'auto'")
+    log.info("%s is a surface (%s): growing its triangles; where it is thicker than %g the "
+             "result is hollow", name, reason, 2 * radius)
+
+
+def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
+               max_cells: int | None, name: str, progress: bool | None):
+    """``((mesh, error_bound, stats), method used)`` of the solid's offset by ``method``
+    (``"auto"``: the first that applies, :data:`METHODS`)."""
+    if method in ("auto", "hull"):
+        done = convex_offset(solid, radius, step)
+        if done is not None:
+            return done, "hull"
+        if method == "hull":
+            raise InvalidParameterError(f"method = 'hull': {name} is not convex within "
+                                        f"eps {step:.3g} (or its hull is too large or too "
+                                        f"thin for qhull)")
+    if method == "auto" and _fine_facets(solid, step):
+        return _cell_offset(solid, radius, step, max_cells, name), "cells"
+    if method in ("auto", "ball"):
+        done = ball_offset(solid, radius, step, name=name, max_cells=max_cells,
+                           progress=progress)
+        if done is not None:
+            return done, "ball"
+        if method == "ball":
+            raise InvalidParameterError(f"method = 'ball': eps {step:.3g} is finer than the "
+                                        f"finest icosphere of radius {abs(radius):g}")
+    return _cell_offset(solid, radius, step, max_cells, name), "cells"
 
 
 FINE_FACETS = 0.2
@@ -242,15 +296,16 @@ def _fine_facets(solid: trimesh.Trimesh, eps: float) -> bool:
     return count >= FINE_FACETS_MIN and count * eps * eps > FINE_FACETS * float(solid.area)
 
 
-def _cell_offset(solid: trimesh.Trimesh, radius: float, step: float, max_cells: int | None,
-                 name: str) -> tuple[trimesh.Trimesh, float, dict[str, Any]]:
-    """``(mesh, error_bound, stats)`` of the native cell source's offset."""
+def _cell_offset(mesh: trimesh.Trimesh, radius: float, step: float, max_cells: int | None,
+                 name: str, *, solid: bool = True) -> tuple[trimesh.Trimesh, float, dict[str, Any]]:
+    """``(mesh, error_bound, stats)`` of the native cell source's offset (of a surface's
+    triangles when not ``solid``)."""
     from . import budget  # noqa: PLC0415
     from ._minkowski_core import CheckedMesh, offset_surface  # noqa: PLC0415
 
     cells, from_memory = budget.surface_cells(max_cells)
-    checked = CheckedMesh(np.asarray(solid.vertices, dtype=np.float64),
-                          np.asarray(solid.faces, dtype=np.int64), name=name)
+    checked = CheckedMesh(np.asarray(mesh.vertices, dtype=np.float64),
+                          np.asarray(mesh.faces, dtype=np.int64), solid=solid, name=name)
     try:
         raw = offset_surface(checked, radius, step, max_cells=cells)
     except ResourceLimitError as exc:
@@ -262,15 +317,20 @@ def _cell_offset(solid: trimesh.Trimesh, radius: float, step: float, max_cells: 
 
 
 def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
-              kind: str, progress: bool | None, method: str) -> OffsetResult:
+              stage_name: str, progress: bool | None, method: str, kind: str,
+              repair: bool) -> OffsetResult:
+    if kind == "surface":
+        _refuse_surface_closing(name)
     one = offset(mesh, first, eps=eps, max_cells=max_cells, name=name, progress=progress,
-                 method=method)
+                 method=method, kind=kind, repair=repair)
+    if one.stats["kind"] != "solid":  # (auto: found a surface)
+        _refuse_surface_closing(name)
     # the second stage by the first's method: their errors then largely cancel (an
     # opening inside its input, a closing around it), where mixing a grid and a ball
     # leaves each stage's error in full, on opposite sides
     then = _second_method(method, one.stats["method"])
     stage = functools.partial(offset, one.mesh, second, eps=eps, max_cells=max_cells,
-                              name=f"{name} ({kind})", progress=progress)
+                              name=f"{name} ({stage_name})", progress=progress)
     try:
         two = stage(method=then)
     except InvalidParameterError:
@@ -282,6 +342,14 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
              "stage_bounds": [one.error_bound, two.error_bound],
              "seconds": one.stats["seconds"] + two.stats["seconds"]}
     return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
+
+
+def _refuse_surface_closing(name: str) -> None:
+    """An opening erodes first (a surface has no inside); a closing's grown triangles
+    eroded by as much are the triangles again, of no thickness."""
+    raise InvalidParameterError(f"{name}: an opening or closing needs a closed solid, and it "
+                                f"is a surface (grown and eroded by as much, its triangles "
+                                f"are themselves again, of no thickness)")
 
 
 def _positive_radius(r: float, what: str) -> float:
@@ -300,15 +368,19 @@ def _second_method(asked: str, first: str) -> str:
 
 def opening(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
             name: str = "mesh", progress: bool | None = None,
-            method: str = "auto") -> OffsetResult:
-    """Erode by ``r`` then grow by ``r`` (``r > 0``): features thinner than ``2 r`` go."""
+            method: str = "auto", kind: str = "solid", repair: bool = False) -> OffsetResult:
+    """Erode by ``r`` then grow by ``r`` (``r > 0``): features thinner than ``2 r`` go.
+    ``kind`` and ``repair`` as :func:`offset`'s (an erosion needs a solid)."""
     radius = _positive_radius(r, "an opening")
-    return _composed(mesh, -radius, radius, eps, max_cells, name, "eroded", progress, method)
+    return _composed(mesh, -radius, radius, eps, max_cells, name, "eroded", progress, method,
+                     kind, repair)
 
 
 def closing(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
             name: str = "mesh", progress: bool | None = None,
-            method: str = "auto") -> OffsetResult:
-    """Grow by ``r`` then erode by ``r`` (``r > 0``): gaps narrower than ``2 r`` close."""
+            method: str = "auto", kind: str = "solid", repair: bool = False) -> OffsetResult:
+    """Grow by ``r`` then erode by ``r`` (``r > 0``): gaps narrower than ``2 r`` close.
+    ``kind`` and ``repair`` as :func:`offset`'s (a closing needs a solid)."""
     radius = _positive_radius(r, "a closing")
-    return _composed(mesh, radius, -radius, eps, max_cells, name, "grown", progress, method)
+    return _composed(mesh, radius, -radius, eps, max_cells, name, "grown", progress, method,
+                     kind, repair)

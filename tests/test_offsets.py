@@ -644,3 +644,83 @@ def test_a_bound_not_below_the_radius_is_warned_of(caplog):
     with caplog.at_level("WARNING", logger="planner.offsets"):
         planner.offset(box, 0.2, eps=0.05, method="cells")
     assert "is not below the radius" not in caplog.text
+
+
+def _open_box() -> trimesh.Trimesh:
+    """A unit cube without its top: five squares, ten triangles, an open triangle soup."""
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    top = box.face_normals[:, 2] > 0.5
+    return trimesh.Trimesh(box.vertices, box.faces[~top], process=False)
+
+
+def test_a_lone_triangle_grows_into_its_parallel_body():
+    """Steiner's formula for a flat convex set of area A and perimeter L: 2 A r + π L r² / 2
+    + 4/3 π r³; and every output point lies within the bound of distance r from it."""
+    from planner.meshes.closest import mesh_distance
+
+    triangle = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0.3, 0.8, 0.1]], [[0, 1, 2]],
+                               process=False)
+    r = 0.2
+    result = planner.offset(triangle, r, eps=0.01, kind="surface")
+    assert (result.stats["kind"], result.stats["method"]) == ("surface", "cells")
+    assert result.mesh.is_watertight and result.mesh.is_winding_consistent
+    area, perimeter = float(triangle.area), float(np.sum(np.linalg.norm(
+        triangle.vertices - np.roll(triangle.vertices, 1, axis=0), axis=1)))
+    exact = 2 * area * r + 0.5 * math.pi * perimeter * r * r + 4 / 3 * math.pi * r ** 3
+    assert abs(result.mesh.volume - exact) <= _volume_slack(result, float(result.mesh.area))
+    points = trimesh.sample.sample_surface(result.mesh, 3000, seed=1)[0]
+    distance = mesh_distance(triangle.vertices, triangle.faces, points)
+    assert np.all(np.abs(distance - r) <= result.error_bound)
+
+
+def test_an_open_surface_is_grown_as_the_set_within_r_of_its_triangles(tmp_path):
+    """An open box (as FCL sees it: triangles) grown by r: membership of random points
+    agrees with the exact distance to its triangles away from the bound's band (the box's
+    inside farther than r from every wall stays out); as a file it reads back closed."""
+    from oracle import points_in_mesh
+
+    from planner.meshes.closest import mesh_distance
+
+    soup, r = _open_box(), 0.2
+    result = planner.offset(soup, r, eps=0.02, kind="auto")  # not a solid: its triangles
+    assert result.stats["kind"] == "surface"
+    points = np.random.default_rng(3).uniform(-0.8, 0.8, size=(4000, 3))
+    distance = mesh_distance(soup.vertices, soup.faces, points)
+    inside = points_in_mesh(result.mesh, points)
+    clear = np.abs(distance - r) > result.error_bound
+    assert np.array_equal(inside[clear], distance[clear] < r)
+    assert not points_in_mesh(result.mesh, [[0.0, 0.0, 0.0]])[0]  # the box's inside
+    out = tmp_path / "grown.stl"
+    assert main(["offset", str(_write(soup, tmp_path / "open.stl")), "-r", str(r), "-o",
+                 str(out), "--eps", "0.02", "--kind", "surface"]) == 0
+    read = trimesh.load(out)
+    assert read.is_watertight and read.is_winding_consistent and read.volume > 0
+
+
+def _write(mesh: trimesh.Trimesh, path):
+    mesh.export(path)
+    return path
+
+
+def test_a_surface_has_no_erosion_and_a_solid_that_is_none_says_how_to_grow_it(capsys,
+                                                                               tmp_path):
+    from planner.errors import InvalidMeshError
+
+    soup = _open_box()
+    with pytest.raises(InvalidParameterError, match="an erosion needs a closed solid"):
+        planner.offset(soup, -0.1, kind="surface")
+    for method in ("hull", "ball"):
+        with pytest.raises(InvalidParameterError, match="needs a closed solid"):
+            planner.offset(soup, 0.1, kind="surface", method=method)
+    with pytest.raises(InvalidMeshError, match="kind='surface'"):
+        planner.offset(soup, 0.1)  # a solid by default
+    with pytest.raises(InvalidParameterError, match="kind = 'shell'"):
+        planner.offset(soup, 0.1, kind="shell")
+    path = _write(soup, tmp_path / "open.stl")
+    assert main(["offset", str(path), "-r", "0.1", "-o", str(tmp_path / "x.stl")]) == 2
+    assert "--kind surface" in capsys.readouterr().err
+    assert not (tmp_path / "x.stl").exists()
+    # its triangles grown and eroded by as much are the triangles, of no thickness
+    for how in (planner.closing, planner.opening):
+        with pytest.raises(InvalidParameterError, match="or closing needs a closed solid"):
+            how(soup, 0.1, eps=0.05, kind="surface")

@@ -4,6 +4,8 @@
 //!
 //! Growing (`r > 0`): `O = {x : dist(x, P) <= r} = P ∪ {x : dist(x, ∂P) <= r}`.
 //! Eroding (`r < 0`): `E = {x ∈ P : dist(x, ∂P) >= |r|}`.
+//! A surface (open triangles, as FCL sees them) grows as its triangles do: `P` is then
+//! empty and `∂P` the triangles, `O = {x : dist(x, triangles) <= r}`; it has no erosion.
 //!
 //! Cells are classified by exact distances to the triangles of `∂P`: a triangle is a
 //! record of a cell when its `|r|`-neighbourhood may meet the cell (the distance from the
@@ -75,15 +77,16 @@ pub struct OffsetSource<'a> {
 }
 
 impl<'a> OffsetSource<'a> {
-    /// The offset of the solid `mesh` by `r` (grown for `r > 0`, eroded for `r < 0`).
+    /// The offset of the solid `mesh` by `r` (grown for `r > 0`, eroded for `r < 0`), or
+    /// of the surface `mesh` grown by `r > 0`.
     ///
     /// # Panics
-    /// When `r` is zero or not finite (the caller checks it), or in debug builds when
-    /// `mesh` is no solid.
+    /// When `r` is zero or not finite, or `mesh` is a surface and `r < 0` (the caller
+    /// checks them).
     pub fn new(mesh: &'a TriMesh, r: f64) -> Self {
         assert!(r.is_finite() && r != 0.0, "offset radius {r}");
+        assert!(mesh.solid || r > 0.0, "the erosion of a surface");
         assert!(mesh.tris.len() < SIDE_OUT as usize, "{} triangles: records address fewer than 2^30 - 2", mesh.tris.len());
-        debug_assert!(mesh.solid, "the offset of a surface");
         let grow = r > 0.0;
         let aabb = if grow { mesh.aabb.inflated(r * (1.0 + 1e-9)) } else { mesh.aabb };
         let faces = mesh.tris.iter().map(|t| Face::new(t.p)).collect();
@@ -140,9 +143,10 @@ impl<'a> OffsetSource<'a> {
         }
     }
 
-    /// Whether `p`, not within the radius of the boundary, is in the offset: inside `P`.
+    /// Whether `p`, not within the radius of the boundary, is in the offset: inside `P`
+    /// (never, for a surface).
     fn inside_far(&self, p: Vec3) -> bool {
-        self.mesh.contains(p)
+        self.mesh.solid && self.mesh.contains(p)
     }
 }
 
@@ -485,6 +489,26 @@ mod tests {
         let volume = signed_volume(&result.surface.vertices, &result.surface.faces);
         let exact = 1.0 + 6.0 * r + 3.0 * std::f64::consts::PI * r * r + 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
         assert!((volume - exact).abs() < 0.03 * exact, "{volume} vs {exact}");
+    }
+
+    /// A lone triangle grows into its parallel body: by Steiner's formula for a flat convex
+    /// set of area `A` and perimeter `L`, `2 A r + π L r² / 2 + 4/3 π r³`.
+    #[test]
+    fn a_grown_triangle_has_the_steiner_volume() {
+        let v = vec![Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.3, 0.8, 0.1)];
+        let tri = TriMesh::surface(v.clone(), &[[0, 1, 2]], "triangle").expect("a surface");
+        let r = 0.2;
+        let src = OffsetSource::new(&tri, r);
+        let params = UnionParams { eps: 0.01, max_cells: 4_000_000, max_refinements: 0, simplify: true, planes: true };
+        let result = approximate_solid(&src, &src.aabb, &params).expect("a surface");
+        let volume = signed_volume(&result.surface.vertices, &result.surface.faces);
+        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+        let perimeter = (v[1] - v[0]).length() + (v[2] - v[1]).length() + (v[0] - v[2]).length();
+        let pi = std::f64::consts::PI;
+        let exact = 2.0 * area * r + 0.5 * pi * perimeter * r * r + 4.0 / 3.0 * pi * r.powi(3);
+        assert!((volume - exact).abs() < 0.02 * exact, "{volume} vs {exact}");
+        // its two flat sides are resolved by planes
+        assert!(result.surface.planar_pieces > 0);
     }
 
     /// An eroded cube is resolved by its faces' slab planes everywhere: the shrunken box,

@@ -160,15 +160,16 @@ fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: 
 /// The offset of the solid `mesh` (a [`CheckedMesh`] checked as a solid) by `radius`:
 /// `{x : dist(x, P) <= r}` for `r > 0`, the erosion `{x in P : dist(x, boundary) >= |r|}`
 /// for `r < 0`, as a closed surface at resolution `eps` with its two-sided error bound (a
-/// dict as `union_surface`'s).
+/// dict as `union_surface`'s). A surface (checked as one) grows as its triangles do:
+/// `{x : dist(x, triangles) <= r}`, `r > 0`.
 #[pyfunction]
 #[pyo3(signature = (mesh, radius, eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
 fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
     if !(radius.is_finite() && radius != 0.0) {
         return Err(InvalidParameterError::new_err(format!("radius = {radius}: must be a non-zero finite number")));
     }
-    if !mesh.inner.solid {
-        return Err(InvalidParameterError::new_err("mesh: checked as a surface; an offset needs a solid".to_string()));
+    if !mesh.inner.solid && radius < 0.0 {
+        return Err(InvalidParameterError::new_err("mesh: checked as a surface; an erosion needs a solid".to_string()));
     }
     let solid = mesh.inner.clone();
     let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };

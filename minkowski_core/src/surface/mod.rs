@@ -315,6 +315,9 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -
             .take(MAX_OPEN_REPORTED)
             .collect();
         s.open_at.extend(at);
+    } else {
+        // (a collapse or a move keeps the band closed and manifold)
+        s.sheets_unzipped = stitch::part_coincident_vertices(&mut s, oct.h);
     }
     s
 }

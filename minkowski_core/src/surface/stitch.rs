@@ -17,6 +17,7 @@ use super::Surface;
 use crate::bvh::Bvh;
 use crate::math::{Aabb, Vec3};
 use crate::util::{FastMap, FastSet};
+use rayon::prelude::*;
 
 /// How far, in cells, the copies of a vertex where sheets touched move apart into their
 /// own sheets ([`unzip_touching_sheets`]).
@@ -244,45 +245,168 @@ pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>, h: f64) -> usize
     copies
 }
 
-/// Move apart distinct vertices at one place (to float32, as a reader welding by position
-/// sees them): two sheets of the surface closed over the same loop from either side (the
-/// fills of a crevice's holes) meet there without sharing a vertex. Each moves into its
-/// own triangles as [`unzip_touching_sheets`] moves a copy, and `s.sheets_apart` records
-/// the largest move. Returns how many vertices moved to a float32 place of their own (a
-/// move held below float32's step by thin triangles about the vertex counts none).
+/// Distinct vertices closer than this, in a length unit, may be merged by a reader that
+/// rounds coordinates to it when it loads a mesh (trimesh's default weld: its `tol.merge`).
+pub const READER_WELD: f64 = 1e-8;
+
+/// How near two vertices at `p` may come before a reader welding by position may merge
+/// them: [`READER_WELD`]'s grid and float32's (STL stores nothing finer) each move a
+/// coordinate by at most half their step, so vertices farther apart than both steps and
+/// then some are apart to every such reader.
+fn weld_reach(p: Vec3) -> f64 {
+    2.0 * (READER_WELD + f32::EPSILON as f64 * p.abs().max_element())
+}
+
+/// Keep distinct vertices apart to a reader that welds by position ([`weld_reach`]):
+/// two sheets of the surface closed over the same loop from either side (the fills of a
+/// crevice's holes) meet there without sharing a vertex, and a crossing held a hair off a
+/// lattice point ([`super::EDGE_CLAMP`]) lies that close to its neighbour on the next
+/// edge. Two such vertices joined by an edge are made one (the edge collapsed) where the
+/// surface stays a closed manifold and no triangle turns over; the rest each move into
+/// their own triangles as [`unzip_touching_sheets`] moves a copy. `s.sheets_apart` records
+/// the largest move or collapsed edge. Returns how many vertices were collapsed or moved to
+/// places of their own (a move held short by thin triangles about the vertex counts none).
 pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
-    let key = |p: Vec3| [p.x as f32, p.y as f32, p.z as f32].map(f32::to_bits);
-    let mut at: FastMap<[u32; 3], Vec<u32>> = FastMap::default();
-    let used: FastSet<u32> = s.faces.iter().flatten().copied().collect();
-    for &v in &used {
-        at.entry(key(s.vertices[v as usize])).or_default().push(v);
-    }
-    let mut moving: Vec<u32> = at.into_values().filter(|ids| ids.len() > 1).flatten().collect();
-    if moving.is_empty() {
+    let groups = coinciding(s);
+    if groups.is_empty() {
         return 0;
     }
+    let mut moving: Vec<u32> = groups.iter().flatten().copied().collect();
     moving.sort_unstable();
-    let star = stars(&s.faces, &moving);
+    moving.dedup();
+    let mut star = stars(&s.faces, &moving);
+    let mut gone = vec![false; s.faces.len()];
+    let mut collapsed: FastSet<u32> = FastSet::default();
+    for group in &groups {
+        for (k, &u) in group.iter().enumerate() {
+            for &v in &group[k + 1..] {
+                if !collapsed.contains(&u) && !collapsed.contains(&v) && collapse_edge(s, &mut star, &mut gone, u, v) {
+                    s.sheets_apart = s.sheets_apart.max((s.vertices[u as usize] - s.vertices[v as usize]).length());
+                    collapsed.insert(v);
+                }
+            }
+        }
+    }
+    let parted = collapsed.len();
+    if !collapsed.is_empty() {
+        let mut n = 0;
+        s.faces.retain(|_| {
+            n += 1;
+            !gone[n - 1]
+        });
+        drop_unused_vertices(s);
+        // the vertices left at a shared place, numbered anew
+        moving = coinciding(s).into_iter().flatten().collect();
+        moving.sort_unstable();
+        moving.dedup();
+        star = stars(&s.faces, &moving);
+    }
+    if moving.is_empty() {
+        return parted;
+    }
     let before = s.vertices.clone();
-    let mut parted = 0;
     for &v in &moving {
         let place = before[v as usize];
         let corners = |t: usize| s.faces[t].map(|c| before[c as usize]);
         let step = apart_step(place, h, star[&v].iter().map(|&t| (corners(t), s.faces[t].iter().position(|&c| c == v))));
         s.vertices[v as usize] = place + into_fan(place, star[&v].iter().map(|&t| corners(t))) * step;
         s.sheets_apart = s.sheets_apart.max(step);
-        parted += (key(s.vertices[v as usize]) != key(place)) as usize;
     }
-    parted
+    let left: usize = coinciding(s).iter().map(Vec::len).sum();
+    parted + moving.len().saturating_sub(left)
+}
+
+/// The groups of used vertices within [`weld_reach`] of each other (joined in chains).
+fn coinciding(s: &Surface) -> Vec<Vec<u32>> {
+    let used: FastSet<u32> = s.faces.iter().flatten().copied().collect();
+    let mut used: Vec<u32> = used.into_iter().collect();
+    used.sort_unstable();
+    let Some(reach) = used.iter().map(|&v| weld_reach(s.vertices[v as usize])).reduce(f64::max) else {
+        return Vec::new();
+    };
+    let bin = |p: Vec3| p.to_array().map(|x| (x / reach).floor() as i64);
+    let mut bins: FastMap<[i64; 3], Vec<u32>> = FastMap::default();
+    for &v in &used {
+        bins.entry(bin(s.vertices[v as usize])).or_default().push(v);
+    }
+    // each pair once: a vertex looks in its own bin (at later vertices) and in the 13
+    // bins after it
+    let forward: Vec<[i64; 3]> = (-1..=1).flat_map(|dx| (-1..=1).flat_map(move |dy| (-1..=1).map(move |dz| [dx, dy, dz]))).filter(|d| *d > [0, 0, 0]).collect();
+    let near = |v: u32| -> Vec<(u32, u32)> {
+        let (p, [x, y, z]) = (s.vertices[v as usize], bin(s.vertices[v as usize]));
+        let own = bins[&[x, y, z]].iter().copied().filter(|&w| w > v);
+        let after = forward.iter().flat_map(|d| bins.get(&[x + d[0], y + d[1], z + d[2]]).into_iter().flatten().copied());
+        own.chain(after).filter(|&w| (s.vertices[w as usize] - p).length() <= weld_reach(p).max(weld_reach(s.vertices[w as usize]))).map(|w| (v, w)).collect()
+    };
+    let pairs: Vec<(u32, u32)> = used.par_iter().flat_map_iter(|&v| near(v)).collect();
+    if pairs.is_empty() {
+        return Vec::new();
+    }
+    let mut uf = crate::util::UnionFind::new(s.vertices.len());
+    for (v, w) in pairs {
+        uf.union(v as usize, w as usize);
+    }
+    let mut groups: FastMap<usize, Vec<u32>> = FastMap::default();
+    for &v in &used {
+        groups.entry(uf.find(v as usize)).or_default().push(v);
+    }
+    let mut out: Vec<Vec<u32>> = groups.into_values().filter(|g| g.len() > 1).collect();
+    out.sort_unstable();
+    out
+}
+
+/// Make `v` one with `u` when they are joined by an edge whose two triangles are the only
+/// ones they share neighbours through (the link condition: the surface stays a closed
+/// manifold) and no other triangle of `v` turns over or loses its area at `u`'s place.
+/// `star` holds the triangles about each vertex being looked at, `gone` the triangles
+/// removed; both are kept up to date.
+fn collapse_edge(s: &mut Surface, star: &mut FastMap<u32, Vec<usize>>, gone: &mut [bool], u: u32, v: u32) -> bool {
+    let live = |t: &usize| !gone[*t];
+    let (Some(su), Some(sv)) = (star.get(&u), star.get(&v)) else { return false };
+    let (su, sv): (Vec<usize>, Vec<usize>) = (su.iter().copied().filter(live).collect(), sv.iter().copied().filter(live).collect());
+    let shared: Vec<usize> = sv.iter().copied().filter(|&t| s.faces[t].contains(&u)).collect();
+    if shared.len() != 2 {
+        return false;
+    }
+    let others = |tris: &[usize], me: u32| -> FastSet<u32> { tris.iter().flat_map(|&t| s.faces[t]).filter(|&c| c != me).collect() };
+    let (nu, nv) = (others(&su, u), others(&sv, v));
+    let opposite: FastSet<u32> = shared.iter().flat_map(|&t| s.faces[t]).filter(|&c| c != u && c != v).collect();
+    if nu.intersection(&nv).filter(|&&c| c != u && c != v).count() != opposite.len() || opposite.len() != 2 {
+        return false;
+    }
+    let at = |c: u32| s.vertices[c as usize];
+    let normal = |f: [u32; 3]| (at(f[1]) - at(f[0])).cross(at(f[2]) - at(f[0]));
+    let moved: Vec<usize> = sv.iter().copied().filter(|t| !shared.contains(t)).collect();
+    let turns = moved.iter().any(|&t| {
+        let f = s.faces[t];
+        let g = f.map(|c| if c == v { u } else { c });
+        let (old, new) = (normal(f), normal(g));
+        new.length_squared() == 0.0 || old.dot(new) <= 0.0
+    });
+    if turns {
+        return false;
+    }
+    for &t in &moved {
+        for c in s.faces[t].iter_mut().filter(|c| **c == v) {
+            *c = u;
+        }
+    }
+    for &t in &shared {
+        gone[t] = true;
+    }
+    star.entry(u).or_default().extend(moved);
+    star.remove(&v);
+    true
 }
 
 /// How far a vertex at `place` moves where sheets part: [`SHEETS_APART`] of `h`, at least
-/// 16 float32 steps of its coordinates, at most [`SHEETS_APART_MAX`] of `h`, and less than
+/// 16 float32 steps of its coordinates and twice [`weld_reach`], at most
+/// [`SHEETS_APART_MAX`] of `h`, and less than
 /// a sixth of its lowest height over the opposite edge in its triangles `star` (their
 /// corners, and which is the vertex). No triangle flips: its corners each moved less than
 /// a sixth of their heights over the opposite edges change its area by less than 7/12 of it.
 fn apart_step(place: Vec3, h: f64, star: impl Iterator<Item = ([Vec3; 3], Option<usize>)>) -> f64 {
-    let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).min(SHEETS_APART_MAX * h);
+    let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).max(2.0 * weld_reach(place)).min(SHEETS_APART_MAX * h);
     let lowest = star.map(|(p, at)| height_over_opposite_edge(p, at)).fold(f64::INFINITY, f64::min);
     wanted.min(lowest / 6.0)
 }
@@ -775,6 +899,27 @@ mod tests {
         assert!(s.sheets_apart > 0.0 && s.sheets_apart <= SHEETS_APART_MAX * h);
         assert!((a - b).length() <= 2.0 * s.sheets_apart + 1e-15);
         assert_eq!(part_coincident_vertices(&mut s, h), 0, "nothing left to part");
+    }
+
+    /// A tetrahedron with an edge split a hair from its end (a crossing clamped off a
+    /// lattice point): a reader would weld the two, so the short edge is collapsed and the
+    /// tetrahedron is whole again.
+    #[test]
+    fn a_hair_short_edge_is_collapsed() {
+        let o = Vec3::ONE; // (float32 does not weld near 0)
+        let m = o + Vec3::new(5e-9, 0.0, 0.0); // on the edge from vertex 0 to vertex 1
+        let vertices = vec![o, o + Vec3::X, o + Vec3::Y, o + Vec3::Z, m];
+        // the outward tetrahedron [0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3], edge 0-1 split
+        let faces = vec![[0, 2, 4], [4, 2, 1], [0, 4, 3], [4, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let mut s = Surface { vertices, faces, ..Default::default() };
+        assert!(open_edges(&s.faces).is_empty());
+        assert_eq!(part_coincident_vertices(&mut s, 0.1), 1);
+        assert_eq!((s.faces.len(), s.vertices.len()), (4, 4));
+        assert!(open_edges(&s.faces).is_empty() && pinched_vertices(&s.faces).is_empty());
+        assert!((s.sheets_apart - 5e-9).abs() < 1e-15, "{}", s.sheets_apart);
+        let at = |v: u32| s.vertices[v as usize] - o;
+        let volume: f64 = s.faces.iter().map(|f| at(f[0]).dot(at(f[1]).cross(at(f[2]))) / 6.0).sum();
+        assert!((volume - 1.0 / 6.0).abs() < 1e-12, "still the outward tetrahedron: {volume}");
     }
 
     #[test]
