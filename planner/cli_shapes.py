@@ -84,10 +84,17 @@ def cmd_offset(args) -> int:
                  name=args.mesh, progress=False if args.no_progress else None,
                  method=args.method, kind=args.kind, repair=args.repair)
     write_mesh(result.mesh, out)
-    of = "" if result.stats.get("kind", "solid") == "solid" else ", of its triangles"
-    sys.stdout.write(f"wrote {out}: {result.stats['triangles']} triangles, error bound "
-                     f"{result.error_bound:.4g} ({result.stats['method']}{of}), "
-                     f"{result.stats['seconds']:.2f} s\n")
+    stats = result.stats
+    of = "" if stats["kind"] == "solid" else ", of its triangles"
+    if "stage_bounds" in stats:  # an opening or closing: each stage's bound
+        bound = ("error bounds {:.4g} then {:.4g} by stage (together where no feature's "
+                 "thickness is within their sum of 2r)".format(*stats["stage_bounds"]))
+    else:
+        bound = f"error bound {result.error_bound:.4g}"
+    changes = ", ".join(f"{key} {value}" for key, value in stats["changes"].items())
+    made = f"; made a solid by: {changes}" if changes else ""
+    sys.stdout.write(f"wrote {out}: {stats['triangles']} triangles, {bound} "
+                     f"({stats['method']}{of}), {stats['seconds']:.2f} s{made}\n")
     return 0
 
 

@@ -93,19 +93,45 @@ class OffsetResult:
     stats: dict[str, Any] = field(default_factory=dict)
 
 
-def _operand(obj, name: str, kind: str, repair: bool) -> Classified:
+def _operand(obj, name: str, kind: str, repair: bool, radius: float) -> Classified:
     """The operand as the ``kind`` it is asked to be (:func:`planner.meshes.kinds.classify`:
     a solid made one as a part's mesh is, T-junctions split, with ``repair`` holes filled;
-    a surface its triangles as they are); a solid that is none says how to grow it anyway."""
+    a surface its triangles as they are). A solid that is none says what would take it:
+    ``repair``, and for a growth (``radius > 0``) its triangles as a surface."""
     if kind not in KINDS:
         raise InvalidParameterError(f"kind = {kind!r}: must be one of {', '.join(KINDS)}")
+    if repair and kind == "surface":
+        raise InvalidParameterError("repair = True: a surface is taken as its triangles are; "
+                                    "repair makes a solid (kind 'solid' or 'auto')")
+    mesh = as_mesh(obj, name)
     try:
-        return classify(as_mesh(obj, name), name=name, kind=kind, repair=repair)
+        return classify(mesh, name=name, kind=kind, repair=repair)
     except InvalidMeshError as error:
         if kind != "solid":
             raise
-        raise InvalidMeshError(f"{error}; or grow its triangles as they are (a surface, as "
-                               f"FCL sees it): kind='surface' (--kind surface)") from None
+        ways = [] if repair else ["repair=True (--repair) fills its holes where it can"]
+        if radius > 0 and _usable_as_surface(mesh, name):
+            ways.append("kind='surface' (--kind surface) grows its triangles as they are (as "
+                        "FCL sees them)")
+        if not ways:
+            raise
+        raise InvalidMeshError(f"{error}; or: {'; or '.join(ways)}") from None
+
+
+def _usable_as_surface(mesh: trimesh.Trimesh, name: str) -> bool:
+    """Whether the mesh's triangles can be taken as a surface (finite, in range)."""
+    try:
+        classify(mesh, name=name, kind="surface")
+    except InvalidMeshError:
+        return False
+    return True
+
+
+def _name_of(mesh, name: str) -> str:
+    """The name errors give: a mesh file's path unless named otherwise."""
+    if name == "mesh" and isinstance(mesh, (str, os.PathLike)):
+        return os.fspath(mesh)
+    return name
 
 
 def _radius(r: float) -> float:
@@ -187,24 +213,36 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
             triangles) <= r}`` by the cells (no erosion: it has no inside; where the part
             is thicker than ``2 r`` the result is hollow); ``"auto"``, a solid when it is
             one, else a surface. ``stats["kind"]`` says which it was.
-        repair: a solid may have holes filled (:func:`planner.meshes.repair_mesh`).
+        repair: a solid may have holes filled (:func:`planner.meshes.repair_mesh`);
+            ``stats["changes"]`` says what was changed to make it one.
 
     Raises:
-        InvalidMeshError: ``mesh`` is not a closed solid (``kind="solid"``).
+        InvalidMeshError: ``mesh`` is not a closed solid (``kind="solid"``), or has no
+            usable triangles at all (non-finite coordinates, none).
         InvalidParameterError: ``r`` zero or not finite, ``eps`` not positive, an unknown
             ``method`` or ``kind``, ``"hull"`` for a solid that is not convex within
-            ``eps``, or an erosion, ``"hull"`` or ``"ball"`` of a surface.
+            ``eps``, an erosion, ``"hull"`` or ``"ball"`` of a surface, or ``repair``
+            with ``kind="surface"``.
         ResourceLimitError: the grid for ``eps`` would not fit the cell budget.
         GeometryError: an erosion that leaves nothing (``|r|`` past the solid's
             thickness).
     """
     t0 = time.perf_counter()
     radius = _radius(r)
+    _check_method(method)
+    name = _name_of(mesh, name)
+    part = _operand(mesh, name, kind, repair, radius)
+    return _offset_part(part, radius, eps, max_cells, name, progress, method, t0)
+
+
+def _check_method(method: str) -> None:
     if method not in METHODS:
         raise InvalidParameterError(f"method = {method!r}: must be one of {', '.join(METHODS)}")
-    if name == "mesh" and isinstance(mesh, (str, os.PathLike)):
-        name = os.fspath(mesh)
-    part = _operand(mesh, name, kind, repair)
+
+
+def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: int | None,
+                 name: str, progress: bool | None, method: str, t0: float) -> OffsetResult:
+    """:func:`offset` of the classified ``part`` (``t0``: when the work began)."""
     solid = part.mesh
     extent = np.ptp(np.asarray(solid.bounds), axis=0)
     _check_radius_scale(radius, float(np.linalg.norm(extent)), name)
@@ -230,12 +268,20 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
                             f"thickest part is thinner than {2 * -radius:g})")
     stats["method"] = used
     stats["kind"] = "solid" if part.solid else "surface"
+    stats["changes"] = dict(part.changes)
     stats["seconds"] = time.perf_counter() - t0
+    if part.changes:
+        log.info("%s: made a solid by %s", name, _changes_text(part.changes))
     if bound >= abs(radius):
         log.warning("%s offset by %g: the error bound %.3g is not below the radius, so the "
-                    "result need not even lie %s the solid; use eps below %.3g", name, radius,
+                    "result need not even lie %s it; use eps below %.3g", name, radius,
                     bound, "around" if radius > 0 else "inside", step * abs(radius) / bound)
     return OffsetResult(surface, radius, bound, step, stats)
+
+
+def _changes_text(changes: dict[str, Any]) -> str:
+    """``"filled_holes 2, merged_vertices 80"``: what was changed to make a solid."""
+    return ", ".join(f"{key} {value}" for key, value in changes.items())
 
 
 def _check_surface_offset(radius: float, method: str, name: str, reason: str) -> None:
@@ -319,12 +365,14 @@ def _cell_offset(mesh: trimesh.Trimesh, radius: float, step: float, max_cells: i
 def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
               stage_name: str, progress: bool | None, method: str, kind: str,
               repair: bool) -> OffsetResult:
-    if kind == "surface":
+    t0 = time.perf_counter()
+    radius = _radius(first)
+    _check_method(method)
+    name = _name_of(mesh, name)
+    part = _operand(mesh, name, kind, repair, radius)
+    if not part.solid:
         _refuse_surface_closing(name)
-    one = offset(mesh, first, eps=eps, max_cells=max_cells, name=name, progress=progress,
-                 method=method, kind=kind, repair=repair)
-    if one.stats["kind"] != "solid":  # (auto: found a surface)
-        _refuse_surface_closing(name)
+    one = _offset_part(part, radius, eps, max_cells, name, progress, method, t0)
     # the second stage by the first's method: their errors then largely cancel (an
     # opening inside its input, a closing around it), where mixing a grid and a ball
     # leaves each stage's error in full, on opposite sides
@@ -340,6 +388,7 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
              "method": f"{one.stats['method']} then {two.stats['method']}",
              "stage_bounds": [one.error_bound, two.error_bound],
+             "kind": "solid", "changes": one.stats["changes"],
              "seconds": one.stats["seconds"] + two.stats["seconds"]}
     return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
 

@@ -724,3 +724,39 @@ def test_a_surface_has_no_erosion_and_a_solid_that_is_none_says_how_to_grow_it(c
     for how in (planner.closing, planner.opening):
         with pytest.raises(InvalidParameterError, match="or closing needs a closed solid"):
             how(soup, 0.1, eps=0.05, kind="surface")
+
+
+def test_a_part_far_from_the_origin_reads_back_as_written(tmp_path):
+    """A sphere at x = 3000 grown by the cells: float32 cannot tell apart what lies a
+    millionth of a cell apart there, so such vertices are collapsed or moved apart, by
+    far less than a cell, and the STL reads back with every vertex its own and the same
+    topology."""
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    results = []
+    for shift in (0.0, 3000.0):
+        moved = sphere.copy()
+        moved.apply_translation([shift, 0.0, 0.0])
+        result = planner.offset(moved, 0.2, eps=0.05, method="cells")
+        path = tmp_path / f"grown{int(shift)}.stl"
+        result.mesh.export(path)
+        back = trimesh.load(path)
+        assert back.is_watertight and back.is_winding_consistent
+        assert len(back.vertices) == len(result.mesh.vertices)
+        assert back.euler_number == result.mesh.euler_number == 2
+        assert result.stats["sheets_apart"] <= 0.05 * result.stats["h"]
+        results.append(result)
+    assert results[1].error_bound <= 1.05 * results[0].error_bound
+
+
+def test_repair_says_what_it_changed(capsys, tmp_path):
+    soup = _open_box()
+    result = planner.offset(soup, 0.1, eps=0.05, repair=True)
+    assert result.stats["kind"] == "solid" and result.stats["changes"].get("filled_holes") == 1
+    path = _write(soup, tmp_path / "open.stl")
+    assert main(["offset", str(path), "-r", "0.1", "--eps", "0.05", "--repair", "-o",
+                 str(tmp_path / "grown.stl")]) == 0
+    said = capsys.readouterr().out  # (an STL's corners are welded too)
+    assert "made a solid by: " in said and "filled_holes 1" in said
+    assert main(["offset", str(path), "-r", "0.1", "--kind", "surface", "--repair", "-o",
+                 str(tmp_path / "x.stl")]) == 2
+    assert "repair" in capsys.readouterr().err

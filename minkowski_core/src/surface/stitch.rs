@@ -189,10 +189,8 @@ pub fn pinched_vertices(faces: &[[u32; 3]]) -> Vec<u32> {
 /// (the simple cycles of its link); every fan but the first gets a copy of the vertex.
 /// Copies at one place would be welded into one again by any reader that joins vertices
 /// by position (STL has no others): each fan's vertex moves [`SHEETS_APART`] of `h` into
-/// its own fan (towards its triangles' centroids), at least 16 float32 steps of its
-/// coordinates but at most [`SHEETS_APART_MAX`] of `h`, and less than a sixth of its
-/// height over the opposite edge in any of its triangles (so none flips, whichever of its
-/// corners move); `s.sheets_apart` records the largest move (the bound adds it). `at`:
+/// its own fan (towards its triangles' centroids), as far as [`apart_step`] says;
+/// `s.sheets_apart` records the largest move (the bound adds it). `at`:
 /// the vertices to look at (the ends of open edges, or the pinched vertices when there
 /// are none). Edges left open (a real hole) are left to the caller. Returns how many
 /// copies were made.
@@ -249,45 +247,54 @@ pub fn unzip_touching_sheets(s: &mut Surface, mut at: Vec<u32>, h: f64) -> usize
 /// rounds coordinates to it when it loads a mesh (trimesh's default weld: its `tol.merge`).
 pub const READER_WELD: f64 = 1e-8;
 
-/// How near two vertices at `p` may come before a reader welding by position may merge
-/// them: [`READER_WELD`]'s grid and float32's (STL stores nothing finer) each move a
-/// coordinate by at most half their step, so vertices farther apart than both steps and
-/// then some are apart to every such reader.
-fn weld_reach(p: Vec3) -> f64 {
-    2.0 * (READER_WELD + f32::EPSILON as f64 * p.abs().max_element())
+/// How far apart a coordinate of magnitude up to `x` may lie from another and a reader
+/// welding by position still merge them: float32 (STL stores nothing finer) moves it by
+/// at most half its step, at most `f32::EPSILON |x| / 2`, and [`READER_WELD`]'s grid by at
+/// most half of that; a reader merges two vertices only when every coordinate lands on
+/// the same value.
+fn weld_reach(x: f64) -> f64 {
+    READER_WELD + f32::EPSILON as f64 * x.abs()
 }
 
-/// Keep distinct vertices apart to a reader that welds by position ([`weld_reach`]):
-/// two sheets of the surface closed over the same loop from either side (the fills of a
+/// Whether a reader welding by position may merge vertices at `p` and `q` ([`weld_reach`]
+/// on every axis).
+fn may_weld(p: Vec3, q: Vec3) -> bool {
+    (0..3).all(|k| (p[k] - q[k]).abs() <= weld_reach(p[k].abs().max(q[k].abs())))
+}
+
+/// Keep distinct vertices apart to a reader that welds by position ([`may_weld`]): two
+/// sheets of the surface closed over the same loop from either side (the fills of a
 /// crevice's holes) meet there without sharing a vertex, and a crossing held a hair off a
 /// lattice point ([`super::EDGE_CLAMP`]) lies that close to its neighbour on the next
-/// edge. Two such vertices joined by an edge are made one (the edge collapsed) where the
-/// surface stays a closed manifold and no triangle turns over; the rest each move into
-/// their own triangles as [`unzip_touching_sheets`] moves a copy. `s.sheets_apart` records
-/// the largest move or collapsed edge. Returns how many vertices were collapsed or moved to
-/// places of their own (a move held short by thin triangles about the vertex counts none).
+/// edge. Such a pair joined by an edge is made one (the edge collapsed, [`collapse_edge`])
+/// where the surface stays a closed manifold and no triangle turns over; the vertices of
+/// the other pairs each move into their own triangles as [`unzip_touching_sheets`] moves
+/// a copy. `s.sheets_apart` grows by the longest edge collapsed plus the longest move
+/// (a vertex may have been moved before, and a kept end may move after its collapse).
+/// Returns how many vertices were collapsed or moved clear of every other (a move held
+/// short by thin triangles about the vertex counts none).
 pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
-    let groups = coinciding(s);
-    if groups.is_empty() {
+    let pairs = coinciding(s);
+    if pairs.is_empty() {
         return 0;
     }
-    let mut moving: Vec<u32> = groups.iter().flatten().copied().collect();
-    moving.sort_unstable();
-    moving.dedup();
-    let mut star = stars(&s.faces, &moving);
+    let ends = |pairs: &[(u32, u32)]| -> Vec<u32> {
+        let mut v: Vec<u32> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let mut star = stars(&s.faces, &ends(&pairs));
     let mut gone = vec![false; s.faces.len()];
     let mut collapsed: FastSet<u32> = FastSet::default();
-    for group in &groups {
-        for (k, &u) in group.iter().enumerate() {
-            for &v in &group[k + 1..] {
-                if !collapsed.contains(&u) && !collapsed.contains(&v) && collapse_edge(s, &mut star, &mut gone, u, v) {
-                    s.sheets_apart = s.sheets_apart.max((s.vertices[u as usize] - s.vertices[v as usize]).length());
-                    collapsed.insert(v);
-                }
-            }
+    let mut longest_collapse: f64 = 0.0;
+    for &(u, v) in &pairs {
+        if !collapsed.contains(&u) && !collapsed.contains(&v) && collapse_edge(s, &mut star, &mut gone, u, v) {
+            longest_collapse = longest_collapse.max((s.vertices[u as usize] - s.vertices[v as usize]).length());
+            collapsed.insert(v);
         }
     }
-    let parted = collapsed.len();
+    let mut pairs = pairs;
     if !collapsed.is_empty() {
         let mut n = 0;
         s.faces.retain(|_| {
@@ -295,36 +302,33 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
             !gone[n - 1]
         });
         drop_unused_vertices(s);
-        // the vertices left at a shared place, numbered anew
-        moving = coinciding(s).into_iter().flatten().collect();
-        moving.sort_unstable();
-        moving.dedup();
-        star = stars(&s.faces, &moving);
+        pairs = coinciding(s); // (numbered anew)
+        star = stars(&s.faces, &ends(&pairs));
     }
-    if moving.is_empty() {
-        return parted;
-    }
+    let moving = ends(&pairs);
     let before = s.vertices.clone();
+    let mut longest_move: f64 = 0.0;
     for &v in &moving {
         let place = before[v as usize];
         let corners = |t: usize| s.faces[t].map(|c| before[c as usize]);
         let step = apart_step(place, h, star[&v].iter().map(|&t| (corners(t), s.faces[t].iter().position(|&c| c == v))));
         s.vertices[v as usize] = place + into_fan(place, star[&v].iter().map(|&t| corners(t))) * step;
-        s.sheets_apart = s.sheets_apart.max(step);
+        longest_move = longest_move.max(step);
     }
-    let left: usize = coinciding(s).iter().map(Vec::len).sum();
-    parted + moving.len().saturating_sub(left)
+    s.sheets_apart += longest_collapse + longest_move;
+    let left = if moving.is_empty() { 0 } else { ends(&coinciding(s)).len() };
+    collapsed.len() + moving.len().saturating_sub(left)
 }
 
-/// The groups of used vertices within [`weld_reach`] of each other (joined in chains).
-fn coinciding(s: &Surface) -> Vec<Vec<u32>> {
+/// The pairs of used vertices a reader may weld ([`may_weld`]), each once, in order.
+fn coinciding(s: &Surface) -> Vec<(u32, u32)> {
     let used: FastSet<u32> = s.faces.iter().flatten().copied().collect();
     let mut used: Vec<u32> = used.into_iter().collect();
     used.sort_unstable();
-    let Some(reach) = used.iter().map(|&v| weld_reach(s.vertices[v as usize])).reduce(f64::max) else {
+    let Some(bin_size) = used.iter().map(|&v| weld_reach(s.vertices[v as usize].abs().max_element())).reduce(f64::max) else {
         return Vec::new();
     };
-    let bin = |p: Vec3| p.to_array().map(|x| (x / reach).floor() as i64);
+    let bin = |p: Vec3| p.to_array().map(|x| (x / bin_size).floor() as i64);
     let mut bins: FastMap<[i64; 3], Vec<u32>> = FastMap::default();
     for &v in &used {
         bins.entry(bin(s.vertices[v as usize])).or_default().push(v);
@@ -336,23 +340,11 @@ fn coinciding(s: &Surface) -> Vec<Vec<u32>> {
         let (p, [x, y, z]) = (s.vertices[v as usize], bin(s.vertices[v as usize]));
         let own = bins[&[x, y, z]].iter().copied().filter(|&w| w > v);
         let after = forward.iter().flat_map(|d| bins.get(&[x + d[0], y + d[1], z + d[2]]).into_iter().flatten().copied());
-        own.chain(after).filter(|&w| (s.vertices[w as usize] - p).length() <= weld_reach(p).max(weld_reach(s.vertices[w as usize]))).map(|w| (v, w)).collect()
+        own.chain(after).filter(|&w| may_weld(p, s.vertices[w as usize])).map(|w| (v.min(w), v.max(w))).collect()
     };
-    let pairs: Vec<(u32, u32)> = used.par_iter().flat_map_iter(|&v| near(v)).collect();
-    if pairs.is_empty() {
-        return Vec::new();
-    }
-    let mut uf = crate::util::UnionFind::new(s.vertices.len());
-    for (v, w) in pairs {
-        uf.union(v as usize, w as usize);
-    }
-    let mut groups: FastMap<usize, Vec<u32>> = FastMap::default();
-    for &v in &used {
-        groups.entry(uf.find(v as usize)).or_default().push(v);
-    }
-    let mut out: Vec<Vec<u32>> = groups.into_values().filter(|g| g.len() > 1).collect();
-    out.sort_unstable();
-    out
+    let mut pairs: Vec<(u32, u32)> = used.par_iter().flat_map_iter(|&v| near(v)).collect();
+    pairs.sort_unstable();
+    pairs
 }
 
 /// Make `v` one with `u` when they are joined by an edge whose two triangles are the only
@@ -370,8 +362,22 @@ fn collapse_edge(s: &mut Surface, star: &mut FastMap<u32, Vec<usize>>, gone: &mu
     }
     let others = |tris: &[usize], me: u32| -> FastSet<u32> { tris.iter().flat_map(|&t| s.faces[t]).filter(|&c| c != me).collect() };
     let (nu, nv) = (others(&su, u), others(&sv, v));
-    let opposite: FastSet<u32> = shared.iter().flat_map(|&t| s.faces[t]).filter(|&c| c != u && c != v).collect();
-    if nu.intersection(&nv).filter(|&&c| c != u && c != v).count() != opposite.len() || opposite.len() != 2 {
+    let opposite: Vec<u32> = shared.iter().flat_map(|&t| s.faces[t]).filter(|&c| c != u && c != v).collect();
+    if nu.intersection(&nv).filter(|&&c| c != u && c != v).count() != 2 || opposite.len() != 2 || opposite[0] == opposite[1] {
+        return false;
+    }
+    // nor may the links share an edge (a closed tetrahedron would fold flat)
+    let link_edges = |tris: &[usize], me: u32| -> FastSet<(u32, u32)> {
+        tris.iter()
+            .map(|&t| {
+                let f = s.faces[t];
+                let k = f.iter().position(|&c| c == me).expect("in its star");
+                let (a, b) = (f[(k + 1) % 3], f[(k + 2) % 3]);
+                (a.min(b), a.max(b))
+            })
+            .collect()
+    };
+    if !link_edges(&su, u).is_disjoint(&link_edges(&sv, v)) {
         return false;
     }
     let at = |c: u32| s.vertices[c as usize];
@@ -400,13 +406,13 @@ fn collapse_edge(s: &mut Surface, star: &mut FastMap<u32, Vec<usize>>, gone: &mu
 }
 
 /// How far a vertex at `place` moves where sheets part: [`SHEETS_APART`] of `h`, at least
-/// 16 float32 steps of its coordinates and twice [`weld_reach`], at most
+/// 16 float32 steps of its coordinates and four times [`weld_reach`], at most
 /// [`SHEETS_APART_MAX`] of `h`, and less than
 /// a sixth of its lowest height over the opposite edge in its triangles `star` (their
 /// corners, and which is the vertex). No triangle flips: its corners each moved less than
 /// a sixth of their heights over the opposite edges change its area by less than 7/12 of it.
 fn apart_step(place: Vec3, h: f64, star: impl Iterator<Item = ([Vec3; 3], Option<usize>)>) -> f64 {
-    let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).max(2.0 * weld_reach(place)).min(SHEETS_APART_MAX * h);
+    let wanted = (SHEETS_APART * h).max(16.0 * f32::EPSILON as f64 * place.abs().max_element()).max(4.0 * weld_reach(place.abs().max_element())).min(SHEETS_APART_MAX * h);
     let lowest = star.map(|(p, at)| height_over_opposite_edge(p, at)).fold(f64::INFINITY, f64::min);
     wanted.min(lowest / 6.0)
 }
@@ -920,6 +926,45 @@ mod tests {
         let at = |v: u32| s.vertices[v as usize] - o;
         let volume: f64 = s.faces.iter().map(|f| at(f[0]).dot(at(f[1]).cross(at(f[2]))) / 6.0).sum();
         assert!((volume - 1.0 / 6.0).abs() < 1e-12, "still the outward tetrahedron: {volume}");
+    }
+
+    /// An octahedron with two of its edges split a hair from an end, and a closed
+    /// tetrahedron shrunk to a hair: the two splits collapse in one call; the tetrahedron's
+    /// edges may not (it would fold flat), so its corners move apart instead.
+    #[test]
+    fn hair_short_edges_collapse_where_the_surface_stays_a_manifold() {
+        let o = Vec3::new(2.0, 1.0, 1.0);
+        let mut vertices: Vec<Vec3> = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].iter().map(|&d| o + d).collect();
+        let mut faces: Vec<[u32; 3]> = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        // split edge 0-2 (triangles [0, 2, 4] and [2, 0, 5]) and edge 1-3 next to 0 and 1
+        for (a, b) in [(0u32, 2u32), (1, 3)] {
+            let m = vertices.len() as u32;
+            vertices.push(vertices[a as usize] + (vertices[b as usize] - vertices[a as usize]) * 3e-9);
+            let mut split = Vec::new();
+            for f in &faces {
+                match (0..3).find(|&k| (f[k], f[(k + 1) % 3]) == (a, b) || (f[k], f[(k + 1) % 3]) == (b, a)) {
+                    Some(k) => {
+                        let (p, q, r) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
+                        split.extend([[p, m, r], [m, q, r]]);
+                    }
+                    None => split.push(*f),
+                }
+            }
+            faces = split;
+        }
+        let mut s = Surface { vertices, faces, ..Default::default() };
+        assert_eq!(s.faces.len(), 12);
+        assert_eq!(part_coincident_vertices(&mut s, 0.1), 2);
+        assert_eq!((s.faces.len(), s.vertices.len()), (8, 6));
+        assert!(open_edges(&s.faces).is_empty() && pinched_vertices(&s.faces).is_empty());
+        assert!(coinciding(&s).is_empty());
+
+        let tiny = |k: usize| o + Vec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, (k >> 2) as f64) * 2e-9;
+        let mut s = Surface { vertices: vec![tiny(0), tiny(1), tiny(2), tiny(4)], faces: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], ..Default::default() };
+        // (its corners cannot move apart either: by a sixth of their heights at most)
+        assert_eq!(part_coincident_vertices(&mut s, 0.1), 0);
+        assert_eq!(s.faces.len(), 4, "no collapse folds the tetrahedron");
+        assert!(open_edges(&s.faces).is_empty() && pinched_vertices(&s.faces).is_empty());
     }
 
     #[test]
