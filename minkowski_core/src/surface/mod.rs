@@ -111,10 +111,12 @@ pub struct Surface {
     /// diameter counts in `planar_deviation`).
     pub loops_closed: usize,
     /// Copies of vertices made where sheets of the joined surface touch (along a hair-thin
-    /// edge or at a point), one per sheet ([`stitch::unzip_touching_sheets`]).
+    /// edge or at a point), one per sheet ([`stitch::unzip_touching_sheets`]), and vertices
+    /// a reader welding by position would merge that were collapsed or moved apart
+    /// ([`stitch::part_coincident_vertices`]).
     pub sheets_unzipped: usize,
-    /// How far those vertices moved apart into their own sheets (so that a reader welding
-    /// vertices by position keeps them apart); the bound adds it.
+    /// How far those vertices moved (so that a reader welding vertices by position keeps
+    /// them apart); the bound adds it.
     pub sheets_apart: f64,
     /// Closed slivers (two layers folded onto each other, under two cells across) removed
     /// after the join ([`stitch::drop_slivers`]).
