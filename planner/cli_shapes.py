@@ -68,6 +68,7 @@ def _add_offset_parser(sub, common) -> None:
 
 def cmd_offset(args) -> int:
     out = Path(args.output)
+    from planner.offsets import changes_text
     from planner.output import unknown_mesh_format, unwritable, write_mesh
 
     problem = unwritable(out) or unknown_mesh_format(out)
@@ -91,8 +92,7 @@ def cmd_offset(args) -> int:
                  "thickness is within their sum of 2r)".format(*stats["stage_bounds"]))
     else:
         bound = f"error bound {result.error_bound:.4g}"
-    changes = ", ".join(f"{key} {value}" for key, value in stats["changes"].items())
-    made = f"; made a solid by: {changes}" if changes else ""
+    made = f"; made a solid by: {changes_text(stats['changes'])}" if stats["changes"] else ""
     sys.stdout.write(f"wrote {out}: {stats['triangles']} triangles, {bound} "
                      f"({stats['method']}{of}), {stats['seconds']:.2f} s{made}\n")
     return 0

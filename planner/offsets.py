@@ -271,7 +271,7 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
     stats["changes"] = dict(part.changes)
     stats["seconds"] = time.perf_counter() - t0
     if part.changes:
-        log.info("%s: made a solid by %s", name, _changes_text(part.changes))
+        log.info("%s: made a solid by %s", name, changes_text(part.changes))
     if bound >= abs(radius):
         log.warning("%s offset by %g: the error bound %.3g is not below the radius, so the "
                     "result need not even lie %s it; use eps below %.3g", name, radius,
@@ -279,7 +279,7 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
     return OffsetResult(surface, radius, bound, step, stats)
 
 
-def _changes_text(changes: dict[str, Any]) -> str:
+def changes_text(changes: dict[str, Any]) -> str:
     """``"filled_holes 2, merged_vertices 80"``: what was changed to make a solid."""
     return ", ".join(f"{key} {value}" for key, value in changes.items())
 
