@@ -103,7 +103,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
         return None
     stats = {"triangles": len(mesh.faces), "band_cells": 0, "h": 0.0, "refinements": 0,
              "planar_cells": 0, "planar_pieces": 0, "planar_regions": 0,
-             "planar_fanned": 0, "planes_fallback_edges": 0,
+             "planar_fanned": 0, "planar_straight_dropped": 0, "planes_fallback_edges": 0,
              "bound_by_region": {"planes": between + rounding, "sampled": 0.0, "missed": 0.0,
                                  "round": chord},
              "holes_closed": 0, "sheets_unzipped": 0, "sheets_apart": 0.0, "convex": method,

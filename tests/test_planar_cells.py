@@ -75,6 +75,10 @@ def test_flat_pairs_are_exact_with_their_sharp_edges(pair):
     assert r.mesh.volume == pytest.approx(truth.volume, rel=1e-9)
     assert r.stats["band_cells"] == 0, "every boundary cell resolved by planes"
     assert len(r.mesh.faces) <= 3 * len(truth.faces)
+    # each plane's regions triangulated once, straight creases without the cell walls'
+    # vertices: nothing left to collapse afterwards
+    assert r.stats["planar_fanned"] == 0 and r.stats["planar_straight_dropped"] > 0
+    assert r.stats["triangles_extracted"] == len(r.mesh.faces)
     # every true sharp edge is an edge of ours: points along it lie on our edges
     edges = feature_edges(truth)
     t = np.linspace(0.05, 0.95, 7)
@@ -136,6 +140,8 @@ def test_a_coarse_torus_operand_is_resolved_by_its_facets_and_agrees_with_the_or
     r = exact_sum(a, b)
     assert r.stats["band_cells"] == 0 and r.stats["planar_cells"] > 0
     assert r.mesh.body_count == 1 and r.mesh.euler_number == 2
+    # the regions about the torus's hole have holes: bridged, they are triangulated once
+    assert r.stats["planar_fanned"] == 0 and r.stats["triangles_extracted"] == len(r.mesh.faces)
     # (manifold3d is no reference here: the torus does not contain the origin)
     assert agree_away_from_surface(r, a, b, 3000, seed=2) > 1000
 
@@ -147,6 +153,7 @@ def test_two_grates_sum_to_their_exact_box_and_agree_with_the_oracle():
     r = exact_sum(a, b, rel_eps=0.005)
     assert r.mesh.body_count == 1
     assert len(r.mesh.faces) == 12 and r.stats["planar_cells"] > 0
+    assert r.stats["planar_fanned"] == 0, "the faces' regions with holes are bridged"
     lo, hi = r.mesh.bounds
     assert abs(r.mesh.volume - np.prod(hi - lo)) < 1e-9 * np.prod(hi - lo)
     assert np.allclose(hi - lo, a.extents + b.extents, rtol=0, atol=1e-12)

@@ -57,8 +57,11 @@ DEFAULT_SOURCE = {"sphere5120 ⊕ sphere1280 (convex)"}
 """Pairs ours runs with the default source (``exact="auto"``: convex bodies, one convex
 sum, its hull); the others with the exact source."""
 
-RUNS = [(name, 0.005) for name in PAIRS] + [("grate512 ⊕ grate1292", e) for e in (0.02, 0.01)]
-"""(pair, eps as a fraction of the sum's diagonal) in the order they run."""
+RUNS = [(name, 0.005) for name in PAIRS] + [("grate512 ⊕ grate1292", e) for e in (0.02, 0.01)] \
+    + [("torus ⊕ ball", e) for e in (0.02, 0.01, 0.0025)]
+"""(pair, eps as a fraction of the sum's diagonal) in the order they run: each pair at
+0.5%, then the grates coarser and the curved torus ⊕ ball coarser and finer (its cost in
+eps: :func:`scaling`)."""
 
 QUICK = [("L-bracket ⊕ cube", 0.005), ("jack ⊕ tetrahedron", 0.005)]
 
@@ -196,6 +199,24 @@ def table(rows: list[dict]) -> str:
     return "\n".join(out)
 
 
+def scaling(rows: list[dict]) -> str:
+    """Per pair run at three or more eps, the least-squares log-log slope of our wall
+    seconds and triangles against 1/eps (2: the work follows a curved boundary's band;
+    0: a flat answer resolved by planes, whatever eps)."""
+    lines = []
+    for pair in dict.fromkeys(r["pair"] for r in rows):
+        ok = sorted((r for r in rows if r["pair"] == pair and "error" not in r["ours"]),
+                    key=lambda r: -r["rel_eps"])
+        if len(ok) < 3:
+            continue
+        x = np.log([1.0 / r["rel_eps"] for r in ok])
+        time_slope = np.polyfit(x, np.log([r["ours"]["seconds"] for r in ok]), 1)[0]
+        tri_slope = np.polyfit(x, np.log([r["ours"]["triangles"] for r in ok]), 1)[0]
+        lines.append(f"{pair}: time ~ (1/eps)^{time_slope:.2f}, triangles ~ "
+                     f"(1/eps)^{tri_slope:.2f} over eps {', '.join(_f(100 * r['rel_eps'], 'g') for r in ok)}%")
+    return "\n".join(lines)
+
+
 LEGEND = """\
 eps% of the sum's bounding-box diagonal; s = wall seconds, cpu = CPU seconds of the
 process, MB = its peak resident memory (a child process per run; about 150 MB of it is
@@ -243,7 +264,8 @@ def main(argv=None) -> int:
                                       f"{r['seconds']:.2f} s, {r['triangles']} triangles"))
             row["compare"] = compare(row["ours"], row["manifold3d"], args.samples)
             rows.append(row)
-    text = table(rows) + "\n\n" + LEGEND
+    slopes = scaling(rows)
+    text = table(rows) + "\n\n" + (f"Scaling in eps (ours):\n\n{slopes}\n\n" if slopes else "") + LEGEND
     sys.stdout.write(text)
     if args.markdown:
         args.markdown.write_text(

@@ -8,8 +8,10 @@
 //! only along their common line (`u` must lie in both), where `v` lies between `u` and the
 //! crease's other neighbour; a corner of three planes never. The surface is the same point
 //! set: the error bound, closedness and orientation are kept. Marching tetrahedra samples a
-//! flat facet with O(area / h²) triangles, plane-resolved cells split a straight edge at
-//! every cell; afterwards only corners and the sampled (curved or chamfered) band remain.
+//! flat facet with O(area / h²) triangles; plane-resolved cells come out as regions
+//! triangulated once ([`super::regions`]), and what is left here for them is where a
+//! region could not be merged (fanned polygons) or meets the band. Afterwards only corners
+//! and the sampled (curved or chamfered) band remain.
 
 use super::Surface;
 use crate::math::Vec3;

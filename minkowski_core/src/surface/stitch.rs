@@ -40,8 +40,9 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], planes: &[PlaneKey], tol: f64,
             grid.insert(v, s.vertices[v as usize]);
         }
     }
+    let band_vertices = s.vertices.len();
     let welded: Vec<Vec<u32>> = polys.iter().map(|poly| poly.iter().map(|&p| grid.weld(p, tol, &mut s.vertices)).collect()).collect();
-    let (faces, stats) = regions::triangulate(&mut s.vertices, &welded, planes, tol);
+    let (faces, stats) = regions::triangulate(&mut s.vertices, &welded, planes, tol, band_vertices);
     s.faces.extend(faces);
     // a triangle two of whose corners welded into one is a segment: no area, and its edges
     // would count as used twice
@@ -832,7 +833,7 @@ mod tests {
         assert!(open_edges(&s.faces).is_empty(), "{:?}", open_edges(&s.faces));
         // top and bottom are sheets through the same points, facing each other: fanned
         // about their own centres, not merged (they would share diagonals)
-        assert_eq!(stats, RegionStats { merged_planes: 0, fanned_planes: 2 });
+        assert_eq!(stats, RegionStats { merged_planes: 0, fanned_planes: 2, straight_dropped: 0 });
     }
 
     #[test]
