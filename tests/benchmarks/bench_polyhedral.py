@@ -212,8 +212,9 @@ def scaling(rows: list[dict]) -> str:
         x = np.log([1.0 / r["rel_eps"] for r in ok])
         time_slope = np.polyfit(x, np.log([r["ours"]["seconds"] for r in ok]), 1)[0]
         tri_slope = np.polyfit(x, np.log([r["ours"]["triangles"] for r in ok]), 1)[0]
+        series = ", ".join(_f(100 * r["rel_eps"], "g") for r in ok)
         lines.append(f"{pair}: time ~ (1/eps)^{time_slope:.2f}, triangles ~ "
-                     f"(1/eps)^{tri_slope:.2f} over eps {', '.join(_f(100 * r['rel_eps'], 'g') for r in ok)}%")
+                     f"(1/eps)^{tri_slope:.2f} over eps {series}%")
     return "\n".join(lines)
 
 
@@ -265,7 +266,8 @@ def main(argv=None) -> int:
             row["compare"] = compare(row["ours"], row["manifold3d"], args.samples)
             rows.append(row)
     slopes = scaling(rows)
-    text = table(rows) + "\n\n" + (f"Scaling in eps (ours):\n\n{slopes}\n\n" if slopes else "") + LEGEND
+    text = table(rows) + "\n\n" + (f"Scaling in eps (ours):\n\n{slopes}\n\n" if slopes else "") \
+        + LEGEND
     sys.stdout.write(text)
     if args.markdown:
         args.markdown.write_text(
