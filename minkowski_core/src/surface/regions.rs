@@ -204,9 +204,9 @@ fn in_plane(vertices: &[Vec3], i: u32, (u, v): (Vec3, Vec3)) -> [f64; 2] {
     [p.dot(u), p.dot(v)]
 }
 
-/// The triangles of the loops of one plane (outward `normal`) by ear clipping, holes joined
-/// to the loops around them first ([`with_holes_bridged`]), or `None` when that cannot be
-/// done.
+/// The triangles of the loops of one plane (outward `normal`) by ear clipping (within the
+/// weld tolerance `tol`, else to rounding), holes joined to the loops around them first
+/// ([`with_holes_bridged`]), or `None` when that cannot be done.
 fn clip_loops(vertices: &[Vec3], loops: &[Vec<u32>], normal: Vec3, tol: f64) -> Option<Vec<[u32; 3]>> {
     let basis = plane_basis(normal);
     let pos = |i: u32| in_plane(vertices, i, basis);
@@ -216,7 +216,10 @@ fn clip_loops(vertices: &[Vec3], loops: &[Vec<u32>], normal: Vec3, tol: f64) -> 
             return None;
         }
         let pts: Vec<[f64; 2]> = ids.iter().map(|&i| pos(i)).collect();
-        out.extend(ear_clip(&pts, tol)?.into_iter().map(|t| t.map(|k| ids[k])));
+        // two corners just over the weld apart can stand within it of each other's edges:
+        // not simple within the weld, the loop may still be simple to rounding
+        let tris = ear_clip(&pts, tol).or_else(|| ear_clip(&pts, 0.0))?;
+        out.extend(tris.into_iter().map(|t| t.map(|k| ids[k])));
     }
     Some(out)
 }
@@ -727,6 +730,28 @@ mod tests {
         }
         let single = count.keys().filter(|&&(a, b)| !count.contains_key(&(b, a))).count();
         assert_eq!(single, 24 + 4 + 4, "outline edges");
+    }
+
+    /// A loop from a sum's facet whose two corners lie just over the weld apart, one of them
+    /// reflex by less than the weld: not simple within the weld, so that clipping fails;
+    /// simple to rounding, it is clipped exactly, every triangle turning left.
+    #[test]
+    fn a_loop_simple_only_to_rounding_is_clipped_exactly() {
+        let p = [
+            [-1.4039817539349981, -2.640148344701439],
+            [-1.395154729323091, -2.657850309921108],
+            [-1.3951618469542844, -2.657867447885093],
+            [-1.3906043119398677, -2.6669758458512143],
+            [-1.3795774163759644, -2.6516718645166524],
+        ];
+        let tol = 1.8335362345687105e-05;
+        assert!(ear_clip(&p, tol).is_none());
+        let (vertices, ids): (Vec<Vec3>, Vec<u32>) = p.iter().enumerate().map(|(i, q)| (Vec3::new(q[0], q[1], 0.0), i as u32)).unzip();
+        let tris = clip_loops(&vertices, &[ids], Vec3::Z, tol).expect("clipped to rounding");
+        assert_eq!(tris.len(), 3);
+        let area = |t: &[u32; 3]| orient(p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]);
+        assert!(tris.iter().all(|t| area(t) > 0.0));
+        assert!((tris.iter().map(area).sum::<f64>() - signed_area(&p)).abs() < 1e-15);
     }
 
     /// Ear clipping a comb-like polygon with straight runs: `n − 2` triangles, all turning
