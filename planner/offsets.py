@@ -228,11 +228,18 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
             thickness).
     """
     t0 = time.perf_counter()
+    radius, name, part = _prepared(mesh, r, method, name, kind, repair)
+    return _offset_part(part, radius, eps, max_cells, name, progress, method, t0)
+
+
+def _prepared(mesh, r: float, method: str, name: str, kind: str, repair: bool
+              ) -> tuple[float, str, Classified]:
+    """The checked radius, the mesh's name and the part it is taken for
+    (:func:`_operand`), the radius and ``method`` checked before the mesh is read."""
     radius = _radius(r)
     _check_method(method)
     name = _name_of(mesh, name)
-    part = _operand(mesh, name, kind, repair, radius)
-    return _offset_part(part, radius, eps, max_cells, name, progress, method, t0)
+    return radius, name, _operand(mesh, name, kind, repair, radius)
 
 
 def _check_method(method: str) -> None:
@@ -366,10 +373,7 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
               stage_name: str, progress: bool | None, method: str, kind: str,
               repair: bool) -> OffsetResult:
     t0 = time.perf_counter()
-    radius = _radius(first)
-    _check_method(method)
-    name = _name_of(mesh, name)
-    part = _operand(mesh, name, kind, repair, radius)
+    radius, name, part = _prepared(mesh, first, method, name, kind, repair)
     if not part.solid:
         _refuse_surface_closing(name)
     one = _offset_part(part, radius, eps, max_cells, name, progress, method, t0)

@@ -128,8 +128,9 @@ pub fn drop_slivers(s: &mut Surface, size: f64, volume: f64) -> usize {
     slivers.len()
 }
 
-/// Remove the vertices no triangle uses (renumbering the triangles').
-fn drop_unused_vertices(s: &mut Surface) {
+/// Remove the vertices no triangle uses (renumbering the triangles'). Returns each old
+/// vertex's new number (`u32::MAX`: removed).
+fn drop_unused_vertices(s: &mut Surface) -> Vec<u32> {
     let mut remap = vec![u32::MAX; s.vertices.len()];
     for f in &s.faces {
         for &v in f {
@@ -147,6 +148,7 @@ fn drop_unused_vertices(s: &mut Surface) {
     for f in &mut s.faces {
         *f = f.map(|v| remap[v as usize]);
     }
+    remap
 }
 
 /// Vertices whose triangles do not form one fan (a disk) about them: where two sheets of
@@ -302,8 +304,10 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
             n += 1;
             !gone[n - 1]
         });
-        drop_unused_vertices(s);
-        pairs = coinciding(s); // (numbered anew)
+        // a collapse moves no vertex: the pairs left are those between kept vertices,
+        // numbered anew (in the same order)
+        let remap = drop_unused_vertices(s);
+        pairs = pairs.iter().map(|&(a, b)| (remap[a as usize], remap[b as usize])).filter(|&(a, b)| a != u32::MAX && b != u32::MAX).collect();
         star = stars(&s.faces, &ends(&pairs));
     }
     let moving = ends(&pairs);
