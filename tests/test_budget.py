@@ -100,6 +100,8 @@ def test_a_small_limit_refuses_the_exact_sum_that_the_default_computes():
         planner.minkowski_sum(torus, bumps, exact=True, eps=0.2)
     message = str(refused.value)
     assert "boundary convolution needs more than" in message
+    # the facets' part of the limit is named as such, beside the limit itself
+    assert f"the {budget.FACET_SHARE:.0%} of the memory limit it may use" in message
     assert "--memory-limit" in message and "\n" not in message
     result = planner.minkowski_sum(torus, bumps, exact=True, eps=0.2)
     assert result.stats["facets"] > budget.MemoryBudget(int(0.002 * budget.GIB)).facets(
