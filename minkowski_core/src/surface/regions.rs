@@ -16,8 +16,9 @@
 //! many triangles as it has corners, not four per cell to be collapsed afterwards.
 //!
 //! A plane keeps its polygons, each fanned about its centroid as before, when its boundary
-//! is not simple loops (an edge left twice, regions overlapping at a vertex, a hole in no
-//! loop, an ear not found: not simple within the weld tolerance, a loop, or a loop with
+//! is not simple loops (an edge left twice, regions overlapping at a vertex, a loop through
+//! a vertex twice — a hole touching the loop around it —, a hole in no loop, an ear not
+//! found: not simple within the weld tolerance, a loop, or a loop with
 //! its holes bridged in, longer than [`MAX_LOOP`]), or when it shares a corner with a
 //! plane facing the other way (two sheets through the same points would share diagonals).
 //! Either way the triangles cover the same point set as the polygons.
@@ -61,7 +62,8 @@ pub struct RegionStats {
     pub merged_planes: usize,
     /// Planes whose polygons were fanned one by one instead.
     pub fanned_planes: usize,
-    /// Vertices inside straight creases left out of the regions' outlines.
+    /// Vertices found inside straight creases, left out of the regions' outlines (but
+    /// where a shortened outline could not be clipped: [`triangulate`]).
     pub straight_dropped: usize,
 }
 
@@ -98,15 +100,16 @@ pub fn triangulate(vertices: &mut Vec<Vec3>, polys: &[Vec<u32>], keys: &[PlaneKe
     // the band's vertices (the polygons' corners welded to them) and the fanned polygons'
     // corners stay
     let fanned: FastSet<u32> = groups.iter().zip(&loops).filter(|(_, l)| l.is_none()).flat_map(|(g, _)| g.iter().flat_map(|&i| polys[i].iter().copied())).collect();
-    let straight = straight_crease_vertices(verts, &loops, |v| (v as usize) < kept || fanned.contains(&v));
+    let straight = straight_crease_vertices(verts, &loops, tol, |v| (v as usize) < kept || fanned.contains(&v));
     let merged: Vec<Option<Vec<[u32; 3]>>> = loops
         .par_iter()
         .enumerate()
         .map(|(g, whole)| {
             let whole = whole.as_ref()?;
             let short: Vec<Vec<u32>> = whole.iter().map(|ids| ids.iter().copied().filter(|v| !straight.contains(v)).collect()).collect();
-            // (should a shortened loop not clip, the whole one does: the stitch splits the
-            // neighbour's edges at the vertices it kept)
+            // (should a shortened loop not clip, the whole one is tried: where that clips,
+            // the stitch splits the neighbour's edges at the vertices it kept; where it does
+            // not, the plane is fanned, its polygons keeping them too)
             clip_loops(verts, &short, normals[g], tol).or_else(|| clip_loops(verts, whole, normals[g], tol))
         })
         .collect();
@@ -177,7 +180,8 @@ fn fan(vertices: &mut Vec<Vec3>, ids: &[u32], faces: &mut Vec<[u32; 3]>) {
 }
 
 /// The boundary loops of the regions the polygons of one plane (outward `normal`) make
-/// up, or `None` when they are not simple loops around regions without holes.
+/// up: counter-clockwise around regions, clockwise around holes; `None` when they are not
+/// simple loops ([`boundary_loops`]), a loop is longer than [`MAX_LOOP`] or has no area.
 fn region_loops<'a>(vertices: &[Vec3], polys: impl Iterator<Item = &'a [u32]>, normal: Vec3) -> Option<Vec<Vec<u32>>> {
     let mut edges: Vec<(u32, u32)> = Vec::new();
     for p in polys {
@@ -208,6 +212,9 @@ fn in_plane(vertices: &[Vec3], i: u32, (u, v): (Vec3, Vec3)) -> [f64; 2] {
 /// weld tolerance `tol`, else to rounding), holes joined to the loops around them first
 /// ([`with_holes_bridged`]), or `None` when that cannot be done.
 fn clip_loops(vertices: &[Vec3], loops: &[Vec<u32>], normal: Vec3, tol: f64) -> Option<Vec<[u32; 3]>> {
+    if loops.iter().any(|ids| ids.len() < 3) {
+        return None; // (a sliver region whose sides were all straight creases)
+    }
     let basis = plane_basis(normal);
     let pos = |i: u32| in_plane(vertices, i, basis);
     let mut out = Vec::new();
@@ -272,36 +279,36 @@ fn inside(ids: &[u32], q: [f64; 2], pos: &impl Fn(u32) -> [f64; 2]) -> bool {
 }
 
 /// The corner of the counter-clockwise polygon `poly` that the point `m` inside it sees
-/// (Eberly): the end of larger `x` of the first edge the ray from `m` to `+x` meets, unless
-/// corners lie in the triangle of `m`, that meeting point and that end; then of those,
-/// the one nearest the ray's direction.
+/// (Eberly): the end of larger `x` of the first edge the ray from `m` to `+x` meets going up
+/// (where the ray leaves the polygon), unless corners lie in the triangle of `m`, that
+/// meeting point and that end; then of those, the one nearest the ray's direction. A
+/// corner the polygon passes twice (an earlier bridge's end) is taken where `m` lies in
+/// its angle.
 fn bridge_end(poly: &[u32], m: [f64; 2], pos: &impl Fn(u32) -> [f64; 2]) -> Option<usize> {
     let n = poly.len();
     let mut hit: Option<(f64, usize)> = None; // (x where the ray meets the edge, its corner)
     for i in 0..n {
         let (a, b) = (pos(poly[i]), pos(poly[(i + 1) % n]));
-        // edges across the ray's line, ends included
-        if a[1].min(b[1]) > m[1] || a[1].max(b[1]) < m[1] || a[1] == b[1] {
+        if !(a[1] <= m[1] && m[1] <= b[1] && a[1] < b[1]) {
             continue;
         }
         let x = a[0] + (m[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
         if x < m[0] || hit.is_some_and(|(hx, _)| hx <= x) {
             continue;
         }
-        let end = if a[0] > b[0] { i } else { (i + 1) % n };
         let end = if x == a[0] && m[1] == a[1] {
             i
-        } else if x == b[0] && m[1] == b[1] {
+        } else if x == b[0] && m[1] == b[1] || a[0] <= b[0] {
             (i + 1) % n
         } else {
-            end
+            i
         };
         hit = Some((x, end));
     }
     let (x, end) = hit?;
     let (i_pt, p) = ([x, m[1]], pos(poly[end]));
     if i_pt == p {
-        return Some(end);
+        return the_copy_around(poly, end, m, pos);
     }
     // corners strictly inside the triangle m, i_pt, p hide p: take the one at the least
     // angle to the ray (the nearest of those)
@@ -312,7 +319,23 @@ fn bridge_end(poly: &[u32], m: [f64; 2], pos: &impl Fn(u32) -> [f64; 2]) -> Opti
         ((d[1].abs()).atan2(d[0]), d[0] * d[0] + d[1] * d[1])
     };
     let best = (0..n).filter(|&k| k != end && strictly_in(pos(poly[k]))).min_by(|&a, &b| key(pos(poly[a])).partial_cmp(&key(pos(poly[b]))).unwrap_or(std::cmp::Ordering::Equal));
-    Some(best.unwrap_or(end))
+    the_copy_around(poly, best.unwrap_or(end), m, pos)
+}
+
+/// Of the places the polygon passes corner `poly[k]`, the one whose angle (inside the
+/// counter-clockwise polygon, between the edges in and out there) holds `m`; `None` when
+/// none does.
+fn the_copy_around(poly: &[u32], k: usize, m: [f64; 2], pos: &impl Fn(u32) -> [f64; 2]) -> Option<usize> {
+    let n = poly.len();
+    (0..n).filter(|&j| poly[j] == poly[k]).find(|&j| {
+        let (a, p, b) = (pos(poly[(j + n - 1) % n]), pos(poly[j]), pos(poly[(j + 1) % n]));
+        let (left_in, left_out) = (orient(a, p, m) >= 0.0, orient(p, b, m) >= 0.0);
+        if orient(a, p, b) >= 0.0 {
+            left_in && left_out // a convex corner: left of both edges
+        } else {
+            left_in || left_out // a reflex one: left of either
+        }
+    })
 }
 
 /// Relative distance (of the run's length and its ends' coordinates) within which a vertex
@@ -327,7 +350,7 @@ const ON_LINE: f64 = 1e-10;
 /// a run of such vertices whose every vertex lies on the line between the run's ends, in
 /// order along it. A straight edge of the answer crossing many cells is split at every
 /// cell wall; its outlines keep only its ends. The point set does not change.
-fn straight_crease_vertices(vertices: &[Vec3], loops: &[Option<Vec<Vec<u32>>>], pinned: impl Fn(u32) -> bool) -> FastSet<u32> {
+fn straight_crease_vertices(vertices: &[Vec3], loops: &[Option<Vec<Vec<u32>>>], tol: f64, pinned: impl Fn(u32) -> bool) -> FastSet<u32> {
     // per vertex: its (previous, next) in each loop it is on (up to three kept)
     let mut seen: FastMap<u32, Vec<(u32, u32)>> = FastMap::default();
     for ids in loops.iter().flatten().flatten() {
@@ -352,7 +375,7 @@ fn straight_crease_vertices(vertices: &[Vec3], loops: &[Option<Vec<Vec<u32>>>], 
         for (k, &a) in anchors.iter().enumerate() {
             let b = anchors[(k + 1) % anchors.len()];
             let run: Vec<u32> = (1..(b + n - a) % n).map(|j| ids[(a + j) % n]).collect();
-            if !run.is_empty() && on_segment(vertices, ids[a], ids[b], &run) {
+            if !run.is_empty() && on_segment(vertices, ids[a], ids[b], &run, tol) {
                 out.extend(run);
             }
         }
@@ -360,16 +383,17 @@ fn straight_crease_vertices(vertices: &[Vec3], loops: &[Option<Vec<Vec<u32>>>], 
     out
 }
 
-/// Whether every vertex of `run` lies on the segment from `a` to `b` (within [`ON_LINE`]),
+/// Whether every vertex of `run` lies on the segment from `a` to `b` (within [`ON_LINE`],
+/// and within the weld tolerance `weld`, the stitch's, far from the origin),
 /// strictly between them and in order from `a`. The segment is measured from its end of
 /// smaller index, so the answer is the same from both loops the run is on (there it runs
 /// from `b` to `a`, reversed).
-fn on_segment(vertices: &[Vec3], a: u32, b: u32, run: &[u32]) -> bool {
+fn on_segment(vertices: &[Vec3], a: u32, b: u32, run: &[u32], weld: f64) -> bool {
     let (lo, hi) = (a.min(b), a.max(b));
     let (p, q) = (vertices[lo as usize], vertices[hi as usize]);
     let d = q - p;
     let len2 = d.dot(d);
-    let tol = ON_LINE * (len2.sqrt() + p.abs().max_element().max(q.abs().max_element()));
+    let tol = (ON_LINE * (len2.sqrt() + p.abs().max_element().max(q.abs().max_element()))).min(weld);
     if len2 <= tol * tol {
         return false;
     }
@@ -664,11 +688,11 @@ mod tests {
     #[test]
     fn a_run_on_a_segment() {
         let v = vec![Vec3::ZERO, Vec3::new(3.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(2.0, 1e-6, 0.0)];
-        assert!(on_segment(&v, 0, 1, &[2, 3]));
-        assert!(on_segment(&v, 1, 0, &[3, 2]), "either way round");
-        assert!(!on_segment(&v, 0, 1, &[3, 2]), "out of order");
-        assert!(!on_segment(&v, 0, 1, &[2, 4]), "off the line");
-        assert!(!on_segment(&v, 0, 2, &[3]), "past the end");
+        assert!(on_segment(&v, 0, 1, &[2, 3], 1e-9));
+        assert!(on_segment(&v, 1, 0, &[3, 2], 1e-9), "either way round");
+        assert!(!on_segment(&v, 0, 1, &[3, 2], 1e-9), "out of order");
+        assert!(!on_segment(&v, 0, 1, &[2, 4], 1e-9), "off the line");
+        assert!(!on_segment(&v, 0, 2, &[3], 1e-9), "past the end");
     }
 
     /// Two squares of one plane touching at a corner, and a square touching an L of three
@@ -752,6 +776,62 @@ mod tests {
         let area = |t: &[u32; 3]| orient(p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]);
         assert!(tris.iter().all(|t| area(t) > 0.0));
         assert!((tris.iter().map(area).sum::<f64>() - signed_area(&p)).abs() < 1e-15);
+    }
+
+    /// Random regions of jittered grid cells with holes of one to four cells (apart from
+    /// each other and from the outline): every plane merges, its triangles turning left and
+    /// covering the cells' area. Bridges then often end at earlier bridges' ends, where
+    /// the polygon passes a corner twice: a bridge from the wrong copy of it crosses the
+    /// polygon, and the plane could not be clipped.
+    #[test]
+    fn jittered_regions_with_holes_are_clipped_once() {
+        const N: usize = 10;
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for case in 0..200 {
+            let mut vertices: Vec<Vec3> = Vec::new();
+            for i in 0..=N {
+                for j in 0..=N {
+                    vertices.push(Vec3::new(i as f64 + 0.6 * next() - 0.3, j as f64 + 0.6 * next() - 0.3, 0.0));
+                }
+            }
+            let id = |i: usize, j: usize| (i * (N + 1) + j) as u32;
+            let mut removed: Vec<(usize, usize)> = Vec::new();
+            for _ in 0..4 {
+                let pick = |x: f64| 1 + (x * (N - 2) as f64) as usize % (N - 2);
+                let mut blob = vec![(pick(next()), pick(next()))];
+                for _ in 0..(next() * 4.0) as usize {
+                    let (a, b) = blob[(next() * blob.len() as f64) as usize % blob.len()];
+                    let c = [(a + 1, b), (a - 1, b), (a, b + 1), (a, b - 1)][(next() * 4.0) as usize % 4];
+                    if (1..N - 1).contains(&c.0) && (1..N - 1).contains(&c.1) && !blob.contains(&c) {
+                        blob.push(c);
+                    }
+                }
+                let near = |&(a, b): &(usize, usize)| removed.iter().any(|&(x, y)| x.abs_diff(a) <= 1 && y.abs_diff(b) <= 1);
+                if !blob.iter().any(near) {
+                    removed.extend(blob);
+                }
+            }
+            let polys: Vec<Vec<u32>> = (0..N)
+                .flat_map(|i| (0..N).map(move |j| (i, j)))
+                .filter(|c| !removed.contains(c))
+                .map(|(i, j)| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+                .collect();
+            let area_in = |vertices: &[Vec3], ids: &[u32]| signed_area(&ids.iter().map(|&v| [vertices[v as usize].x, vertices[v as usize].y]).collect::<Vec<_>>()) / 2.0;
+            let expected: f64 = polys.iter().map(|p| area_in(&vertices, p)).sum();
+            let keys = vec![plane_key(Vec3::Z, 0.0); polys.len()];
+            let (faces, stats) = triangulate(&mut vertices, &polys, &keys, 1e-9, 0);
+            let area = |ids: &[u32]| area_in(&vertices, ids);
+            assert_eq!((stats.merged_planes, stats.fanned_planes), (1, 0), "case {case}: {} cells removed", removed.len());
+            assert!(faces.iter().all(|f| area(f) > 0.0), "case {case}: a triangle turns right");
+            let total: f64 = faces.iter().map(|f| area(f)).sum();
+            assert!((total - expected).abs() < 1e-9 * expected, "case {case}: {total} vs {expected}");
+        }
     }
 
     /// Ear clipping a comb-like polygon with straight runs: `n − 2` triangles, all turning
