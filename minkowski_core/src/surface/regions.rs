@@ -17,11 +17,11 @@
 //!
 //! A plane keeps its polygons, each fanned about its centroid as before, when its boundary
 //! is not simple loops (an edge left twice, regions overlapping at a vertex, a loop through
-//! a vertex twice — a hole touching the loop around it —, a hole in no loop, an ear not
-//! found: not simple within the weld tolerance, a loop, or a loop with
-//! its holes bridged in, longer than [`MAX_LOOP`]), or when it shares a corner with a
-//! plane facing the other way (two sheets through the same points would share diagonals).
-//! Either way the triangles cover the same point set as the polygons.
+//! a vertex twice — a hole touching the loop around it —, a hole in no loop, no ear found
+//! even to rounding, a loop longer than [`MAX_LOOP`] with its holes bridged in), or when
+//! it shares a corner with a plane facing the other way (two sheets through the same
+//! points would share diagonals). Either way the triangles cover the same point set as the
+//! polygons.
 //!
 //! Entry point: [`triangulate`].
 
