@@ -22,6 +22,7 @@ __all__ = [
     "offset_surface",
     "set_record_budget",
     "set_time_limit",
+    "solid_windings",
     "union_surface",
     "winding_numbers",
 ]
@@ -79,6 +80,10 @@ def crossing_windings(
     vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
 ) -> npt.NDArray[np.int64]:
     """Winding number in front of both faces of each crossing (int64 min: unknown)."""
+def solid_windings(
+    vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64], name: str = "mesh"
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], CheckedMesh | None]:
+    """Both windings above, and the checked solid when none is negative or unknown."""
 def closed_shell_sizes(
     vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
 ) -> list[int]:

@@ -354,11 +354,11 @@ def _cell_offset(mesh: trimesh.Trimesh, radius: float, step: float, max_cells: i
     """``(mesh, error_bound, stats)`` of the native cell source's offset (of a surface's
     triangles when not ``solid``)."""
     from . import budget  # noqa: PLC0415
-    from ._minkowski_core import CheckedMesh, offset_surface  # noqa: PLC0415
+    from ._minkowski_core import offset_surface  # noqa: PLC0415
+    from .meshes.checked import core_mesh  # noqa: PLC0415
 
     cells, from_memory = budget.surface_cells(max_cells)
-    checked = CheckedMesh(np.asarray(mesh.vertices, dtype=np.float64),
-                          np.asarray(mesh.faces, dtype=np.int64), solid=solid, name=name)
+    checked = core_mesh(mesh, solid=solid, name=name)
     try:
         raw = offset_surface(checked, radius, step, max_cells=cells)
     except ResourceLimitError as exc:

@@ -175,12 +175,17 @@ class CheckedParts:
     pair it is in); and whether a solid's bodies are all convex."""
 
     def __init__(self) -> None:
-        self._arrays: dict[int, tuple[Part, tuple[np.ndarray, np.ndarray]]] = {}
+        self._arrays: dict[int, tuple[Part, Any, tuple[np.ndarray, np.ndarray]]] = {}
         self._native: dict[int, Any] = {}
         self._convex: dict[int, bool] = {}
 
     def arrays(self, part: Part) -> tuple[np.ndarray, np.ndarray]:
         """Vertices ``(n, 3)`` float64 and faces ``(m, 3)`` int64 of the part."""
+        return self._checked(part)[2]
+
+    def _checked(self, part: Part) -> tuple[Part, Any, tuple[np.ndarray, np.ndarray]]:
+        """``(part, its checked trimesh, its arrays)``, computed once (the part kept
+        alive: its id stays its own)."""
         key = id(part)
         if key not in self._arrays:
             mesh = part.mesh
@@ -190,17 +195,18 @@ class CheckedParts:
                 mesh = validate_solid(mesh, name=part.name)
             arrays = (np.ascontiguousarray(mesh.vertices, dtype=np.float64),
                       np.ascontiguousarray(mesh.faces, dtype=np.int64))
-            self._arrays[key] = (part, arrays)  # the part kept alive: its id stays its own
-        return self._arrays[key][1]
+            self._arrays[key] = (part, mesh, arrays)
+        return self._arrays[key]
 
     def native(self, part: Part):
-        """The core's :class:`CheckedMesh` of the part's arrays (built once)."""
+        """The core's :class:`CheckedMesh` of the part's mesh (built once; the one its
+        check made when it was validated here or by a reader: :mod:`.meshes.checked`)."""
         key = id(part)
         if key not in self._native:
-            from ._minkowski_core import CheckedMesh  # noqa: PLC0415
+            from .meshes.checked import core_mesh  # noqa: PLC0415
 
-            self._native[key] = CheckedMesh(*self.arrays(part), solid=part.solid,
-                                            name=part.name)
+            self._native[key] = core_mesh(self._checked(part)[1], solid=part.solid,
+                                          name=part.name)
         return self._native[key]
 
     def convex(self, part: Part) -> bool:

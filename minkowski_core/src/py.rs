@@ -259,6 +259,12 @@ fn build_octree<'py>(py: Python<'py>, prims: &Primitives, h: f64, bounds: Option
 /// A solid (`solid`: closed, winding number never negative; checked) or a surface (any
 /// triangles) from (vertices (n, 3) float64, faces (m, 3) int64).
 fn mesh_of(v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>, what: &str, solid: bool) -> PyResult<TriMesh> {
+    let (verts, faces) = arrays_of(v, f, what)?;
+    Ok(if solid { TriMesh::new(verts, &faces, what)? } else { TriMesh::surface(verts, &faces, what)? })
+}
+
+/// The vertices and faces of a mesh argument, checked for shape and index range.
+fn arrays_of(v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>, what: &str) -> PyResult<(Vec<Vec3>, Vec<[u32; 3]>)> {
     let verts = points_of(v, &format!("{what} vertices"))?;
     let fa = f.as_array();
     if fa.ncols() != 3 {
@@ -271,7 +277,7 @@ fn mesh_of(v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>, what: &
         }
         faces.push([row[0] as u32, row[1] as u32, row[2] as u32]);
     }
-    Ok(if solid { TriMesh::new(verts, &faces, what)? } else { TriMesh::surface(verts, &faces, what)? })
+    Ok((verts, faces))
 }
 
 /// A part's triangle mesh, checked once (a solid: closed, outward, winding number never
@@ -353,6 +359,26 @@ fn crossing_windings<'py>(py: Python<'py>, vertices: PyReadonlyArray2<'py, f64>,
         mesh.crossing_windings(&crossings).into_iter().map(|w| w.unwrap_or(i64::MIN)).collect()
     });
     Ok(out.into_pyarray(py))
+}
+
+/// The winding numbers of the closed mesh (vertices (n, 3), faces (m, 3)), as
+/// [`front_windings`] and [`crossing_windings`] give them, and its [`CheckedMesh`] as a
+/// solid when none is negative or untold (else `None`): one check where the three calls
+/// would make three. `name` names the mesh in errors. Parallel.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, name="mesh"))]
+#[allow(clippy::type_complexity)]
+fn solid_windings<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    name: &str,
+) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, Option<CheckedMesh>)> {
+    let (verts, tris) = arrays_of(&vertices, &faces, name)?;
+    let windings = py.detach(|| TriMesh::checked_windings(verts, &tris, name))?;
+    let told = |ws: Vec<Option<i64>>| ws.into_iter().map(|w| w.unwrap_or(i64::MIN)).collect::<Vec<i64>>().into_pyarray(py);
+    let checked = windings.solid.ok().map(|mesh| CheckedMesh { inner: Arc::new(mesh) });
+    Ok((told(windings.fronts), told(windings.wedges), checked))
 }
 
 /// The winding numbers of `points` (k, 3) for the closed mesh (vertices (n, 3), faces
@@ -557,6 +583,7 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(set_time_limit, m)?)?;
     m.add_function(wrap_pyfunction!(budget_units, m)?)?;
     m.add_function(wrap_pyfunction!(front_windings, m)?)?;
+    m.add_function(wrap_pyfunction!(solid_windings, m)?)?;
     m.add_function(wrap_pyfunction!(crossing_windings, m)?)?;
     m.add_function(wrap_pyfunction!(winding_numbers, m)?)?;
     m.add_function(wrap_pyfunction!(closed_shell_sizes, m)?)?;

@@ -26,6 +26,7 @@ frame) is not a solid.
 from __future__ import annotations
 
 import logging
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -34,6 +35,7 @@ from scipy.spatial import cKDTree
 from planner.errors import InvalidMeshError
 from planner.tolerances import scale_of, tol
 
+from .checked import remember
 from .topology import (
     checked_arrays,
     clean_faces,
@@ -126,7 +128,7 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
             f"opposite ways overlap); typically polygons triangulated wrongly by the "
             f"exporter{obj_hint(mesh)}"
         )
-    faces_inside = _check_winding(vertices, faces, label)
+    faces_inside, checked = _check_winding(vertices, faces, label)
     if report["flipped_shells"]:  # said once the result is a solid
         log.info("%s: %d of %d closed shell(s) were inside out; flipped them", label,
                  report["flipped_shells"], report["shells"])
@@ -134,6 +136,7 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
     result.metadata.update(getattr(mesh, "metadata", {}) or {})
     result.metadata["name"] = name
     result.metadata[FACES_INSIDE] = faces_inside
+    remember(result, checked, solid=True)
     if report["merged_vertices"] or report["removed_faces"]:
         log.debug(
             "%s: merged %d vertices, removed %d faces",
@@ -159,21 +162,21 @@ the solid in front of them too (winding number above 0 there: shells that touch 
 overlap), so are not part of its boundary."""
 
 
-def _check_winding(vertices: np.ndarray, faces: np.ndarray, label: str) -> int:
+def _check_winding(vertices: np.ndarray, faces: np.ndarray, label: str) -> tuple[int, Any]:
     """Raise unless the closed, consistently wound surface bounds a solid: its exact
     winding number (the core's) is never negative, neither in front of a face nor where
     faces cross (see the module's conventions). Returns how many faces have the solid in
-    front of them too (:data:`FACES_INSIDE`)."""
-    from planner._minkowski_core import crossing_windings, front_windings  # noqa: PLC0415
+    front of them too (:data:`FACES_INSIDE`), and the core's checked solid
+    (:mod:`.checked`)."""
+    from planner._minkowski_core import solid_windings  # noqa: PLC0415
 
     untold = np.iinfo(np.int64).min
-    fronts = front_windings(vertices, faces)
-    wedges = crossing_windings(vertices, faces)
+    fronts, wedges, checked = solid_windings(vertices, faces, label)
     inverted = int(((fronts < 0) & (fronts != untold)).sum())
     inverted_wedges = int(((wedges < 0) & (wedges != untold)).sum())
     unknown = int((fronts == untold).sum() + (wedges == untold).sum())
-    if not (inverted or inverted_wedges or unknown):
-        return int((fronts != 0).sum())
+    if checked is not None and not (inverted or inverted_wedges or unknown):
+        return int((fronts != 0).sum()), checked
     told = np.concatenate([fronts[fronts != untold], wedges[wedges != untold]])
     detail = []
     if inverted or inverted_wedges:

@@ -113,7 +113,8 @@ def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
 
     from planner.meshes.kinds import classify
     cases = [{"name": "box 1x0.6x0.4", "mesh": trimesh.creation.box((1.0, 0.6, 0.4)),
-              "r": 0.1, "ours": [0.02, 0.005, 0.001, 0.0002], "libigl": [50, 100, 200, 300],
+              "r": 0.1, "ours": [0.02, 0.005, 0.001, 0.0002],
+              "libigl": [20, 30, 50, 100, 200, 300],
               "manifold": [1, 2, 3, 4, 5]},
              {"name": "bunny-like 2k", "mesh": bunny_like(), "r": 0.03,
               "ours": [0.004, 0.0011, 0.00028], "ours-cells": [0.024, 0.012],
@@ -131,7 +132,7 @@ def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
         gear = classify(planner.load_mesh(GEAR), name="gear", kind="solid").mesh
         cases.append({"name": "gear: IndustReal small gear (CAD, 20k triangles)",
                       "mesh": gear, "r": 0.001, "ours": [0.002, 0.001, 0.0005, 0.00025],
-                      "libigl": [50, 75, 100, 150, 200], "manifold": [1]})
+                      "libigl": [20, 30, 40, 50, 75, 100, 150, 200], "manifold": [1]})
     else:
         log(f"skipping the CAD part: {HOLE} is absent (../shared/assets not laid out)")
     if only:

@@ -98,6 +98,18 @@ pub struct TriMesh {
     pub solid: bool,
 }
 
+/// A closed mesh's winding numbers ([`TriMesh::checked_windings`]): just in front of each
+/// triangle, in the wedge in front of both triangles of each crossing (`None`: untold), and
+/// the solid it bounds, or why it bounds none.
+pub struct Windings {
+    /// Per triangle.
+    pub fronts: Vec<Option<i64>>,
+    /// Per crossing of two triangles.
+    pub wedges: Vec<Option<i64>>,
+    /// The solid, or the error saying why the mesh is none.
+    pub solid: CoreResult<TriMesh>,
+}
+
 impl TriMesh {
     /// A solid from vertices and triangles. `what` names the mesh in errors.
     ///
@@ -107,7 +119,18 @@ impl TriMesh {
     /// exactly once in each direction), or is closed but no solid: its winding number is
     /// negative somewhere (inverted faces or shells; [`TriMesh::front_windings`]).
     pub fn new(vertices: Vec<Vec3>, faces: &[[u32; 3]], what: &str) -> CoreResult<TriMesh> {
-        let bad = |detail: String| CoreError::InvalidGeometry { what: what.into(), detail };
+        TriMesh::checked_windings(vertices, faces, what)?.solid
+    }
+
+    /// The closed mesh's winding numbers in front of its triangles and at its crossings,
+    /// and the solid it is when none is negative or untold (else the error
+    /// [`TriMesh::new`] gives): the windings computed once, for a caller that reports
+    /// them too.
+    ///
+    /// # Errors
+    /// [`CoreError::InvalidGeometry`] when the mesh is empty, has a non-finite vertex or an
+    /// index out of range, or is not closed and consistently oriented.
+    pub fn checked_windings(vertices: Vec<Vec3>, faces: &[[u32; 3]], what: &str) -> CoreResult<Windings> {
         check_arrays(&vertices, faces, what)?;
         TriMesh::check_closed(faces, what)?;
         let mut mesh = TriMesh { closed: true, ..TriMesh::surface(vertices, faces, what)? };
@@ -118,16 +141,21 @@ impl TriMesh {
         let unknown = |ws: &[Option<i64>]| ws.iter().filter(|w| w.is_none()).count();
         let (inverted, inverted_wedges) = (negative(&fronts), negative(&wedges));
         let untold = unknown(&fronts) + unknown(&wedges);
-        if inverted + inverted_wedges + untold > 0 {
-            return Err(bad(format!(
-                "is closed but bounds no solid: {inverted} of {} triangles, and {inverted_wedges} of {} crossings of triangles, have the inside in front of them (winding number below 0: inverted faces or shells), and {untold} places could not be told; repair it or use it as a surface",
-                fronts.len(),
-                crossings.len()
-            )));
-        }
-        mesh.crossing = crossings.iter().map(|c| c.tris).collect();
-        mesh.solid = true;
-        Ok(mesh)
+        let solid = if inverted + inverted_wedges + untold > 0 {
+            Err(CoreError::InvalidGeometry {
+                what: what.into(),
+                detail: format!(
+                    "is closed but bounds no solid: {inverted} of {} triangles, and {inverted_wedges} of {} crossings of triangles, have the inside in front of them (winding number below 0: inverted faces or shells), and {untold} places could not be told; repair it or use it as a surface",
+                    fronts.len(),
+                    crossings.len()
+                ),
+            })
+        } else {
+            mesh.crossing = crossings.iter().map(|c| c.tris).collect();
+            mesh.solid = true;
+            Ok(mesh)
+        };
+        Ok(Windings { fronts, wedges, solid })
     }
 
     /// Whether every edge of `faces` is used once in each direction.

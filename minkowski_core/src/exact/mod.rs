@@ -61,7 +61,7 @@ pub use convolution::{convolution, convolution_within, Facet, FlatPlanes};
 #[cfg(test)]
 use convolution::{convolution_scan, planar_regions};
 pub use depth::{facet_nearest, Depth};
-pub use mesh::{MeshNode, Tri, TriMesh};
+pub use mesh::{MeshNode, Tri, TriMesh, Windings};
 pub use piece::{pair_box_relation, pair_contains_box, pair_contains_point, BoxRelation, Piece};
 pub use verify::BoxWitness;
 
