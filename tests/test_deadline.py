@@ -89,3 +89,52 @@ def test_a_plan_whose_whole_bounds_cspace_passes_the_limit_ends_near_it():
     assert outcome.status == "not_found" and outcome.reason == "time_limit", outcome.message
     assert "while the C-space over the whole bounds was built" in outcome.message
     assert seconds < 20, seconds  # loading and the checker, not the build's own time
+
+
+INTERRUPTED_OFFSET = """
+import os, signal, sys, threading, time
+import trimesh
+import planner
+solid = trimesh.creation.torus(major_radius=1.0, minor_radius=0.4, major_sections=96,
+                               minor_sections=48)
+signal_at = []
+
+def interrupt():
+    signal_at.append(time.perf_counter())
+    os.kill(os.getpid(), signal.SIGINT)
+
+timer = threading.Timer(float(sys.argv[1]), interrupt)
+timer.daemon = True
+timer.start()
+start = time.perf_counter()
+try:
+    planner.offset(solid, 0.2, eps=float(sys.argv[2]), method="cells")
+    print("finished", time.perf_counter() - start)
+except KeyboardInterrupt:
+    stopped = time.perf_counter()
+    after = planner.offset(solid, 0.2, eps=0.2, method="cells")   # not left cancelled
+    print("interrupted", stopped - signal_at[0], stopped - start, len(after.mesh.faces))
+"""
+
+
+def _offset_run(delay: float, eps: float) -> list[str]:
+    import subprocess  # noqa: PLC0415
+    import sys  # noqa: PLC0415
+
+    done = subprocess.run([sys.executable, "-c", INTERRUPTED_OFFSET, str(delay), str(eps)],
+                          capture_output=True, text=True, timeout=300, check=True)
+    return done.stdout.split()
+
+
+def test_ctrl_c_stops_a_long_native_offset_and_the_next_one_runs():
+    """Ctrl+C reaches the native work (the binding checks Python's signals while it runs
+    and cancels it): the interrupt comes well before the offset would have finished, and
+    a later offset in the same process runs to its end."""
+    whole = _offset_run(1e6, 0.025)                     # no interrupt: how long it takes
+    assert whole[0] == "finished"
+    seconds = float(whole[1])
+    assert seconds > 4.0, f"the offset takes {seconds:.1f} s: too short to interrupt"
+    out = _offset_run(0.5, 0.025)
+    assert out[0] == "interrupted", out
+    assert float(out[2]) < 0.5 * seconds, f"stopped after {out[2]} s of {seconds:.1f} s"
+    assert int(out[3]) > 0

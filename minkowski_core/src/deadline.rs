@@ -7,9 +7,12 @@
 //! plan at a time may set it (the planner's own use; batch runs give each task its own
 //! process).
 //!
+//! Cancelling ([`cancel`]: the Python binding does when Ctrl+C arrives) makes the deadline
+//! pass at once and the surface extraction skip its queries, until [`uncancel`].
+//!
 //! [`CoreError::TimeLimit`]: crate::error::CoreError::TimeLimit
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
@@ -34,10 +37,31 @@ pub fn set_deadline(after: Option<Duration>) {
     DEADLINE_NS.store(deadline_at(now_ns(), after), Ordering::Relaxed);
 }
 
-/// Whether the deadline has passed.
+/// Whether the deadline has passed, or the work was cancelled ([`cancel`]).
 #[inline]
 pub fn passed() -> bool {
-    is_past(DEADLINE_NS.load(Ordering::Relaxed), now_ns())
+    cancelled() || is_past(DEADLINE_NS.load(Ordering::Relaxed), now_ns())
+}
+
+/// Set while the work in progress is cancelled (Ctrl+C: the caller stops waiting for it).
+static CANCELLED: AtomicBool = AtomicBool::new(false);
+
+/// Cancel the work in progress: builds stop as at a passed deadline, and a surface
+/// extraction skips its remaining queries (its result is to be dropped). Until
+/// [`uncancel`].
+pub fn cancel() {
+    CANCELLED.store(true, Ordering::Relaxed);
+}
+
+/// Let work run again after [`cancel`].
+pub fn uncancel() {
+    CANCELLED.store(false, Ordering::Relaxed);
+}
+
+/// Whether the work in progress is cancelled.
+#[inline]
+pub fn cancelled() -> bool {
+    CANCELLED.load(Ordering::Relaxed)
 }
 
 /// The deadline `after` from `now` (nanoseconds after [`epoch`]; [`NONE`] for none).

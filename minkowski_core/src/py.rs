@@ -34,6 +34,45 @@ impl From<CoreError> for PyErr {
     }
 }
 
+/// How often a thread waiting for native work checks Python's signals.
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// `work` run with the GIL released, as `py.detach` runs it, answering Ctrl+C: the calling
+/// thread checks Python's signals every [`SIGNAL_POLL`] while `work` runs on another; when a
+/// signal's handler raises (KeyboardInterrupt), the work is cancelled
+/// ([`crate::deadline::cancel`]), waited for, and that error returned.
+fn interruptible<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+    let waiting = std::thread::current();
+    std::thread::scope(|scope| {
+        let worker = scope.spawn(move || {
+            let out = work();
+            waiting.unpark();
+            out
+        });
+        loop {
+            py.detach(|| {
+                if !worker.is_finished() {
+                    std::thread::park_timeout(SIGNAL_POLL);
+                }
+            });
+            if worker.is_finished() {
+                return Ok(joined(worker));
+            }
+            if let Err(interrupt) = py.check_signals() {
+                crate::deadline::cancel();
+                py.detach(|| drop(worker.join()));
+                crate::deadline::uncancel();
+                return Err(interrupt);
+            }
+        }
+    })
+}
+
+/// The result of a finished worker thread (its panic resumed here).
+fn joined<T>(worker: std::thread::ScopedJoinHandle<'_, T>) -> T {
+    worker.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+}
+
 fn points_of(a: &PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<Vec<Vec3>> {
     let shape = a.shape();
     if shape.len() != 2 || shape[1] != 3 {
@@ -153,7 +192,7 @@ impl Primitives {
 fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
     let set = prims.inner.clone();
     let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };
-    let r = py.detach(move || approximate_union(&set, &params))?;
+    let r = interruptible(py, move || approximate_union(&set, &params))??;
     surface_dict(py, &r)
 }
 
@@ -173,10 +212,10 @@ fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f6
     }
     let solid = mesh.inner.clone();
     let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };
-    let r = py.detach(move || {
+    let r = interruptible(py, move || {
         let src = crate::offset::OffsetSource::new(solid.as_ref(), radius);
         approximate_solid(&src, &src.aabb, &params)
-    })?;
+    })??;
     surface_dict(py, &r)
 }
 
@@ -241,7 +280,7 @@ fn build_octree<'py>(py: Python<'py>, prims: &Primitives, h: f64, bounds: Option
     };
     let set = prims.inner.clone();
     let t0 = Instant::now();
-    let oct = py.detach(move || Octree::build(set.as_ref(), &region, h, max_cells))?;
+    let oct = interruptible(py, move || Octree::build(set.as_ref(), &region, h, max_cells))??;
     let seconds = t0.elapsed().as_secs_f64();
     let d = PyDict::new(py);
     d.set_item("origin", oct.origin.to_array().to_vec())?;
@@ -440,9 +479,9 @@ impl ExactSum {
         let ma = a.mesh("a", a_solid)?;
         let mb = b.mesh("b", b_solid)?;
         let inner = if pieces {
-            py.detach(move || ExactSource::with_piece_fallback(vec![ma], mb, 0.0, None, 0))
+            interruptible(py, move || ExactSource::with_piece_fallback(vec![ma], mb, 0.0, None, 0))?
         } else {
-            py.detach(move || ExactSource::try_new(vec![ma], mb, 0.0, None, max_facets))?
+            interruptible(py, move || ExactSource::try_new(vec![ma], mb, 0.0, None, max_facets))??
         };
         Ok(ExactSum { inner: Arc::new(inner), pieces })
     }
@@ -505,7 +544,7 @@ impl ExactSum {
         let p = vec3_of(&point, "point")?;
         let src = self.inner.clone();
         let t0 = Instant::now();
-        let r = py.detach(move || src.try_depth(p, tolerance, max_cells))?;
+        let r = interruptible(py, move || src.try_depth(p, tolerance, max_cells))??;
         let d = PyDict::new(py);
         d.set_item("inside", r.inside)?;
         d.set_item("lower", r.lower)?;
@@ -527,7 +566,7 @@ impl ExactSum {
         }
         let src = self.inner.clone();
         let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };
-        let r = py.detach(move || approximate_solid(src.as_ref(), &src.aabb, &params))?;
+        let r = interruptible(py, move || approximate_solid(src.as_ref(), &src.aabb, &params))??;
         surface_dict(py, &r)
     }
 }
@@ -653,10 +692,10 @@ impl PyCSpace {
         }
         let region = Aabb::new(b[0], b[1]);
         let set = prims.map(|p| p.inner.clone());
-        let inner = py.detach(move || {
+        let inner = interruptible(py, move || {
             let polys: &[ConvexPolytope] = set.as_ref().map_or(&[], |s| &s.polys);
             crate::roadmap::CSpace::build(polys, region, h_floor, h_coarse, margin, max_leaves)
-        })?;
+        })??;
         Ok(PyCSpace { inner, max_leaves, reused: Vec::new() })
     }
 
@@ -699,7 +738,8 @@ impl PyCSpace {
         }
         let r = robot.mesh("robot", robot_solid)?;
         let given: Vec<Option<Arc<ExactSource>>> = reuse.unwrap_or_default().iter().map(|g| g.as_ref().map(|g| g.get().inner.clone())).collect();
-        let (inner, reused) = py.detach(move || crate::roadmap::CSpace::build_exact_reusing(meshes, &r, region, h_floor, h_coarse, margin, max_leaves, max_facets, &given))?;
+        let (inner, reused) =
+            interruptible(py, move || crate::roadmap::CSpace::build_exact_reusing(meshes, &r, region, h_floor, h_coarse, margin, max_leaves, max_facets, &given))??;
         Ok(PyCSpace { inner, max_leaves, reused })
     }
 
@@ -896,7 +936,7 @@ impl PyCSpace {
     fn refine<'py>(&mut self, py: Python<'py>, leaves: Vec<usize>, ring: bool, levels: u8) -> PyResult<Bound<'py, PyDict>> {
         let max = self.max_leaves;
         let cs = &mut self.inner;
-        let st = py.detach(move || cs.refine(&leaves, ring, levels, max))?;
+        let st = interruptible(py, move || cs.refine(&leaves, ring, levels, max))??;
         let d = PyDict::new(py);
         d.set_item("refined", st.refined)?;
         d.set_item("created", st.created)?;

@@ -223,6 +223,9 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         let t1 = Instant::now();
         let surface = extract(&oct, set, &resolved);
         t_surf += t1.elapsed().as_secs_f64();
+        if crate::deadline::cancelled() {
+            return Err(CoreError::TimeLimit { during: "surface extraction".into() });
+        }
         // where the exact polygons did not join the band, or the band has complex cells
         // next to them, sample around those places while that leaves fewer of them; then,
         // if the join is closed, its complex cells are thin features the bound covers as

@@ -283,11 +283,17 @@ impl EdgeIntervals {
 pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -> Surface {
     let planar = planar_polygons(oct, src, resolved);
     let mut s = sample_band(oct, src, &planar);
+    if crate::deadline::cancelled() {
+        return s; // dropped by the caller
+    }
     s.planar_cells = planar.cells;
     s.planar_pieces = planar.polys.len();
     s.planar_deviation = planar.deviation;
     if !planar.polys.is_empty() {
         s.regions = stitch::join(&mut s, &planar.polys, &planar.planes, STITCH_TOL * oct.h, (oct.origin, oct.h));
+        if crate::deadline::cancelled() {
+            return s;
+        }
         // a fill point is within its loop's diameter of a loop vertex, and that within the
         // weld and the polygons' deviation of the boundary (a band vertex is on it, unless
         // its edge's crossings were inconsistent: then within half the edge); holes up to
@@ -466,7 +472,7 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarPolygons) ->
     let sampled = |i: usize| oct.leaves[i].label == Label::Mixed && oct.leaves[i].level == 0 && !planar.resolved.get(i).copied().unwrap_or(false);
     let band: Vec<usize> = (0..oct.leaves.len()).filter(|&i| sampled(i)).collect();
     let mut s = Surface { band_cells: band.len(), ..Default::default() };
-    if band.is_empty() {
+    if band.is_empty() || crate::deadline::cancelled() {
         return s;
     }
     let leaf_corner_key = |li: usize, c: usize| -> u64 {
@@ -524,13 +530,24 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarPolygons) ->
     let edges: Vec<(u64, u64, u32, usize, u32)> =
         owner.iter().enumerate().filter(|(_, o)| o.0 != u32::MAX).map(|(slot, &(o, pb))| (pts[slot / 7].0, pts[pb as usize].0, o, slot, pb)).collect();
     s.edges = edges.len();
+    if crate::deadline::cancelled() {
+        return s;
+    }
 
     // where the boundary may cross each edge; an edge it cannot cross joins its ends' signs
+    // (cancelled work skips the queries: its surface is dropped)
     let bnd = EdgeIntervals::collect(&edges, |&(ka, kb, li, _, _), iv| {
+        if crate::deadline::cancelled() {
+            iv.clear();
+            return;
+        }
         src.boundary_intervals(oct.records(&oct.leaves[li as usize]), point_of(ka), point_of(kb), iv);
     });
 
     // signs: one point query per set of lattice points joined by such edges
+    if crate::deadline::cancelled() {
+        return s;
+    }
     let mut joined = UnionFind::new(pts.len());
     for (n, e) in edges.iter().enumerate() {
         if bnd.of(n).is_empty() {
@@ -544,7 +561,7 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarPolygons) ->
         .filter(|(i, &r)| *i as u32 == r)
         .map(|(i, _)| {
             let (q, li) = pts[i];
-            (i as u32, src.cell_contains(oct.records(&oct.leaves[li as usize]), point_of(q)))
+            (i as u32, !crate::deadline::cancelled() && src.cell_contains(oct.records(&oct.leaves[li as usize]), point_of(q)))
         })
         .collect();
     s.point_queries = queried.len();
@@ -647,7 +664,7 @@ fn sample_band<S: CellSource>(oct: &Octree, src: &S, planar: &PlanarPolygons) ->
         .zip(&cell_points)
         .map(|((&li, &(sign_change, unresolved)), idx)| {
             let l = &oct.leaves[li];
-            !sign_change && !unresolved && !src.misses_boundary(&oct.cell_box(l), oct.records(l), inside[idx[0] as usize])
+            !sign_change && !unresolved && !crate::deadline::cancelled() && !src.misses_boundary(&oct.cell_box(l), oct.records(l), inside[idx[0] as usize])
         })
         .collect();
     for ((&li, &(_, unresolved)), &silent) in band.iter().zip(&flags).zip(&unproved) {

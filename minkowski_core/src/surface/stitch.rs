@@ -47,7 +47,13 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], planes: &[PlaneKey], tol: f64,
     // a triangle two of whose corners welded into one is a segment: no area, and its edges
     // would count as used twice
     drop_degenerate(&mut s.faces);
+    if crate::deadline::cancelled() {
+        return stats; // the surface is dropped
+    }
     split_t_junctions(s, tol);
+    if crate::deadline::cancelled() {
+        return stats;
+    }
     fill_face_gaps(s, tol, lattice);
     drop_degenerate(&mut s.faces);
     cancel_opposite_twins(&mut s.faces);
