@@ -192,6 +192,13 @@ fn simplify(r: &mut UnionResult, scale: f64, min_area: f64) {
     r.seconds_simplify = t.elapsed().as_secs_f64();
 }
 
+/// Part the vertices a reader welding by position would merge, a last time: what the
+/// extraction parted, the join and the clean-ups after it may bring back within a weld.
+fn kept_apart(r: &mut UnionResult) {
+    let parted = crate::surface::stitch::part_coincident_vertices(&mut r.surface, r.h);
+    r.surface.sheets_unzipped += parted;
+}
+
 /// [`approximate_union`] for any [`CellSource`] whose solid lies in `region`.
 ///
 /// # Errors
@@ -276,5 +283,6 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
         let min_area = 1e-12 * r.h * r.h;
         simplify(&mut r, region.diagonal(), min_area);
     }
+    kept_apart(&mut r);
     Ok(r)
 }
