@@ -329,13 +329,16 @@ def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
     return _cell_offset(solid, radius, step, max_cells, name), "cells"
 
 
-FINE_FACETS = 0.2
+FINE_FACETS = 0.05
 """Triangles per ``eps²`` of surface above which ``auto`` takes the cells before the ball:
 the sum with the ball then holds many small facets in each cell, which it samples at eps
-with costly point queries, while the cells' cost follows the area alone. Measured at the
-default eps: the IndustReal gears and the Factory M12 bolt (0.3–1.0) 3.5–5 times faster by
-the cells for as many triangles; the IndustReal gear base (0.14), Factory's holes (under
-0.02) and the bunny-like solid (0.07) faster by the ball, the bunny 100 times."""
+with costly point queries, while the cells' cost follows the area alone. Measured (solids
+of at least :data:`FINE_FACETS_MIN` triangles): the IndustReal gears and the Factory M12
+bolt at the default eps (0.3–1.0) 3.5–5 times faster by the cells for as many triangles;
+the small gear grown by 0.5 mm at eps 2e-4 (0.29) 19 s by the cells, 96 s by the ball, and
+at eps 1e-4 (0.073) 284 s and 759 s (a try-out; 0.2 sent that one to the ball). Fewer
+triangles per ``eps²`` (a finely triangulated part with large flat faces) keep the ball,
+whose cells the facets' planes resolve above eps."""
 
 
 FINE_FACETS_MIN = 5000

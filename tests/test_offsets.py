@@ -529,9 +529,9 @@ def test_the_gap_bound_holds_the_measured_gap_of_a_dented_hull():
 
 
 def test_auto_takes_the_cells_for_a_solid_of_small_triangles():
-    """An L-bracket cut into 5,120 triangles: at an eps where it has 0.3 of them per eps²
-    of surface the sum with the ball would sample cells full of small facets, so ``auto``
-    takes the cells; where it has 0.1, the ball."""
+    """An L-bracket cut into 5,120 triangles: at an eps where it has 1.5 times FINE_FACETS
+    of them per eps² of surface the sum with the ball would sample cells full of small
+    facets, so ``auto`` takes the cells; where it has half that, the ball."""
     from shapes import l_bracket
 
     from planner.offsets import FINE_FACETS
