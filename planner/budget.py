@@ -284,7 +284,7 @@ def explain(error: ResourceLimitError, what: str | None = None,
         k = int(numbered.group(1))
         name = (f"{obstacles[k]}: " if obstacles is not None and k < len(obstacles) else "")
         message = name + message[numbered.end():]
-    facets = re.search(r"the boundary convolution needs more than [\d.]+ GiB", message)
+    facets = re.search(r"the boundary convolution needs more than [\d.]+ [MG]iB", message)
     if facets:  # which part of the limit that is (it reads as the whole limit otherwise)
         end = facets.end()
         message = (f"{message[:end]}, the {FACET_SHARE:.0%} of the memory limit it may use"

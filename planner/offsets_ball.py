@@ -138,7 +138,9 @@ def ball_offset(solid: trimesh.Trimesh, radius: float, eps: float, *, name: str,
                                progress=progress)
     except ResourceLimitError as exc:
         what = f"{name} {'grown' if radius > 0 else 'eroded'} by {r:g}"
-        message = str(exc).removeprefix(f"{operand.name} ⊕ ball: ")
+        message = str(exc).removeprefix(f"{operand.name} ⊕ ball: ").replace(
+            "or use the decomposition source (exact: false) or simpler meshes",
+            "or use a larger eps or the cells (method 'cells', --method cells)")
         raise ResourceLimitError(f"{what} (its sum with a ball of {len(polytope.vertices)} "
                                  f"vertices): {message}") from exc
     mesh = summed.mesh if radius > 0 else _inner_shells(summed.mesh)

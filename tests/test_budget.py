@@ -15,7 +15,8 @@ import trimesh
 import planner
 from planner import _minkowski_core as core
 from planner import budget
-from planner.errors import InvalidParameterError, ResourceLimitError
+from planner.errors import InvalidMeshError, InvalidParameterError, ResourceLimitError
+from planner.meshes import repair_mesh
 from planner.planning import OctreeParams
 from planner.planning.search import SearchResult, SearchRun, search_without_margin
 from planner.roles import NO_PATH, NOT_FOUND
@@ -205,3 +206,22 @@ def test_batch_keeps_its_own_memory_limit(tmp_path):
     done = _run(tmp_path, "--memory-limit", "2", "batch", "x.txt", "--out", "out")
     assert done.returncode == 2
     assert "batch has its own --memory-limit MB" in done.stderr
+
+
+def test_a_ball_offset_over_the_limit_offers_what_an_offset_has_in_mib():
+    """Refused, the ball's sum names the cells (an offset has no decomposition source) and
+    a need below 0.1 GiB in MiB (it read "0.00 GiB")."""
+    torus, _ = _torus_and_bumps()
+    with planner.memory_limit(0.001), pytest.raises(ResourceLimitError) as refused:
+        planner.offset(torus, 0.05, eps=0.002, method="ball")
+    message = str(refused.value)
+    assert "boundary convolution needs more than" in message and " MiB, the 25%" in message
+    assert "exact: false" not in message and "--method cells" in message
+
+
+def test_a_repair_that_drops_nan_faces_says_so():
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    vertices = np.vstack([box.vertices, [[np.nan, 0.0, 0.0]]])
+    flat = trimesh.Trimesh(vertices, np.vstack([box.faces[:2], [[0, 1, 8]]]), process=False)
+    with pytest.raises(InvalidMeshError, match="after removing the 1 faces with NaN"):
+        repair_mesh(flat, name="flat")

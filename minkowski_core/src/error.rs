@@ -65,7 +65,7 @@ pub enum CoreError {
     /// The exact source would hold more boundary candidates (reduced-convolution facets)
     /// than its budget allows, so more memory than allowed. Fix: the decomposition
     /// source, simpler meshes, or a larger memory limit if the memory is there.
-    #[error("{what}: the boundary convolution needs more than {:.2} GiB (more than {budget} facets of about {bytes_per_facet} bytes; {found} found before stopping); raise the memory limit, or use the decomposition source (exact: false) or simpler meshes", (*.budget as f64) * (*.bytes_per_facet as f64) / 1_073_741_824.0)]
+    #[error("{what}: the boundary convolution needs more than {} (more than {budget} facets of about {bytes_per_facet} bytes; {found} found before stopping); raise the memory limit, or use the decomposition source (exact: false) or simpler meshes", memory_text((*.budget as f64) * (*.bytes_per_facet as f64)))]
     FacetLimit {
         /// Which pair.
         what: String,
@@ -93,3 +93,14 @@ pub enum CoreError {
 
 /// Result alias of the core.
 pub type CoreResult<T> = Result<T, CoreError>;
+
+/// `bytes` as a reader takes them in: GiB to two decimals from 0.1 GiB, MiB below (so a
+/// small limit does not read "0.00 GiB").
+fn memory_text(bytes: f64) -> String {
+    const GIB: f64 = 1_073_741_824.0;
+    if bytes >= 0.1 * GIB {
+        format!("{:.2} GiB", bytes / GIB)
+    } else {
+        format!("{:.2} MiB", bytes / 1_048_576.0)
+    }
+}

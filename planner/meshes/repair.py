@@ -73,6 +73,19 @@ def repair_mesh(mesh, *, name: str = "mesh"):
     faces = faces[good_faces]
     if len(faces) == 0:
         raise InvalidMeshError(f"{label}: nothing to repair: no faces with finite vertices")
+    try:
+        return _repaired(vertices, faces, mesh, name, label, report)
+    except InvalidMeshError as error:
+        dropped = report["removed_nonfinite_faces"]
+        if not dropped:
+            raise
+        raise InvalidMeshError(f"{error} (after removing the {dropped} faces with NaN or "
+                               f"infinite vertex coordinates)") from None
+
+
+def _repaired(vertices: np.ndarray, faces: np.ndarray, mesh, name: str, label: str,
+              report: dict) -> tuple[trimesh.Trimesh, dict]:
+    """:func:`repair_mesh` of the finite faces."""
     vertices, faces = compact(vertices, faces)
     scale = scale_of(vertices)
     vertices, faces, merged = merge_vertices(vertices, faces, tol.merge_rel * scale)

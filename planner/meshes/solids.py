@@ -118,7 +118,7 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
         raise InvalidMeshError(
             f"{label}: not watertight ({boundary} boundary edges, {nonmanifold} non-manifold "
             f"edges{hint}); close the holes in the model or try "
-            f"planner.meshes.repair_mesh"
+            f"planner.meshes.repair_mesh{_loader_hint(mesh)}"
         )
     faces = orient_shells(vertices, faces, label, report["scale"], report)
     overlaps = _self_overlaps(vertices, faces, report["scale"])
@@ -154,6 +154,13 @@ def obj_hint(mesh) -> str:
     if "polygon_problems" in metadata or (path and not path.lower().endswith(".obj")):
         return ""
     return " or loader (an OBJ with n-gons: read it with planner.meshes.load_obj)"
+
+
+def _loader_hint(mesh) -> str:
+    """The advice for an open mesh that may be an OBJ's polygons fanned wrongly by another
+    loader (trimesh's): as :func:`obj_hint`'s."""
+    return ("; if it was read from an OBJ file with polygons by another loader, read it with "
+            "planner.load_mesh (which triangulates them in their plane)") if obj_hint(mesh) else ""
 
 
 FACES_INSIDE = "faces_inside"
