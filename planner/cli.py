@@ -560,7 +560,9 @@ def _on_sigterm(signum, frame) -> NoReturn:
 
 TERMINATE_GRACE = 5.0
 """Seconds SIGTERM waits for the work to stop like Ctrl+C before the process ends anyway:
-Python runs the handler only between its own steps, never inside the native core."""
+Python runs the handler only between its own steps; the core's long calls (octree builds,
+surface extractions, sums' convolutions) let it run every 50 ms and stop their work,
+other native work runs on until it returns."""
 
 
 def _watch_for_sigterm() -> int:

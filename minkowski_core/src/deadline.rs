@@ -8,7 +8,10 @@
 //! process).
 //!
 //! Cancelling ([`cancel`]: the Python binding does when Ctrl+C arrives) makes the deadline
-//! pass at once and the surface extraction skip its queries, until [`uncancel`].
+//! pass at once and the surface extraction skip its queries, until [`uncancel`]. Like the
+//! deadline it is one flag for the process: it stops every native call running then, on
+//! any thread (a process runs one plan or operation at a time; batch runs give each task
+//! its own process).
 //!
 //! [`CoreError::TimeLimit`]: crate::error::CoreError::TimeLimit
 

@@ -42,20 +42,23 @@ const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
 /// signal's handler raises (KeyboardInterrupt), the work is cancelled
 /// ([`crate::deadline::cancel`]), waited for, and that error returned.
 fn interruptible<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+    use std::sync::atomic::{AtomicBool, Ordering};
     let waiting = std::thread::current();
+    let done = AtomicBool::new(false); // set before the wake-up, so no wait outlasts the work
     std::thread::scope(|scope| {
-        let worker = scope.spawn(move || {
+        let worker = scope.spawn(|| {
             let out = work();
+            done.store(true, Ordering::Release);
             waiting.unpark();
             out
         });
         loop {
             py.detach(|| {
-                if !worker.is_finished() {
+                if !done.load(Ordering::Acquire) {
                     std::thread::park_timeout(SIGNAL_POLL);
                 }
             });
-            if worker.is_finished() {
+            if done.load(Ordering::Acquire) {
                 return Ok(joined(worker));
             }
             if let Err(interrupt) = py.check_signals() {

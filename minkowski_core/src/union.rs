@@ -194,9 +194,12 @@ fn simplify(r: &mut UnionResult, scale: f64, min_area: f64) {
 
 /// Part the vertices a reader welding by position would merge, a last time: what the
 /// extraction parted, the join and the clean-ups after it may bring back within a weld.
+/// The moves add to the bound as the extraction's own do.
 fn kept_apart(r: &mut UnionResult) {
+    let before = r.surface.sheets_apart;
     let parted = crate::surface::stitch::part_coincident_vertices(&mut r.surface, r.h);
     r.surface.sheets_unzipped += parted;
+    r.error_bound += r.surface.sheets_apart - before;
 }
 
 /// [`approximate_union`] for any [`CellSource`] whose solid lies in `region`.
