@@ -105,6 +105,19 @@ def interrupt():
     signal_at.append(time.perf_counter())
     os.kill(os.getpid(), signal.SIGINT)
 
+beside = []   # with a third argument: the same offset in another thread, started 1 s before
+
+def offset_beside():
+    try:
+        planner.offset(solid, 0.2, eps=float(sys.argv[2]), method="cells")
+        beside.append("finished")
+    except KeyboardInterrupt as stop:
+        beside.append("cancelled" if "cancelled" in str(stop) else "other")
+
+companion = threading.Thread(target=offset_beside)
+if len(sys.argv) > 3:
+    companion.start()
+    time.sleep(1.0)
 timer = threading.Timer(float(sys.argv[1]), interrupt)
 timer.daemon = True
 timer.start()
@@ -115,15 +128,18 @@ try:
 except KeyboardInterrupt:
     stopped = time.perf_counter()
     after = planner.offset(solid, 0.2, eps=0.2, method="cells")   # not left cancelled
-    print("interrupted", stopped - signal_at[0], stopped - start, len(after.mesh.faces))
+    if companion.is_alive() or beside:
+        companion.join()
+    print("interrupted", stopped - signal_at[0], stopped - start, len(after.mesh.faces), *beside)
 """
 
 
-def _offset_run(delay: float, eps: float) -> list[str]:
+def _offset_run(delay: float, eps: float, *, beside: bool = False) -> list[str]:
     import subprocess  # noqa: PLC0415
     import sys  # noqa: PLC0415
 
-    done = subprocess.run([sys.executable, "-c", INTERRUPTED_OFFSET, str(delay), str(eps)],
+    args = [str(delay), str(eps)] + (["beside"] if beside else [])
+    done = subprocess.run([sys.executable, "-c", INTERRUPTED_OFFSET, *args],
                           capture_output=True, text=True, timeout=300, check=True)
     return done.stdout.split()
 
@@ -140,3 +156,12 @@ def test_ctrl_c_stops_a_long_native_offset_and_the_next_one_runs():
     assert out[0] == "interrupted", out
     assert float(out[2]) < 0.5 * seconds, f"stopped after {out[2]} s of {seconds:.1f} s"
     assert int(out[3]) > 0
+
+
+def test_ctrl_c_in_one_call_fails_the_native_call_it_stopped_in_another_thread():
+    """The cancel is one flag for the process: an offset running in another thread when
+    Ctrl+C stops the main thread's stops too, and raises rather than return half a
+    surface."""
+    out = _offset_run(2.0, 0.02, beside=True)  # both in their native builds by then
+    assert out[0] == "interrupted", out
+    assert out[4:] == ["cancelled"], out

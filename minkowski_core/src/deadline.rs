@@ -10,13 +10,15 @@
 //! Cancelling ([`cancel`]: the Python binding does when Ctrl+C arrives) makes the deadline
 //! pass at once and the surface extraction skip its queries, until [`uncancel`]. Like the
 //! deadline it is one flag for the process: it stops every native call running then, on
-//! any thread (a process runs one plan or operation at a time; batch runs give each task
-//! its own process).
+//! any thread. A call that ran while some cancel was in force may hold half a result, so
+//! each call takes a [`CancelWatch`] when it starts and asks it when it ends whether a
+//! cancel touched it ([`CancelWatch::touched`]): the binding then raises instead of
+//! returning what it made.
 //!
 //! [`CoreError::TimeLimit`]: crate::error::CoreError::TimeLimit
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 /// No deadline.
@@ -46,25 +48,88 @@ pub fn passed() -> bool {
     cancelled() || is_past(DEADLINE_NS.load(Ordering::Relaxed), now_ns())
 }
 
-/// Set while the work in progress is cancelled (Ctrl+C: the caller stops waiting for it).
-static CANCELLED: AtomicBool = AtomicBool::new(false);
+/// The process's cancels.
+static CANCELS: Cancels = Cancels::new();
 
 /// Cancel the work in progress: builds stop as at a passed deadline, and a surface
-/// extraction skips its remaining queries (its result is to be dropped). Until
-/// [`uncancel`].
+/// extraction skips its remaining queries (its result is to be dropped). Until the
+/// matching [`uncancel`].
 pub fn cancel() {
-    CANCELLED.store(true, Ordering::Relaxed);
+    CANCELS.cancel();
 }
 
-/// Let work run again after [`cancel`].
+/// End one [`cancel`]: work runs again once every cancel has ended.
 pub fn uncancel() {
-    CANCELLED.store(false, Ordering::Relaxed);
+    CANCELS.uncancel();
 }
 
 /// Whether the work in progress is cancelled.
 #[inline]
 pub fn cancelled() -> bool {
-    CANCELLED.load(Ordering::Relaxed)
+    CANCELS.in_force()
+}
+
+/// What a call saw of the process's cancels when it started.
+pub fn watch_cancels() -> CancelWatch {
+    CANCELS.watch()
+}
+
+/// Cancels made and in force.
+#[derive(Debug)]
+struct Cancels {
+    /// How many cancels were ever made, and how many are in force; changed together.
+    log: Mutex<(u64, u32)>,
+    /// The second of `log`, for the work's cheap checks.
+    in_force: AtomicU32,
+}
+
+/// What a call saw of the cancels when it started ([`watch_cancels`]): ask
+/// [`CancelWatch::touched`] when it ends.
+#[derive(Clone, Copy, Debug)]
+pub struct CancelWatch {
+    cancels: &'static Cancels,
+    made: u64,
+    in_force: u32,
+}
+
+impl CancelWatch {
+    /// Whether a cancel was in force at some time since the watch began (one in force
+    /// then, or one made since): the work may have stopped half-way.
+    pub fn touched(&self) -> bool {
+        self.in_force > 0 || self.cancels.log().0 != self.made
+    }
+}
+
+impl Cancels {
+    const fn new() -> Self {
+        Cancels { log: Mutex::new((0, 0)), in_force: AtomicU32::new(0) }
+    }
+
+    fn log(&self) -> std::sync::MutexGuard<'_, (u64, u32)> {
+        self.log.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    fn cancel(&self) {
+        let mut log = self.log();
+        log.0 += 1;
+        log.1 += 1;
+        self.in_force.store(log.1, Ordering::Relaxed);
+    }
+
+    fn uncancel(&self) {
+        let mut log = self.log();
+        log.1 = log.1.saturating_sub(1);
+        self.in_force.store(log.1, Ordering::Relaxed);
+    }
+
+    fn in_force(&self) -> bool {
+        self.in_force.load(Ordering::Relaxed) > 0
+    }
+
+    fn watch(&'static self) -> CancelWatch {
+        let log = self.log();
+        CancelWatch { cancels: self, made: log.0, in_force: log.1 }
+    }
 }
 
 /// The deadline `after` from `now` (nanoseconds after [`epoch`]; [`NONE`] for none).
@@ -97,5 +162,21 @@ mod tests {
         let at = deadline_at(u64::MAX - 10, Some(Duration::from_secs(u64::MAX)));
         assert_eq!(at, NONE - 1);
         assert!(!is_past(at, u64::MAX - 10));
+    }
+
+    #[test]
+    fn a_watch_sees_a_cancel_made_or_in_force_during_its_call() {
+        static OWN: Cancels = Cancels::new(); // not the process's: builds run beside this
+        let before = OWN.watch();
+        assert!(!before.touched());
+        OWN.cancel();
+        let during = OWN.watch();
+        assert!(OWN.in_force() && before.touched() && during.touched());
+        OWN.cancel();
+        OWN.uncancel();
+        assert!(OWN.in_force(), "one cancel is still in force");
+        OWN.uncancel();
+        assert!(!OWN.in_force() && during.touched());
+        assert!(!OWN.watch().touched());
     }
 }

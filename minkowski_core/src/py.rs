@@ -40,11 +40,13 @@ const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
 /// `work` run with the GIL released, as `py.detach` runs it, answering Ctrl+C: the calling
 /// thread checks Python's signals every [`SIGNAL_POLL`] while `work` runs on another; when a
 /// signal's handler raises (KeyboardInterrupt), the work is cancelled
-/// ([`crate::deadline::cancel`]), waited for, and that error returned.
+/// ([`crate::deadline::cancel`]), waited for, and that error returned. Work that a cancel
+/// touched while it ran (another call's Ctrl+C) returns KeyboardInterrupt too.
 fn interruptible<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
     use std::sync::atomic::{AtomicBool, Ordering};
     let waiting = std::thread::current();
     let done = AtomicBool::new(false); // set before the wake-up, so no wait outlasts the work
+    let cancels = crate::deadline::watch_cancels();
     std::thread::scope(|scope| {
         let worker = scope.spawn(|| {
             let out = work();
@@ -59,7 +61,8 @@ fn interruptible<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> Py
                 }
             });
             if done.load(Ordering::Acquire) {
-                return Ok(joined(worker));
+                let out = joined(worker);
+                return if cancels.touched() { Err(cancelled_elsewhere()) } else { Ok(out) };
             }
             if let Err(interrupt) = py.check_signals() {
                 crate::deadline::cancel();
@@ -69,6 +72,12 @@ fn interruptible<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> Py
             }
         }
     })
+}
+
+/// The error of a call that a Ctrl+C in another of the process's native calls cancelled
+/// (one flag stops them all): what it made may be half done.
+fn cancelled_elsewhere() -> PyErr {
+    pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled: Ctrl+C stopped the native work running at the time")
 }
 
 /// The result of a finished worker thread (its panic resumed here).

@@ -750,7 +750,7 @@ pub fn convolution_within(a: &TriMesh, b: &TriMesh, k: u32, budget: usize) -> Re
 /// every feature against every other (a reference for the tests).
 fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -> Result<Vec<Facet>, usize> {
     let found = AtomicUsize::new(0);
-    let room = || found.load(Ordering::Relaxed) <= budget;
+    let room = || found.load(Ordering::Relaxed) <= budget && !crate::deadline::cancelled(); // (a cancelled call drops what it finds)
     let bump = |_: &Part| {
         found.fetch_add(1, Ordering::Relaxed);
     };
