@@ -27,6 +27,17 @@ def test_a_mesh_changed_in_place_is_checked_again():
     assert core_mesh(solid, solid=True, name="box") is again
 
 
+def test_a_mesh_changed_through_a_plain_array_view_is_checked_again():
+    # trimesh's own hash tracks writes to its arrays, not to a plain ndarray view of them
+    solid = validate_solid(trimesh.creation.box((1.0, 2.0, 3.0)), name="box")
+    first = core_mesh(solid, solid=True, name="box")
+    np.asarray(solid.vertices)[:, 0] *= 2.0
+    again = core_mesh(solid, solid=True, name="box")
+    assert again is not first
+    grown = planner.offset(solid, 0.1, eps=0.01, method="cells")
+    assert grown.mesh.bounds[1, 0] - grown.mesh.bounds[0, 0] > 2.1  # the 2-wide box's
+
+
 def test_a_copy_or_a_surface_is_checked_on_its_own():
     solid = validate_solid(trimesh.creation.box((1.0, 2.0, 3.0)), name="box")
     first = core_mesh(solid, solid=True, name="box")
