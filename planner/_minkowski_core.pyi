@@ -139,6 +139,7 @@ class ExactSum:
         b_solid: bool = True,
         max_facets: int = 8000000,
         pieces: bool = False,
+        depth_near: tuple[list[float], float] | None = None,
     ) -> ExactSum: ...
     @property
     def bounds(self) -> npt.NDArray[np.float64]: ...

@@ -357,6 +357,26 @@ class ExactSource(Source):
                  "facets": int(native.facets)}
         return PairCObstacle(native, exact=True, excess=0.0, stats=stats)
 
+    def depth_pair(self, a: Part, b: Part, point: np.ndarray, tolerance: float
+                   ) -> PairCObstacle:
+        """The C-obstacle ``a ⊕ (−b)`` for one depth query only (its ``native.depth`` at
+        ``point`` to within ``tolerance``): the reduced convolution's facets beyond the
+        cube that query's search can reach are left out (two parts that overlap a little
+        have few there, where the whole convolution of two gears would not fit in
+        memory). Not kept for C-spaces; a query it cannot answer (a point outside whose
+        nearest facet lies beyond the cube) is refused with an ``InvalidParameterError``
+        naming the ``depth region``."""
+        from . import _minkowski_core as core  # noqa: PLC0415
+        from . import budget  # noqa: PLC0415
+
+        native = core.ExactSum(self.parts.native(a), self.parts.native(b).negated(), True, True,
+                               max_facets=budget.facets(),
+                               depth_near=(np.asarray(point, dtype=np.float64).tolist(),
+                                           float(tolerance)))
+        stats = {"triangles_a": int(native.triangles[0]), "triangles_b": int(native.triangles[1]),
+                 "facets": int(native.facets)}
+        return PairCObstacle(native, exact=True, excess=0.0, stats=stats)
+
     def describe(self, obstacles, robot):
         return {"used": self.kind, "why": self.why,
                 "triangles": {"robot": int(len(self.arrays(robot)[1])),

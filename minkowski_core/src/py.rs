@@ -486,10 +486,22 @@ impl ExactSum {
     // triangle-pair piece a boundary candidate found per query by the BVH pair traversal
     // (ExactSource::with_piece_fallback): built at once and in no memory beyond the meshes,
     // for point and segment queries (its surface would refine the pieces' whole shell)
-    #[pyo3(signature = (a, b, a_solid=true, b_solid=true, max_facets=8_000_000, pieces=false))]
-    fn new(py: Python<'_>, a: MeshArg<'_>, b: MeshArg<'_>, a_solid: bool, b_solid: bool, max_facets: usize, pieces: bool) -> PyResult<Self> {
+    // depth_near: (point (3,), tolerance): only for the depth query there (to within that
+    // tolerance): the facets beyond the cube its search can reach are left out
+    // (ExactSource::try_new_for_depth); other queries are not to be asked of it.
+    #[pyo3(signature = (a, b, a_solid=true, b_solid=true, max_facets=8_000_000, pieces=false, depth_near=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(py: Python<'_>, a: MeshArg<'_>, b: MeshArg<'_>, a_solid: bool, b_solid: bool, max_facets: usize, pieces: bool, depth_near: Option<(Vec<f64>, f64)>) -> PyResult<Self> {
         let ma = a.mesh("a", a_solid)?;
         let mb = b.mesh("b", b_solid)?;
+        if let Some((point, tolerance)) = depth_near {
+            let p = vec3_any(&point, "depth_near point")?;
+            if !(a_solid && b_solid) || pieces {
+                return Err(InvalidParameterError::new_err("depth_near: for the sum of two solids, with its reduced convolution".to_string()));
+            }
+            let inner = interruptible(py, move || ExactSource::try_new_for_depth(ma, mb, max_facets, p, tolerance))??;
+            return Ok(ExactSum { inner: Arc::new(inner), pieces });
+        }
         let inner = if pieces {
             interruptible(py, move || ExactSource::with_piece_fallback(vec![ma], mb, 0.0, None, 0))?
         } else {

@@ -737,18 +737,27 @@ enum Part {
 /// facets are replaced by the polygon (a fan of triangles), once per region pair. On
 /// parts made of boxes this replaces every facet: a box pair then has its six faces.
 pub fn convolution(a: &TriMesh, b: &TriMesh, k: u32) -> Vec<Facet> {
-    convolution_by(a, b, k, true, usize::MAX).expect("no facet budget")
+    convolution_by(a, b, k, true, usize::MAX, None).expect("no facet budget")
 }
 
 /// [`convolution`], giving up once more than `budget` facets were found (they are
-/// estimated to need more memory than allowed): `Err(facets found so far)`.
-pub fn convolution_within(a: &TriMesh, b: &TriMesh, k: u32, budget: usize) -> Result<Vec<Facet>, usize> {
-    convolution_by(a, b, k, true, budget)
+/// estimated to need more memory than allowed): `Err(facets found so far)`. With `near`,
+/// only the facets whose boxes meet that box are kept (and counted).
+pub fn convolution_within(a: &TriMesh, b: &TriMesh, k: u32, budget: usize, near: Option<&Aabb>) -> Result<Vec<Facet>, usize> {
+    convolution_by(a, b, k, true, budget, near)
 }
 
 /// [`convolution_within`] with the candidates looked up on direction grids (`grid`), or
 /// every feature against every other (a reference for the tests).
-fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -> Result<Vec<Facet>, usize> {
+fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize, near: Option<&Aabb>) -> Result<Vec<Facet>, usize> {
+    let kept = |f: &Facet| near.is_none_or(|r| f.aabb(0.0).overlaps(r));
+    let wanted = |part: &Part| match part {
+        Part::Facet(f) => kept(f),
+        Part::Regions(..) => true, // their polygons are filtered once made
+    };
+    // whether a facet spanning `bx` moved by the box `[lo, hi]` can meet `near` (asked
+    // before the costlier contact tests)
+    let reach = |bx: &Aabb, lo: Vec3, hi: Vec3| near.is_none_or(|r| Aabb::new(bx.min + lo, bx.max + hi).overlaps(r));
     let found = AtomicUsize::new(0);
     let room = || found.load(Ordering::Relaxed) <= budget && !crate::deadline::cancelled(); // (a cancelled call drops what it finds)
     let bump = |_: &Part| {
@@ -770,7 +779,9 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -
             let tb = &tb;
             let ra = ta.convex_region(i as u32);
             let n = if ta.shadowed[i] { Vec3::ZERO } else { t.n }; // no face contact
-            candidates(&vb, n, tb.verts.len()).into_iter().filter(move |&v| tb.contact(v, t.n)).map(move |v| match ra.zip(tb.convex_region_at(v, t.n)) {
+            let tbox = Aabb::from_points(&t.p);
+            let near_v = move |v: u32| reach(&tbox, tb.verts[v as usize], tb.verts[v as usize]);
+            candidates(&vb, n, tb.verts.len()).into_iter().filter(move |&v| near_v(v) && tb.contact(v, t.n)).map(move |v| match ra.zip(tb.convex_region_at(v, t.n)) {
                 Some((ra, rb)) => Part::Regions(ra, rb),
                 None => {
                     let q = tb.verts[v as usize];
@@ -778,6 +789,7 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -
                 }
             })
         })
+        .filter(wanted)
         .inspect(bump)
         .collect();
     parts.par_extend(
@@ -789,7 +801,9 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -
                 let ta = &ta;
                 let rb = tb.convex_region(j as u32);
                 let n = if tb.shadowed[j] { Vec3::ZERO } else { s.n };
-                candidates(&va, n, ta.verts.len()).into_iter().filter(move |&u| ta.contact(u, s.n)).map(move |u| match ta.convex_region_at(u, s.n).zip(rb) {
+                let sbox = Aabb::from_points(&s.p);
+                let near_u = move |u: u32| reach(&sbox, ta.verts[u as usize], ta.verts[u as usize]);
+                candidates(&va, n, ta.verts.len()).into_iter().filter(move |&u| near_u(u) && ta.contact(u, s.n)).map(move |u| match ta.convex_region_at(u, s.n).zip(rb) {
                     Some((ra, rb)) => Part::Regions(ra, rb),
                     None => {
                         let q = ta.verts[u as usize];
@@ -797,6 +811,7 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -
                     }
                 })
             })
+            .filter(wanted)
             .inspect(bump),
     );
     parts.par_extend(
@@ -813,9 +828,13 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -
                     let slack = arc_slack(n1, n2);
                     eb.gather(&eb.cells(|cap| arc_distance(cap.c, n1, n2) <= cap.rho + slack))
                 };
+                let ebox = Aabb::from_points(&[p0, p1]);
                 near.into_iter().filter_map(move |j| {
                     let (b0, b1, m1, m2, g1, g2) = tb.edges[j as usize];
                     let (q0, q1) = (tb.verts[b0 as usize], tb.verts[b1 as usize]);
+                    if !reach(&ebox, q0.min(q1), q0.max(q1)) {
+                        return None;
+                    }
                     let g = q1 - q0;
                     if e.cross(g).length() <= 1e-9 * e.length() * g.length() {
                         return None; // parallel edges sum to a segment on other facets' borders
@@ -839,6 +858,7 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -
                     }
                 })
             })
+            .filter(wanted)
             .inspect(bump),
     );
     if found.load(Ordering::Relaxed) > budget {
@@ -856,7 +876,13 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -
     pairs.dedup();
     for (ra, rb) in pairs {
         if let (Some(p), Some(q)) = (&ta.convex[ra as usize], &tb.convex[rb as usize]) {
+            let from = out.len();
             polygon_sum(p, q, ta.normal[ra as usize], k, &mut out);
+            if near.is_some() {
+                let mut fan = out.split_off(from);
+                fan.retain(kept);
+                out.extend(fan);
+            }
         }
         if out.len() > budget {
             return Err(out.len());
@@ -868,7 +894,7 @@ fn convolution_by(a: &TriMesh, b: &TriMesh, k: u32, grid: bool, budget: usize) -
 /// The reduced convolution found by testing every feature pair (no direction grids).
 #[cfg(test)]
 pub(crate) fn convolution_scan(a: &TriMesh, b: &TriMesh) -> Vec<Facet> {
-    convolution_by(a, b, 0, false, usize::MAX).expect("no facet budget")
+    convolution_by(a, b, 0, false, usize::MAX, None).expect("no facet budget")
 }
 
 /// Per planar region of `m`: its number of border corners when it is a convex polygon.

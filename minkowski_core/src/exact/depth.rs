@@ -124,6 +124,18 @@ pub fn facet_nearest(f: &Facet, p: Vec3) -> Vec3 {
     best
 }
 
+/// How far beyond the box [`Search::box_exit`] steps.
+fn exit_step(bx: &Aabb, p: Vec3, tol: f64) -> f64 {
+    tol * 0.25 + 1e-12 * (bx.extent().max_element() + p.abs().max_element())
+}
+
+/// The distance from `p` (in the box) to the nearest of the points [`Search::box_exit`]
+/// offers: the depth search's first upper bound, so no cell it looks at lies farther.
+pub(super) fn exit_distance(bx: &Aabb, p: Vec3, tol: f64) -> f64 {
+    let step = exit_step(bx, p, tol);
+    (0..3).map(|a| (p[a] - bx.min[a]).abs().min((bx.max[a] - p[a]).abs()) + step).fold(f64::INFINITY, f64::min)
+}
+
 /// The nearest point of the closed box to `p`.
 fn box_nearest(bx: &Aabb, p: Vec3) -> Vec3 {
     p.clamp(bx.min, bx.max)
@@ -160,7 +172,7 @@ impl Search<'_> {
     /// The box of the solid (a closed set inside it): just beyond its nearest face.
     fn box_exit(&mut self) {
         let (bx, p) = (self.src.aabb, self.p);
-        let step = self.tol * 0.25 + 1e-12 * (bx.extent().max_element() + p.abs().max_element());
+        let step = exit_step(&bx, p, self.tol);
         for axis in 0..3 {
             let mut lo = p;
             lo[axis] = bx.min[axis] - step;
@@ -271,7 +283,22 @@ impl Search<'_> {
     }
 }
 
+/// The refusal of a depth query a source made for another region cannot answer.
+fn beyond_region(p: Vec3) -> CoreError {
+    CoreError::InvalidParameter {
+        name: "depth region".into(),
+        value: p.length(),
+        detail: "the source kept only the facets near the point it was made for, and this query reaches beyond them; make the sum whole".into(),
+    }
+}
+
 impl ExactSource {
+    /// Whether every facet meeting the cube around `p` of half-width `r` was kept (always,
+    /// without a [`ExactSource::region`]).
+    fn holds_ball(&self, p: Vec3, r: f64) -> bool {
+        self.region.is_none_or(|reg| reg.min.cmple(p - Vec3::splat(r)).all() && (p + Vec3::splat(r)).cmple(reg.max).all())
+    }
+
     /// [`ExactSource::try_depth`] for a source it accepts.
     ///
     /// ```
@@ -324,12 +351,18 @@ impl ExactSource {
             let nearest = (0..dist.len()).min_by(|&i, &j| dist[i].total_cmp(&dist[j]));
             let point = nearest.map_or(p, |i| facet_nearest(&self.facets[i], p));
             let d = (point - p).length();
+            if nearest.is_none_or(|_| !self.holds_ball(p, d)) {
+                return Err(beyond_region(p));
+            }
             return Ok(Depth { inside, lower: d, upper: d, point, converged: nearest.is_some(), cells: 0, facets_tried: 0, smallest_cells: 0 });
         }
         let mut s = Search { src: self, p, tol, dist, upper: f64::INFINITY, point: p, cells: 0, dropped: f64::INFINITY, witnesses: None, smallest: 0 };
         s.box_exit();
         let facets_tried = s.nearest_facets();
         let nearest_facet = s.dist.iter().copied().fold(f64::INFINITY, f64::min).min(s.upper);
+        if !self.holds_ball(p, s.upper * (1.0 + 1e-9)) {
+            return Err(beyond_region(p)); // (not for the point the source was made for)
+        }
         let (lower, converged) = if s.upper - nearest_facet <= tol { (nearest_facet, true) } else { s.cells(max_cells) };
         // the distances are rounded: the proved bound gives way by their rounding error
         let slack = 1e-12 * (self.aabb.extent().max_element() + p.abs().max_element());

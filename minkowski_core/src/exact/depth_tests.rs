@@ -122,3 +122,40 @@ fn witnesses_show_cells_inside_only() {
         assert!(!w.show(&src, &cube(1.9, 0.2), exhaustive), "across its boundary");
     }
 }
+
+#[test]
+fn a_sum_made_for_one_depth_query_answers_it_as_the_whole_sum_does() {
+    // the facets beyond the cube the search can reach are left out: the same interval,
+    // from fewer facets
+    let (u, _) = u_block();
+    let shifted = |m: &TriMesh, d: Vec3| TriMesh::new(m.vertices.iter().map(|v| *v + d).collect(), &m.faces, "shifted").unwrap();
+    let block = voxel_mesh(|x, y, z| (0..3).contains(&x) && (0..3).contains(&y) && (0..2).contains(&z) && !(x == 1 && y == 1 && z == 1), "block");
+    let pairs = [
+        (u.clone(), shifted(&u, Vec3::new(0.3, 0.2, 0.1)).negated()),
+        (u.clone(), shifted(&u, Vec3::new(-0.4, 0.1, 0.3)).negated()),
+        (frame(), shifted(&frame(), Vec3::new(0.1, 0.0, 0.0)).negated()),
+        (block, box_mesh([-2.15, -1.9, -3.0], [-1.35, -1.1, -1.5])),
+    ];
+    for (a, b) in pairs {
+        for tol in [1e-2, 1e-3] {
+            let whole = ExactSource::new(vec![a.clone()], b.clone(), 0.0, None);
+            let near = ExactSource::try_new_for_depth(a.clone(), b.clone(), usize::MAX, Vec3::ZERO, tol).unwrap();
+            assert!(near.facets.len() <= whole.facets.len());
+            let (dw, dn) = (whole.try_depth(Vec3::ZERO, tol, 200_000).unwrap(), near.try_depth(Vec3::ZERO, tol, 200_000).unwrap());
+            assert!(dw.inside && dn.inside && dn.converged, "{dn:?}");
+            assert_eq!((dw.lower, dw.upper, dw.point), (dn.lower, dn.upper, dn.point), "tol {tol}: {} of {} facets", near.facets.len(), whole.facets.len());
+        }
+    }
+}
+
+#[test]
+fn a_sum_made_for_one_depth_query_refuses_what_reaches_beyond_its_facets() {
+    // two boxes far apart: the box of the sum lies away from the origin, so no facet is
+    // kept near it, and the separation is refused rather than answered wrong
+    let src = ExactSource::try_new_for_depth(box_mesh([1.5, 1.3, 0.0], [2.0, 2.0, 1.0]), box_mesh([-1.0; 3], [0.0; 3]), usize::MAX, Vec3::ZERO, 1e-3).unwrap();
+    assert!(matches!(src.try_depth(Vec3::ZERO, 1e-3, 1000), Err(CoreError::InvalidParameter { .. })));
+    // overlapping cubes, asked at another point than the one the sum was made for
+    let src = ExactSource::try_new_for_depth(box_mesh([0.7, 0.0, 0.0], [1.7, 1.0, 1.0]), box_mesh([-1.0; 3], [0.0; 3]), usize::MAX, Vec3::ZERO, 1e-3).unwrap();
+    assert!(src.try_depth(Vec3::ZERO, 1e-3, 1000).is_ok_and(|d| d.inside && (d.lower - 0.3).abs() <= 1e-3));
+    assert!(matches!(src.try_depth(Vec3::new(0.9, 0.5, 0.5), 1e-3, 1000), Err(CoreError::InvalidParameter { .. })));
+}

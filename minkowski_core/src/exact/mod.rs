@@ -136,8 +136,12 @@ pub struct ExactSource {
     pub aabb: Aabb,
     /// Largest possible piece extent: no cell wider than this lies inside one piece.
     max_piece: f64,
-    /// The reduced convolution facets of every solid `A_k` with a solid `B`.
+    /// The reduced convolution facets of every solid `A_k` with a solid `B`: only those
+    /// meeting [`ExactSource::region`] when that is set.
     pub facets: Vec<Facet>,
+    /// Set for a source made for one depth query ([`ExactSource::try_new_for_depth`]):
+    /// the box holding every point its search can look at; facets beyond it were left out.
+    pub region: Option<Aabb>,
     /// BVH over the facets' boxes (grown by `margin`).
     fbvh: Bvh,
     /// Each facet's half-spaces, computed once (only without a margin, where the tests
@@ -201,7 +205,30 @@ impl ExactSource {
     /// [`CoreError::FacetLimit`] when the facets would exceed the budget; the search
     /// stops soon after, so little of that memory is taken.
     pub fn try_new(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize) -> CoreResult<ExactSource> {
-        Self::build(obstacles, b, margin, walls, max_facets, false, &[]).map(|(src, _)| src)
+        Self::build(obstacles, b, margin, walls, max_facets, false, &[], None).map(|(src, _)| src)
+    }
+
+    /// The sum `a ⊕ b` of two solids for the depth query at `p` to within `tol`
+    /// ([`ExactSource::try_depth`]) and nothing else: only the facets meeting the cube
+    /// around `p` that the search can reach are made (its half-width is the way out of
+    /// the sum's box, which bounds the depth). Two parts that overlap a little have few
+    /// facets there, where their whole reduced convolution (IndustReal's gears: tens of
+    /// millions) would not fit in memory. A point outside the sum whose nearest facet
+    /// lies beyond the cube is refused by the query.
+    ///
+    /// # Errors
+    /// As [`ExactSource::try_new`], counting only the facets kept.
+    pub fn try_new_for_depth(a: TriMesh, b: TriMesh, max_facets: usize, p: Vec3, tol: f64) -> CoreResult<ExactSource> {
+        if !(tol.is_finite() && tol > 0.0) {
+            return Err(CoreError::InvalidParameter { name: "tolerance".into(), value: tol, detail: "must be a positive finite number".into() });
+        }
+        if !p.is_finite() {
+            return Err(CoreError::NonFinite { what: "depth query point".into() });
+        }
+        let aabb = Aabb::new(a.aabb.min + b.aabb.min, a.aabb.max + b.aabb.max);
+        let half = depth::exit_distance(&aabb, p, tol).max(0.0) * (1.0 + 1e-6) + 1e-9 * (aabb.extent().max_element() + p.abs().max_element());
+        let region = Aabb::new(p - Vec3::splat(half), p + Vec3::splat(half));
+        Self::build(vec![a], b, 0.0, None, max_facets, false, &[], Some(region)).map(|(src, _)| src)
     }
 
     /// [`ExactSource::try_new`], taking obstacle `k`'s reduced convolution from `given[k]`
@@ -219,14 +246,20 @@ impl ExactSource {
         max_facets: usize,
         given: &[Option<Arc<ExactSource>>],
     ) -> CoreResult<(ExactSource, Vec<bool>)> {
-        Self::build(obstacles, b, margin, walls, max_facets, false, given)
+        Self::build(obstacles, b, margin, walls, max_facets, false, given, None)
     }
 
     /// Whether this is the sum of exactly `a` and `b` with its reduced convolution (one
     /// obstacle, no margin, no walls): the same triangles in the same order.
     fn is_pair_of(&self, a: &TriMesh, b: &TriMesh) -> bool {
         let same = |x: &TriMesh, y: &TriMesh| x.solid == y.solid && x.tris.len() == y.tris.len() && x.tris.iter().zip(&y.tris).all(|(t, u)| t.p == u.p);
-        self.obstacles.len() == 1 && self.piece_pairs.is_empty() && self.margin == 0.0 && self.walls.is_none() && same(&self.obstacles[0], a) && same(&self.b, b)
+        self.obstacles.len() == 1
+            && self.region.is_none()
+            && self.piece_pairs.is_empty()
+            && self.margin == 0.0
+            && self.walls.is_none()
+            && same(&self.obstacles[0], a)
+            && same(&self.b, b)
     }
 
     /// [`ExactSource::try_new`], but a solid pair whose reduced convolution would exceed
@@ -238,9 +271,10 @@ impl ExactSource {
     /// one piece or a nested vertex shows them FULL: right for a planner, which refines
     /// only where its search asks, not for a surface, which would refine the whole shell.
     pub fn with_piece_fallback(obstacles: Vec<TriMesh>, b: TriMesh, margin: f64, walls: Option<Aabb>, max_facets: usize) -> ExactSource {
-        Self::build(obstacles, b, margin, walls, max_facets, true, &[]).expect("pairs over the budget are taken piece by piece").0
+        Self::build(obstacles, b, margin, walls, max_facets, true, &[], None).expect("pairs over the budget are taken piece by piece").0
     }
 
+    #[allow(clippy::too_many_arguments)] // (private: the constructors above name them)
     fn build(
         obstacles: Vec<TriMesh>,
         b: TriMesh,
@@ -249,6 +283,7 @@ impl ExactSource {
         max_facets: usize,
         fallback: bool,
         given: &[Option<Arc<ExactSource>>],
+        region: Option<Aabb>,
     ) -> CoreResult<(ExactSource, Vec<bool>)> {
         let aabb = obstacles.iter().fold(Aabb::empty(), |acc, a| acc.union(&Aabb::new(a.aabb.min + b.aabb.min, a.aabb.max + b.aabb.max).inflated(margin)));
         let tri_ext = |m: &TriMesh| m.tris.iter().map(|t| Aabb::from_points(&t.p).extent().max_element()).fold(0.0f64, f64::max);
@@ -268,7 +303,7 @@ impl ExactSource {
             let found = match reused {
                 Some(g) if g.facets.len() <= left => Ok(g.facets.iter().map(|f| Facet { k: k as u32, ..*f }).collect()),
                 Some(g) => Err(g.facets.len()),
-                None => convolution_within(a, &b, k as u32, left),
+                None => convolution_within(a, &b, k as u32, left, region.as_ref()),
             };
             match found {
                 Ok(found) => facets.extend(found),
@@ -296,6 +331,7 @@ impl ExactSource {
                 aabb,
                 max_piece,
                 facets,
+                region,
                 fbvh,
                 flat,
                 grids,
