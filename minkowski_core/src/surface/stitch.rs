@@ -579,24 +579,37 @@ pub(super) fn points_on_edges(vertices: &[Vec3], edges: &[(u32, u32)], points: &
     let at = |v: u32| vertices[v as usize];
     let boxes: Vec<Aabb> = edges.iter().map(|&(a, b)| Aabb::from_points(&[at(a), at(b)]).inflated(tol)).collect();
     let bvh = Bvh::build(&boxes);
+    // (edge, parameter, point) per point on an edge, the points in parallel (a cancelled
+    // call stops asking: its surface is dropped)
+    let hits: Vec<(usize, f64, u32)> = points
+        .par_iter()
+        .flat_map_iter(|&v| {
+            let mut found = Vec::new();
+            if crate::deadline::cancelled() {
+                return found;
+            }
+            let p = at(v);
+            bvh.for_each_at_point(p, |i| {
+                let (a, b) = edges[i];
+                if v == a || v == b || a == b {
+                    return;
+                }
+                let (pa, d) = (at(a), at(b) - at(a));
+                let t = (p - pa).dot(d) / d.length_squared();
+                if t > 0.0 && t < 1.0 && (pa + d * t - p).length() <= tol {
+                    found.push((i, t, v));
+                }
+            });
+            found
+        })
+        .collect();
     let mut on: FastMap<usize, Vec<(f64, u32)>> = FastMap::default();
-    for &v in points {
-        let p = at(v);
-        bvh.for_each_at_point(p, |i| {
-            let (a, b) = edges[i];
-            if v == a || v == b || a == b {
-                return;
-            }
-            let (pa, d) = (at(a), at(b) - at(a));
-            let t = (p - pa).dot(d) / d.length_squared();
-            if t > 0.0 && t < 1.0 && (pa + d * t - p).length() <= tol {
-                on.entry(i).or_default().push((t, v));
-            }
-        });
+    for (i, t, v) in hits {
+        on.entry(i).or_default().push((t, v));
     }
     on.into_iter()
         .map(|(i, mut pts)| {
-            pts.sort_by(|x, y| x.0.total_cmp(&y.0));
+            pts.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
             (i, pts.into_iter().map(|(_, v)| v).collect())
         })
         .collect()
