@@ -79,12 +79,24 @@ def __getattr__(name: str):
         return choose
     module = _EXPORTS.get(name)
     if module is None:
-        raise AttributeError(f"module 'planner' has no attribute {name!r}")
+        return _submodule(name)
     import importlib
 
     value = getattr(importlib.import_module(f".{module}", __name__), name)
     globals()[name] = value
     return value
+
+
+def _submodule(name: str):
+    """The subpackage or module ``planner.NAME`` (``planner.meshes``), imported when first
+    used: reachable after ``import planner`` alone, as messages name its functions
+    (``planner.meshes.repair_mesh``)."""
+    import importlib
+    import importlib.util
+
+    if name.startswith("__") or importlib.util.find_spec(f"{__name__}.{name}") is None:
+        raise AttributeError(f"module 'planner' has no attribute {name!r}")
+    return importlib.import_module(f".{name}", __name__)
 
 
 if TYPE_CHECKING:

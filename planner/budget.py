@@ -26,6 +26,7 @@ A gigabyte here is a GiB (2**30 bytes).
 from __future__ import annotations
 
 import contextlib
+import logging
 import math
 import os
 import threading
@@ -33,6 +34,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from .errors import InvalidParameterError, ResourceLimitError
+
+log = logging.getLogger(__name__)
 
 __all__ = ["GIB", "MemoryBudget", "current", "default_memory_limit", "explain",
            "memory_limit", "parse_memory_limit", "set_memory_limit"]
@@ -149,7 +152,18 @@ def parse_memory_limit(value: object, name: str = "--memory-limit") -> int:
             f"{MINIMUM_BYTES / GIB:.3g} (1 MiB)")
     if number * GIB > 1 << 62:
         raise InvalidParameterError(f"{name} {value!r}: more memory than any machine has")
+    _warn_over_machine(int(number * GIB), name, value)
     return int(number * GIB)
+
+
+def _warn_over_machine(limit: int, name: str, value: object) -> None:
+    """Warn when the limit is more than this machine's memory (:func:`machine_memory`'s
+    total): the work may then run out of memory before the limit refuses it."""
+    total = machine_memory()[0]
+    if limit > total:
+        log.warning("%s %s GiB is more than this machine's memory (%s%s): work up to the "
+                    "limit may run out of memory before the limit refuses it", name, value,
+                    gib(total), ", its container's limit" if _cgroup_limit() == total else "")
 
 
 @dataclass(frozen=True)

@@ -142,6 +142,9 @@ def _parser() -> argparse.ArgumentParser:
         help="CoACD concavity threshold for non-convex bodies",
     )
     m.add_argument("--seed", type=int, default=0, help="CoACD seed")
+    from planner.cli_shapes import add_repair_option
+
+    add_repair_option(m)
     m.add_argument(
         "--exact",
         choices=("auto", "true", "false"),
@@ -287,9 +290,9 @@ def _cmd_minkowski(args) -> int:
     if args.threshold is not None:
         kwargs["threshold"] = args.threshold
     fn = planner.c_obstacle if args.mirror_b else planner.minkowski_sum
+    parts = _operand_parts(args)
     result = fn(
-        planner.load_mesh(args.a, name=args.a),
-        planner.load_mesh(args.b, name=args.b),
+        *parts,
         eps=args.eps,
         seed=args.seed,
         progress=False if args.no_progress else None,
@@ -321,13 +324,29 @@ def _cmd_minkowski(args) -> int:
             write_json(stats_path, jsonable(summary))
         except OSError as exc:
             return _fail(f"--stats {stats_path}: cannot write it ({exc.strerror or exc})")
+    from planner.cli_shapes import made_solid_text
+
+    made = made_solid_text({args.a: parts[0].repairs, args.b: parts[1].repairs})
     sys.stdout.write(
         f"wrote {out}: {result.stats['triangles']} triangles ({result.stats['source']} source), "
         f"error bound {result.error_bound:.4g} "
         f"(grid {result.stats['grid_error_bound']:.4g} + decomposition "
-        f"{result.stats['decomposition_excess']:.4g}), {result.stats['seconds']['total']:.2f} s\n"
+        f"{result.stats['decomposition_excess']:.4g}), {result.stats['seconds']['total']:.2f} s"
+        f"{made}\n"
     )
     return 0
+
+
+def _operand_parts(args) -> tuple:
+    """The two mesh files of ``minkplan minkowski`` as solid parts, named by their roles as
+    :func:`planner.minkowski_sum` and :func:`planner.c_obstacle` name them, holes filled
+    with ``--repair`` (an open one's refusal offers it)."""
+    import planner
+    from planner.operands import solid_part
+
+    roles = ("obstacle", "robot") if args.mirror_b else ("a", "b")
+    return tuple(solid_part(planner.load_mesh(path, name=path), role, repair=args.repair)
+                 for path, role in zip((args.a, args.b), roles, strict=True))
 
 
 def _cmd_plan(args) -> int:

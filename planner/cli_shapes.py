@@ -9,7 +9,7 @@ from pathlib import Path
 
 from planner.cli import _fail, _missing_mesh
 
-__all__ = ["add_parsers", "cmd_depth", "cmd_offset"]
+__all__ = ["add_parsers", "add_repair_option", "cmd_depth", "cmd_offset", "made_solid_text"]
 
 
 def add_parsers(sub, common) -> None:
@@ -32,6 +32,7 @@ def _add_depth_parser(sub, common) -> None:
                    help="widest interval wanted (default 1e-3 of the pair's size)")
     d.add_argument("--json", action="store_true",
                    help="print the result as JSON (docs/schemas/depth.schema.json)")
+    add_repair_option(d)
     d.add_argument("--no-progress", action="store_true", help="no progress line")
 
 
@@ -61,9 +62,23 @@ def _add_offset_parser(sub, common) -> None:
                    help="solid (default): a closed solid, else an error; surface: grow its "
                    "triangles as they are (an open mesh, as FCL sees it; hollow where the "
                    "part is thicker than 2r; no erosion); auto: a solid when it is one")
-    o.add_argument("--repair", action="store_true",
-                   help="fill holes to make a solid (says what it changed)")
+    add_repair_option(o)
     o.add_argument("--no-progress", action="store_true", help="no progress line")
+
+
+def add_repair_option(parser) -> None:
+    """``--repair``: an open mesh may have its holes filled (the commands that take solids)."""
+    parser.add_argument("--repair", action="store_true",
+                        help="fill holes to make a solid (says what it changed)")
+
+
+def made_solid_text(changes: dict[str, dict]) -> str:
+    """``"; made a solid by: b t_junctions_split 28"``: what was changed to make each
+    operand (by its name) a solid, or ``""``."""
+    from planner.offsets import changes_text
+
+    made = [f"{name} {changes_text(done)}" for name, done in changes.items() if done]
+    return f"; made a solid by: {'; '.join(made)}" if made else ""
 
 
 def cmd_offset(args) -> int:
@@ -79,11 +94,12 @@ def cmd_offset(args) -> int:
         return _fail(missing)
     import planner
 
+    mesh = planner.load_mesh(args.mesh, name=args.mesh)
+    options = dict(name=args.mesh, progress=False if args.no_progress else None,
+                   method=args.method, kind=args.kind, repair=args.repair)
     how = planner.opening if args.opening else planner.closing if args.closing else \
         planner.offset
-    result = how(planner.load_mesh(args.mesh, name=args.mesh), args.radius, eps=args.eps,
-                 name=args.mesh, progress=False if args.no_progress else None,
-                 method=args.method, kind=args.kind, repair=args.repair)
+    result = how(mesh, args.radius, eps=args.eps, **options)
     write_mesh(result.mesh, out)
     stats = result.stats
     of = "" if stats["kind"] == "solid" else ", of its triangles"
@@ -107,7 +123,8 @@ def cmd_depth(args) -> int:
     r = planner.penetration_depth(planner.load_mesh(args.a, name=args.a),
                                   planner.load_mesh(args.b, name=args.b),
                                   tolerance=args.tolerance,
-                                  progress=False if args.no_progress else None)
+                                  progress=False if args.no_progress else None,
+                                  repair=args.repair)
     if args.json:  # strict JSON (an unbounded upper end is null), named by its schema
         from planner.output import jsonable, schema_id
 
@@ -124,6 +141,7 @@ def cmd_depth(args) -> int:
         why = (f"{stuck} smallest cells unresolved" if stuck else "the cell budget ran out")
         what = (f"penetration depth in [{r.lower:.9g}, {r.upper:.9g}] along ({along})"
                 + ("" if r.converged else f" (wider than the tolerance: {why})"))
+    made = made_solid_text({args.a: r.stats["changes"]["a"], args.b: r.stats["changes"]["b"]})
     sys.stdout.write(f"{args.a} into {args.b}: {what}; {checked}; {r.stats['cells']} cells, "
-                     f"{r.stats['seconds']['total']:.3f} s\n")
+                     f"{r.stats['seconds']['total']:.3f} s{made}\n")
     return 0

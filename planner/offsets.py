@@ -200,8 +200,11 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     ``r``: grown for ``r > 0``, eroded for ``r < 0``.
 
     Args:
-        eps: resolution (default ``tol.eps_rel`` of the result's diagonal); the error bound
-            is of this order.
+        eps: resolution (default ``tol.eps_rel`` of the result's diagonal, at most
+            :data:`MORPHOLOGY_EPS_SHARE` of ``|r|``, and finer once more if the bound still
+            reaches ``|r|``); the error bound is of this order. One given whose bound is
+            not below ``|r|`` is warned of (the result need not even lie on the right side
+            of ``mesh``).
         max_cells: octree cell budget (default ``tol.max_cells``, else from the memory
             limit: :mod:`planner.budget`).
         progress: a status line on stderr while the surface is built
@@ -229,7 +232,19 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
     """
     t0 = time.perf_counter()
     radius, name, part = _prepared(mesh, r, method, name, kind, repair)
-    return _offset_part(part, radius, eps, max_cells, name, progress, method, t0)
+
+    def run(step: float | None) -> OffsetResult:
+        return _offset_part(part, radius, step, max_cells, name, progress, method, t0)
+
+    if eps is None:
+        return within_radius(run, part.mesh, radius, None, f"{name} {_verb(radius)}")
+    done = run(eps)
+    if done.error_bound >= abs(radius):
+        log.warning("%s offset by %g: the error bound %.3g is not below the radius, so the "
+                    "result need not even lie %s it; use eps below %.3g", name, radius,
+                    done.error_bound, "around" if radius > 0 else "inside",
+                    _eps_below(done, radius))
+    return done
 
 
 def _prepared(mesh, r: float, method: str, name: str, kind: str, repair: bool
@@ -279,10 +294,6 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
     stats["seconds"] = time.perf_counter() - t0
     if part.changes:
         log.info("%s: made a solid by %s", name, changes_text(part.changes))
-    if bound >= abs(radius):
-        log.warning("%s offset by %g: the error bound %.3g is not below the radius, so the "
-                    "result need not even lie %s it; use eps below %.3g", name, radius,
-                    bound, "around" if radius > 0 else "inside", step * abs(radius) / bound)
     return OffsetResult(surface, radius, bound, step, stats)
 
 
@@ -379,25 +390,114 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     radius, name, part = _prepared(mesh, first, method, name, kind, repair)
     if not part.solid:
         _refuse_surface_closing(name)
-    one = _offset_part(part, radius, eps, max_cells, name, progress, method, t0)
+    what = "an opening" if first < 0 else "a closing"
+    one = within_radius(
+        lambda step: _offset_part(part, radius, step, max_cells, name, progress, method, t0),
+        part.mesh, radius, eps, f"{what}'s first stage ({name} {_verb(radius)})")
     # the second stage by the first's method: their errors then largely cancel (an
     # opening inside its input, a closing around it), where mixing a grid and a ball
     # leaves each stage's error in full, on opposite sides
     then = _second_method(method, one.stats["method"])
-    stage = functools.partial(offset, one.mesh, second, eps=eps, max_cells=max_cells,
+    stage = functools.partial(offset, one.mesh, second, max_cells=max_cells,
                               name=f"{name} ({stage_name})", progress=progress)
-    try:
-        two = stage(method=then)
-    except InvalidParameterError:
-        if then == method:
-            raise
-        two = stage(method=method)  # the first's method does not apply: auto chooses
+
+    def second_stage(step: float) -> OffsetResult:
+        try:
+            try:
+                return stage(eps=step, method=then)
+            except InvalidParameterError:
+                if then == method:
+                    raise
+                return stage(eps=step, method=method)  # the first's method does not apply
+        except (InvalidMeshError, InvalidParameterError) as error:
+            raise _stage_output_refused(error, one, f"{name} ({stage_name})", what) from error
+
+    two = within_radius(second_stage, one.mesh, second, eps,
+                        f"{what}'s second stage ({name} {_verb(second)})")
     stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
              "method": f"{one.stats['method']} then {two.stats['method']}",
              "stage_bounds": [one.error_bound, two.error_bound],
              "kind": "solid", "changes": one.stats["changes"],
              "seconds": one.stats["seconds"] + two.stats["seconds"]}
     return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
+
+
+MORPHOLOGY_EPS_SHARE = 0.5
+"""An offset's default ``eps`` (each stage's of an opening or closing) is at most
+this share of its radius (and
+``tol.eps_rel`` of each stage's result's diagonal, as an offset's): a stage's bound is
+``eps`` to about 1.6 times it (the IndustReal gear base eroded by 1 mm by the ball: 1.56),
+so it stays below the radius, without which the stage need not even lie on the right side
+of its input and the composition means nothing."""
+
+MORPHOLOGY_EPS_MARGIN = 0.5
+"""A stage whose bound at the default ``eps`` still reaches the radius is done again at
+this share of the ``eps`` its bound says would just bring it below."""
+
+
+def _verb(radius: float) -> str:
+    """What an offset by ``radius`` does to a solid."""
+    return "grown" if radius > 0 else "eroded"
+
+
+def _stage_eps(solid: trimesh.Trimesh, radius: float) -> float:
+    """The default ``eps`` of an offset (a morphology stage) of ``solid`` by ``radius``: an
+    offset's default (``tol.eps_rel`` of the result's diagonal), at most
+    :data:`MORPHOLOGY_EPS_SHARE` of ``|radius|``."""
+    from .tolerances import tol  # noqa: PLC0415
+
+    extent = np.ptp(np.asarray(solid.bounds), axis=0)
+    diagonal = float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
+    return min(tol.eps_rel * diagonal, MORPHOLOGY_EPS_SHARE * abs(radius))
+
+
+def within_radius(run, solid: trimesh.Trimesh, radius: float, eps: float | None,
+                  what: str) -> OffsetResult:
+    """``run(eps)``, an offset of ``solid`` by ``radius`` (an offset at its default ``eps``,
+    or a morphology stage), with an error bound below ``|radius|``: at the ``eps`` given,
+    else refused (nothing is written); by default at :func:`_stage_eps`, done once more
+    finer if that was not fine enough."""
+    done = run(_stage_eps(solid, radius) if eps is None else eps)
+    if done.error_bound < abs(radius):
+        return done
+    needed = _eps_below(done, radius)
+    if eps is None:
+        log.info("%s: the error bound %.3g at the default eps %.3g is not below the radius "
+                 "%g; again at eps %.3g", what, done.error_bound, done.eps, abs(radius),
+                 MORPHOLOGY_EPS_MARGIN * needed)
+        done = run(MORPHOLOGY_EPS_MARGIN * needed)
+        if done.error_bound < abs(radius):
+            return done
+        needed = _eps_below(done, radius)
+    raise InvalidParameterError(
+        f"eps = {done.eps:.3g}: {what} has the error bound {done.error_bound:.3g}, not below "
+        f"the radius {abs(radius):g}, so the result need not even lie "
+        f"{'around' if radius > 0 else 'inside'} its input; use eps below {needed:.3g}")
+
+
+def _stage_output_refused(error: Exception, one: OffsetResult, stage: str, what: str
+                          ) -> Exception:
+    """The second stage's refusal ``error``: of the first stage's surface ``one`` (named
+    ``stage``) a :class:`GeometryError` saying it is minkplan's surface, not the input,
+    that is no clean solid (its advice is for an input's author, not for this); any
+    other refusal (of a parameter) as it is."""
+    if not (isinstance(error, InvalidMeshError) or str(error).startswith(stage)):
+        return error
+    found = str(error).split("; ", 1)[0].replace(f"mesh {stage!r}: ", "").replace(
+        f"{stage}: ", "")
+    return GeometryError(
+        f"{stage}: {what}'s first stage ({one.stats['method']} at eps {one.eps:.3g}) made a "
+        f"surface its second stage cannot take as a solid ({found}); a fault of minkplan's, "
+        f"not of the input: try another eps or method (--method cells), and please report "
+        f"this input")
+
+
+def _eps_below(done: OffsetResult, radius: float) -> float:
+    """The ``eps`` that would just bring ``done``'s bound below ``|radius|`` (the bound
+    about proportional to ``eps``; a tenth of ``eps`` for an unbounded one)."""
+    if not math.isfinite(done.error_bound):
+        return 0.1 * done.eps
+    return done.eps * abs(radius) / done.error_bound
 
 
 def _refuse_surface_closing(name: str) -> None:
@@ -426,7 +526,11 @@ def opening(mesh, r: float, *, eps: float | None = None, max_cells: int | None =
             name: str = "mesh", progress: bool | None = None,
             method: str = "auto", kind: str = "solid", repair: bool = False) -> OffsetResult:
     """Erode by ``r`` then grow by ``r`` (``r > 0``): features thinner than ``2 r`` go.
-    ``kind`` and ``repair`` as :func:`offset`'s (an erosion needs a solid)."""
+    ``kind`` and ``repair`` as :func:`offset`'s (an erosion needs a solid). Each stage's
+    error bound is below ``r``: by default its ``eps`` is at most
+    :data:`MORPHOLOGY_EPS_SHARE` of ``r``; an ``eps`` given that leaves a stage's bound at
+    ``r`` or above is refused (:class:`InvalidParameterError`, with the ``eps`` that would
+    do)."""
     radius = _positive_radius(r, "an opening")
     return _composed(mesh, -radius, radius, eps, max_cells, name, "eroded", progress, method,
                      kind, repair)
@@ -436,7 +540,8 @@ def closing(mesh, r: float, *, eps: float | None = None, max_cells: int | None =
             name: str = "mesh", progress: bool | None = None,
             method: str = "auto", kind: str = "solid", repair: bool = False) -> OffsetResult:
     """Grow by ``r`` then erode by ``r`` (``r > 0``): gaps narrower than ``2 r`` close.
-    ``kind`` and ``repair`` as :func:`offset`'s (a closing needs a solid)."""
+    ``kind`` and ``repair`` as :func:`offset`'s (a closing needs a solid); ``eps`` as
+    :func:`opening`'s."""
     radius = _positive_radius(r, "a closing")
     return _composed(mesh, radius, -radius, eps, max_cells, name, "grown", progress, method,
                      kind, repair)

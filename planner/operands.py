@@ -40,13 +40,26 @@ def label(mesh: trimesh.Trimesh, role: str) -> str:
     return f"{role} {Path(path).name}" if path else role
 
 
-def solid_part(obj, role: str) -> Part:
+def solid_part(obj, role: str, *, repair: bool | None = None) -> Part:
     """The operand as a solid part: a part as it is (a problem's, whose kind and checks a
-    source keeps), anything else checked as a solid (see the module documentation)."""
+    source keeps), anything else checked as a solid (see the module documentation); with
+    ``repair``, its holes filled where they can be (:func:`planner.meshes.repair_mesh`).
+    ``repair=False``: the caller has that option, and an open mesh's refusal offers it;
+    ``None``: it has none."""
     if isinstance(obj, Part):
         return obj
     mesh = as_mesh(obj, role)
     name = label(mesh, role)
-    solid = classify(mesh, name=name, kind="solid")
+    try:
+        solid = classify(mesh, name=name, kind="solid", repair=bool(repair))
+    except InvalidMeshError as error:
+        if repair is not False or "repair_mesh" not in str(error):
+            raise
+        raise InvalidMeshError(f"{error}; or: {REPAIR_OFFER}") from None
     return Part(name, solid.mesh, f"operand {role}", kind_reason=solid.reason, checked=True,
                 repairs=solid.changes)
+
+
+REPAIR_OFFER = "repair=True (--repair) fills its holes where it can"
+"""What an open operand's refusal offers where the call takes ``repair`` (and its command
+``--repair``)."""

@@ -102,18 +102,28 @@ def unwritable(path: Path) -> str | None:
 def _unwritable(path: Path) -> str | None:
     if path.is_dir():
         return "is a directory"
+    missing = None  # the outermost folder that would have to be created
     for parent in path.parents:
         if parent.exists():
             if not parent.is_dir():
                 return f"{parent} is a file, not a folder"
-            if not os.access(parent, os.W_OK | os.X_OK):
-                return f"folder {parent} is not writable"
-            try:  # the permission bits can say yes where the file system says no (/proc)
-                with tempfile.TemporaryFile(dir=parent):
-                    pass
-            except OSError as exc:
-                return f"folder {parent} is not writable ({exc.strerror or exc})"
-            return None
+            return _unwritable_in(parent, missing)
+        missing = parent
+    return None
+
+
+def _unwritable_in(folder: Path, missing: Path | None) -> str | None:
+    """Why nothing can be written in the existing ``folder`` (``missing``: the folder in
+    it that would be created first, named when that is what fails), or ``None``."""
+    what = (f"folder {folder} is not writable" if missing is None else
+            f"folder {missing} does not exist and cannot be created in {folder}")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return what
+    try:  # the permission bits can say yes where the file system says no (/proc)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        return f"{what} ({exc.strerror or exc})"
     return None
 
 

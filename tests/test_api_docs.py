@@ -84,3 +84,17 @@ def test_a_public_function_named_like_its_module_stays_the_function():
     assert inspect.isfunction(planner.decompose)
     assert planner.decompose is sys.modules["planner.decompose"].decompose
     assert Decomposition is planner.Decomposition
+
+
+def test_the_subpackages_that_messages_name_are_reachable_after_import_planner():
+    """Messages advise ``planner.meshes.repair_mesh``: after ``import planner`` alone that
+    name works (imported when first used: ``import planner`` still loads no trimesh), and
+    a name that is neither export nor submodule stays an AttributeError."""
+    code = ("import sys, planner\n"
+            "assert 'trimesh' not in sys.modules and 'planner.meshes' not in sys.modules\n"
+            "assert planner.meshes.repair_mesh is planner.repair_mesh\n"
+            "assert planner.meshes.load_obj.__module__ == 'planner.meshes.formats'\n"
+            "assert not hasattr(planner, 'no_such_name')\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr

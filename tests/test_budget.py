@@ -225,3 +225,24 @@ def test_a_repair_that_drops_nan_faces_says_so():
     flat = trimesh.Trimesh(vertices, np.vstack([box.faces[:2], [[0, 1, 8]]]), process=False)
     with pytest.raises(InvalidMeshError, match="after removing the 1 faces with NaN"):
         repair_mesh(flat, name="flat")
+
+
+def test_a_limit_above_the_machines_memory_is_warned_of(monkeypatch, caplog):
+    monkeypatch.setattr(budget, "machine_memory", lambda: (8 * budget.GIB, 6 * budget.GIB))
+    with caplog.at_level("WARNING", logger="planner.budget"):
+        with planner.memory_limit(4):
+            pass
+    assert caplog.text == ""
+    with caplog.at_level("WARNING", logger="planner.budget"):
+        with planner.memory_limit(16) as limit:
+            assert limit.limit == 16 * budget.GIB  # taken, as asked
+    assert "memory limit 16 GiB is more than this machine's memory (8 GiB" in caplog.text
+
+
+def test_the_cli_warns_of_a_limit_above_the_machines_memory(tmp_path):
+    total = budget.gib(budget.machine_memory()[0])
+    done = _run(tmp_path, "--memory-limit", "1e6", "depth", str(ROOT / "scenarios/assemblies/"
+                "meshes/ring_a.stl"), str(ROOT / "scenarios/assemblies/meshes/ring_a.stl"))
+    assert done.returncode == 0, done.stderr
+    assert (f"WARNING planner.budget: --memory-limit 1e6 GiB is more than this machine's "
+            f"memory ({total}") in done.stderr

@@ -86,3 +86,40 @@ def test_assemble_overlap_reports_depth(tmp_path, capsys):
     assert report["overlap"]["part"] == "a" and report["overlap"]["other"] == "b"
     assert depth["lower"] <= 0.4 <= depth["upper"]
     assert depth["direction"] == pytest.approx([0.0, 0.0, -1.0])
+
+
+def test_depth_refuses_a_tolerance_as_wide_as_the_pair(pair, capsys):
+    assert main(["depth", str(pair[0]), str(pair[1]), "--tolerance", "1e3"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("minkplan: error: tolerance = 1000.0: ")
+    assert "use at most 0.2" in err[0]  # a tenth of the pair's 2.0 diagonal (1 × 1.75 × 1)
+
+
+def _open_box(path) -> None:
+    """A unit box with one square (two triangles) removed, written at ``path``."""
+    box = shapes.box()
+    trimesh.Trimesh(box.vertices, box.faces[:-2], process=False).export(path)
+
+
+def test_depth_and_minkowski_repair_an_open_mesh_with_repair(pair, tmp_path, capsys):
+    """Without --repair the refusal names it; with it the commands work and say what they
+    changed to make a solid."""
+    open_box = tmp_path / "open.stl"
+    _open_box(open_box)
+    out = tmp_path / "sum.stl"
+    commands = [["depth", str(open_box), str(pair[1])],
+                ["minkowski", str(open_box), str(pair[1]), "-o", str(out), "--no-progress"]]
+    for argv in commands:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "not watertight" in err[0] and "--repair" in err[0], err
+        assert not out.exists()
+        assert main([*argv, "--repair"]) == 0, argv
+        line = capsys.readouterr().out.strip()
+        made = line.split("; made a solid by: ", 1)[1]
+        assert made.startswith(f"{open_box} ") and "filled_holes 1" in made, line
+    assert line.startswith(f"wrote {out}") and trimesh.load(out).is_watertight
+    assert main(["depth", str(open_box), str(pair[1]), "--repair", "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["lower"] <= 0.25 + 1e-6 and r["upper"] >= 0.25 - 1e-6
+    assert r["stats"]["changes"]["a"]["filled_holes"] == 1

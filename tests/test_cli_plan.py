@@ -293,3 +293,29 @@ def test_a_misspelling_gets_a_did_you_mean(tmp_path, capsys, monkeypatch, args, 
         code = exit_.code
     err = capsys.readouterr().err
     assert code == 2 and hint in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_an_output_folder_that_cannot_be_created_is_the_one_named(tmp_path, capsys,
+                                                                   monkeypatch):
+    """``--out /proc/nope/run``: /proc exists and takes no new folder; the message names the
+    folder that does not exist (was: "folder /proc is not writable")."""
+    import errno
+    import tempfile
+    import types
+
+    import planner.output
+
+    def refused(dir=None):  # noqa: A002 (tempfile's own keyword)
+        raise FileNotFoundError(errno.ENOENT, "No such file or directory")
+
+    monkeypatch.setattr(planner.output, "tempfile",
+                        types.SimpleNamespace(TemporaryFile=refused, mkstemp=tempfile.mkstemp))
+    code, _, err = run(["plan", str(SCENARIOS / "bug_trap.yaml"), "--out",
+                        str(tmp_path / "nope" / "run")], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert (f"--out {tmp_path}/nope/run: folder {tmp_path}/nope does not exist and cannot be "
+            f"created in {tmp_path} (No such file or directory)") in err
+    code, _, err = run(["plan", str(SCENARIOS / "bug_trap.yaml"), "--out", str(tmp_path)],
+                       capsys)
+    assert code == 2 and f"folder {tmp_path} is not writable (No such file" in err
+    assert not (tmp_path / "nope").exists()

@@ -265,3 +265,66 @@ def test_a_tolerance_finer_than_the_search_resolves_is_refused_naming_the_floor(
     peg, block = _peg_and_block(0.15)
     with pytest.raises(InvalidParameterError, match="use at least"):
         planner.penetration_depth(peg, block, tolerance=1e-300)
+
+
+def test_a_tolerance_not_small_against_the_pair_is_refused_naming_the_ceiling():
+    """1e3 on parts of about 6 cm gave [0.0003, 250]: a width of more than a tenth of the
+    pair's size (the diagonal of the box around both) is refused, saying what would do."""
+    a, b = shapes.box(), shapes.box(center=(0.0, 0.75, 0.0))
+    size = float(np.linalg.norm(np.ptp(np.vstack([a.bounds, b.bounds]), axis=0)))
+    ceiling = planner.depth.COARSEST_TOLERANCE * size
+    with pytest.raises(InvalidParameterError, match=rf"tolerance = 1000.0: more than 0.1 of "
+                       rf"the pair's size .*; use at most {ceiling:.3g}"):
+        planner.penetration_depth(a, b, tolerance=1e3)
+    r = planner.penetration_depth(a, b, tolerance=0.9 * ceiling)
+    assert r.lower <= 0.25 <= r.upper and r.tolerance == 0.9 * ceiling
+
+
+def test_an_open_operand_is_repaired_when_asked_and_says_what_changed():
+    a, b = shapes.box(), shapes.box(center=(0.0, 0.75, 0.0))
+    open_box = trimesh.Trimesh(a.vertices, a.faces[:-2], process=False)  # one square off
+    with pytest.raises(InvalidMeshError, match=r"not watertight.*repair=True \(--repair\)"):
+        planner.penetration_depth(open_box, b)
+    r = planner.penetration_depth(open_box, b, repair=True)
+    assert r.lower <= 0.25 <= r.upper and r.validated
+    assert r.stats["changes"] == {"a": {"filled_holes": 1}, "b": {}}
+
+
+def test_a_trimesh_object_is_taken_as_its_file_is():
+    """Factory's round hole as a trimesh.Trimesh with load_mesh's triangles is made a solid
+    by splitting its T-junctions, as the file is, and says so; trimesh's own reader fans
+    the OBJ's polygons into triangles that overlap once the mesh is closed: no solid to be
+    had honestly, refused with the advice to read it with planner.load_mesh."""
+    from conftest import asset
+
+    folder = "assemblies/factory_round_peg_8mm/meshes/"
+    hole_path = asset(folder + "factory_round_hole_8mm_subdiv_3x.obj")
+    peg = planner.load_mesh(asset(folder + "factory_round_peg_8mm_loose.obj"))
+    peg.apply_translation([0.0005, 0.0, 0.0])
+    by_path = planner.penetration_depth(peg, hole_path)
+    split = by_path.stats["changes"]["b"]["t_junctions_split"]
+    assert split > 0
+    loaded = planner.load_mesh(hole_path)
+    as_object = planner.penetration_depth(peg, trimesh.Trimesh(loaded.vertices, loaded.faces))
+    assert as_object.stats["changes"]["b"] == {"t_junctions_split": split}
+    assert as_object.lower == pytest.approx(by_path.lower, abs=1e-9)
+    with pytest.raises(InvalidMeshError, match=r"mesh 'b': .*read it with planner\.load_mesh"):
+        planner.penetration_depth(peg, trimesh.load(hole_path))
+
+
+@pytest.mark.assets
+def test_two_meshing_gears_pushed_together_are_answered_from_the_facets_near_them():
+    """IndustReal's medium gear moved 1 mm into the large one: the whole reduced
+    convolution of the two (over four million facets) exceeds the memory budget, so the
+    depth is searched on the facets in the cube it can reach (a few tens of thousands);
+    the answer is proved, separates the gears per FCL and is no deeper than the shift."""
+    from conftest import asset
+
+    folder = "assemblies/industreal_gears/meshes/"
+    medium = planner.load_mesh(asset(folder + "industreal_gear_medium.obj"))
+    large = planner.load_mesh(asset(folder + "industreal_gear_large.obj"))
+    medium.apply_translation([-0.001, 0.0, 0.0])
+    r = planner.penetration_depth(medium, large, tolerance=1e-4)
+    assert 0 < r.stats["facets"] < 100_000
+    assert 0.0 < r.lower <= r.upper <= 0.001 + r.tolerance
+    assert_separating(medium, large, r)

@@ -760,3 +760,71 @@ def test_repair_says_what_it_changed(capsys, tmp_path):
     assert main(["offset", str(path), "-r", "0.1", "--kind", "surface", "--repair", "-o",
                  str(tmp_path / "x.stl")]) == 2
     assert "repair" in capsys.readouterr().err
+
+
+def _finned() -> trimesh.Trimesh:
+    """A unit box with a fin 0.1 thin sticking out along x (a non-convex solid)."""
+    body = trimesh.creation.box([1.0, 1.0, 1.0])
+    fin = trimesh.creation.box([0.7, 0.1, 0.6])
+    fin.apply_translation([0.7, 0.0, 0.0])
+    return trimesh.boolean.union([body, fin], engine="manifold")
+
+
+@pytest.mark.parametrize("how", [planner.opening, planner.closing])
+def test_a_morphologys_default_eps_keeps_each_stage_bound_below_the_radius(how, caplog):
+    # r = 0.005 is below the default eps (0.5% of the ~1.8 diagonal, 0.009): each stage's
+    # bound would not be below r (the stage need not lie on the right side of its input)
+    finned = _finned()
+    with caplog.at_level("WARNING", logger="planner.offsets"):
+        result = how(finned, 0.005)
+    assert all(bound < 0.005 for bound in result.stats["stage_bounds"])
+    assert result.eps <= planner.offsets.MORPHOLOGY_EPS_SHARE * 0.005
+    assert "is not below the radius" not in caplog.text
+
+
+@pytest.mark.parametrize("how", [planner.opening, planner.closing])
+def test_a_morphologys_eps_too_coarse_for_its_radius_is_refused_naming_the_eps(how):
+    with pytest.raises(InvalidParameterError, match=r"eps = 0\.02: .* first stage .* not below "
+                       r"the radius 0\.005.*use eps below 0\.00\d"):
+        how(_finned(), 0.005, eps=0.02)
+
+
+def test_a_closings_second_stage_refusing_the_first_stages_surface_is_minkplans_fault(
+        monkeypatch):
+    """The first stage's surface is minkplan's own: a refusal of it as a solid (the
+    IndustReal gear base grown by 1 mm by the ball at eps 5e-4 had one triangle facing into
+    it) is a GeometryError asking for a report, not advice to fix an input mesh."""
+    from planner.errors import InvalidMeshError
+
+    offset = planner.offsets.offset
+
+    def refusing(mesh, r, **options):
+        if options["name"].endswith("(grown)"):
+            raise InvalidMeshError(f"mesh {options['name']!r}: surface overlaps itself (1 "
+                                   f"pairs); typically polygons triangulated wrongly")
+        return offset(mesh, r, **options)
+
+    monkeypatch.setattr(planner.offsets, "offset", refusing)
+    with pytest.raises(GeometryError, match=r"first stage \(ball at eps .*\) made a surface "
+                       r"its second stage cannot take as a solid \(surface overlaps itself "
+                       r"\(1 pairs\)\); a fault of minkplan's") as info:
+        planner.closing(_finned(), 0.05, name="fin")
+    assert "triangulated" not in str(info.value)
+
+
+def test_the_offset_command_takes_an_eps_below_the_radius(tmp_path, capsys, caplog):
+    """A plain erosion too: by default at an eps whose bound is below the radius; a given
+    --eps too coarse for it is taken, with a warning saying which eps would do."""
+    import re
+
+    part = tmp_path / "finned.stl"
+    _finned().export(part)
+    out = tmp_path / "eroded.stl"
+    assert main(["offset", str(part), "-r", "-0.005", "-o", str(out), "--no-progress"]) == 0
+    bound = float(re.search(r"error bound ([\d.e-]+)", capsys.readouterr().out).group(1))
+    assert bound < 0.005
+    out.unlink()
+    with caplog.at_level("WARNING", logger="planner.offsets"):
+        assert main(["offset", str(part), "-r", "-0.005", "--eps", "0.02", "-o", str(out),
+                     "--no-progress"]) == 0
+    assert "is not below the radius" in caplog.text and "use eps below" in caplog.text
