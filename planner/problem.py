@@ -113,6 +113,10 @@ class Part:
             readers do it once); otherwise whoever needs a checked solid does.
         repairs: what was changed to make the mesh a solid (``{"t_junctions_split": 36}``,
             repair counts); empty when nothing was.
+        escape_hints: unit directions known to free the part from a part it overlaps
+            where it stands (the penetration depth's, of an accepted interference fit):
+            FCL's tolerance checks with it as the moving part try them before the contact
+            normals and the axes (:class:`planner.validation.FclChecker`).
     """
 
     name: str
@@ -122,6 +126,7 @@ class Part:
     kind_reason: str = SOLID_REASON
     checked: bool = False
     repairs: dict[str, Any] = dataclasses.field(default_factory=dict)
+    escape_hints: tuple[tuple[float, float, float], ...] = ()
 
     def describe(self) -> dict[str, Any]:
         """Name, source, kind (``"solid"`` / ``"surface"``), why, and what was repaired,

@@ -177,3 +177,30 @@ def test_a_cube_under_a_slotted_roof_is_not_claimed_enclosed(tmp_path):
                           deadline=time.perf_counter() + 60) is None
     result = plan_assembly(assembly)
     assert result.found and result.order == ["shell", "cube"], result.message
+
+
+def test_a_peg_pushed_aslant_into_its_bore_is_accepted_within_its_depth(tmp_path):
+    """Factory's round peg moved (0.3, 0.2) mm into the wall of its hole: the way out
+    is aslant, along no contact normal FCL gives and no axis, so FCL's tolerance check
+    found no witness at any interference. The penetration depth's direction is now tried
+    first: the pose is refused with the depth's bound as the suggestion, and that
+    interference accepts it and plans the peg out."""
+    from conftest import asset
+
+    folder = "assemblies/factory_round_peg_8mm/meshes/"
+    path = tmp_path / "aslant.yaml"
+    path.write_text(
+        "name: aslant\nunits: m\nbase: hole\nparts:\n"
+        f"  - {{name: hole, mesh: {asset(folder + 'factory_round_hole_8mm_subdiv_3x.obj')}}}\n"
+        f"  - {{name: peg, mesh: {asset(folder + 'factory_round_peg_8mm_loose.obj')}, "
+        "position: [0.0003, 0.0002, 0]}\n")
+    with pytest.raises(ScenarioError) as info:
+        load_assembly(path)
+    overlap = info.value.details["overlap"]
+    depth = overlap["penetration_depth"]
+    assert 0.00025 < depth["lower"] <= depth["upper"] < 0.00035
+    suggested = overlap["suggested_interference"]
+    assert suggested is not None and depth["upper"] <= suggested < 1.1 * depth["upper"]
+    assembly = load_assembly(path, interference=suggested)
+    result = plan_assembly(assembly)
+    assert result.found and result.order == ["hole", "peg"], result.message

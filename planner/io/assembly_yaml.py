@@ -129,8 +129,9 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
         delta = DEFAULT_CONTACT_REL * float(np.linalg.norm(bounds[:, 1].max(axis=0)
                                                            - bounds[:, 0].min(axis=0)))
     settings = dataclasses.replace(settings, contact_tolerance=delta + interference)
-    _check_assembled_pose(parts, delta, interference)
     overlaps = _accepted_overlaps(parts, delta) if interference > 0 else ()
+    parts = _with_escape_hints(parts, overlaps)
+    _check_assembled_pose(parts, delta, interference)
     return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
                     settings=settings, path=path, interference=interference,
                     overlaps=overlaps)
@@ -156,6 +157,10 @@ def _check_assembled_pose(parts: list[Part], delta: float, interference: float =
         other = next((p for p in others if hit and p.name == hit[0]), None)
         name = other.name if other is not None else "another part"
         depth = _overlap_depth(part, other) if other is not None else None
+        if depth is not None and any(depth["direction"]):  # its way out, tried first
+            x, y, z = (float(c) for c in depth["direction"])
+            hinted = dataclasses.replace(part, escape_hints=part.escape_hints + ((x, y, z),))
+            checker = FclChecker.for_parts(hinted, others, contact_tolerance=allowed)
         suggested = _interference_accepting(checker, delta, depth)
         said = "" if depth is None else (
             f"; penetration depth in [{depth['lower']:.6g}, {depth['upper']:.6g}] along "
@@ -220,6 +225,23 @@ def _accepted_overlaps(parts: list[Part], delta: float) -> tuple[dict, ...]:
             found.append({"part": part.name, "other": other.name,
                           "penetration_depth": _overlap_depth(part, other)})
     return tuple(found)
+
+
+def _with_escape_hints(parts: list[Part], overlaps: tuple[dict, ...]) -> list[Part]:
+    """The parts, each overlapping one given the directions its penetration depths free
+    it along (the other part of a pair the reverse): FCL's tolerance checks try them, as
+    no contact normal or axis frees a peg pushed sideways into its bore with its shoulder
+    flush on the block."""
+    hints: dict[str, list[tuple[float, float, float]]] = {}
+    for overlap in overlaps:
+        depth = overlap["penetration_depth"]
+        if depth is None or not depth.get("direction"):
+            continue
+        x, y, z = (float(c) for c in depth["direction"])
+        hints.setdefault(overlap["part"], []).append((x, y, z))
+        hints.setdefault(overlap["other"], []).append((-x, -y, -z))
+    return [dataclasses.replace(p, escape_hints=p.escape_hints + tuple(hints[p.name]))
+            if p.name in hints else p for p in parts]
 
 
 def _overlap_depth(part: Part, other: Part) -> dict | None:

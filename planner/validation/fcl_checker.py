@@ -133,6 +133,9 @@ class FclChecker:
             only where triangles meet (FCL's own meaning), containment in it does not
             count.
         robot_solid: whether the robot is a solid.
+        escape_hints: directions tried first as witnesses of a tolerated overlap (a
+            penetration depth's, which frees the robot where no contact normal or axis
+            does: a peg pushed sideways into its bore, its shoulder flush on the block).
 
     Attributes:
         n_valid, n_invalid: :meth:`is_valid` answers so far.
@@ -154,6 +157,7 @@ class FclChecker:
         tolerances: CheckerTolerances | None = None,
         solid: Sequence[bool] | None = None,
         robot_solid: bool = True,
+        escape_hints: Sequence[ArrayLike] = (),
     ) -> None:
         delta = float(contact_tolerance)
         if not (math.isfinite(delta) and delta >= 0.0):
@@ -178,6 +182,9 @@ class FclChecker:
             raise InvalidParameterError(
                 f"solid: {len(solid)} flags for {len(obstacles)} obstacles"
             )
+        self.escape_hints = [h / np.linalg.norm(h) for h in
+                             (np.asarray(x, dtype=np.float64) for x in escape_hints)
+                             if np.all(np.isfinite(h)) and np.linalg.norm(h) > 0]
         self.robot = _Part(robot, "robot", robot_solid)
         self.obstacles = [_Part(m, n, k) for m, n, k in zip(obstacles, names, solid)]
         self.names = tuple(names)
@@ -200,7 +207,7 @@ class FclChecker:
         obstacles = list(obstacles)
         return cls(robot.mesh, [p.mesh for p in obstacles], contact_tolerance=contact_tolerance,
                    names=[p.name for p in obstacles], solid=[p.solid for p in obstacles],
-                   robot_solid=robot.solid)
+                   robot_solid=robot.solid, escape_hints=getattr(robot, "escape_hints", ()))
 
     # ------------------------------------------------------------------ primitives
 
@@ -327,8 +334,9 @@ class FclChecker:
         return sorted(lengths)
 
     def _witness_directions(self, t: np.ndarray) -> list[np.ndarray]:
-        """The distinct escape directions at ``t`` from every obstacle near the robot."""
-        unique: list[np.ndarray] = []
+        """The distinct escape directions at ``t``: the checker's hints, then those from
+        every obstacle near the robot."""
+        unique: list[np.ndarray] = list(self.escape_hints)
         for part in self.obstacles:
             if _aabb_gap(self.robot.lo + t, self.robot.hi + t, part.lo, part.hi) > 0.0:
                 continue
