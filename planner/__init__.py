@@ -94,7 +94,8 @@ def _submodule(name: str):
     import importlib
     import importlib.util
 
-    if name.startswith("__") or importlib.util.find_spec(f"{__name__}.{name}") is None:
+    if name.startswith("__") or "." in name or \
+            importlib.util.find_spec(f"{__name__}.{name}") is None:
         raise AttributeError(f"module 'planner' has no attribute {name!r}")
     return importlib.import_module(f".{name}", __name__)
 

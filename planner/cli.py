@@ -326,7 +326,7 @@ def _cmd_minkowski(args) -> int:
             return _fail(f"--stats {stats_path}: cannot write it ({exc.strerror or exc})")
     from planner.cli_shapes import made_solid_text
 
-    made = made_solid_text({args.a: parts[0].repairs, args.b: parts[1].repairs})
+    made = made_solid_text([(args.a, parts[0].repairs), (args.b, parts[1].repairs)])
     sys.stdout.write(
         f"wrote {out}: {result.stats['triangles']} triangles ({result.stats['source']} source), "
         f"error bound {result.error_bound:.4g} "

@@ -72,12 +72,12 @@ def add_repair_option(parser) -> None:
                         help="fill holes to make a solid (says what it changed)")
 
 
-def made_solid_text(changes: dict[str, dict]) -> str:
+def made_solid_text(changes: list[tuple[str, dict]]) -> str:
     """``"; made a solid by: b t_junctions_split 28"``: what was changed to make each
-    operand (by its name) a solid, or ``""``."""
+    operand (name, changes) a solid, or ``""``."""
     from planner.offsets import changes_text
 
-    made = [f"{name} {changes_text(done)}" for name, done in changes.items() if done]
+    made = [f"{name} {changes_text(done)}" for name, done in changes if done]
     return f"; made a solid by: {'; '.join(made)}" if made else ""
 
 
@@ -141,7 +141,7 @@ def cmd_depth(args) -> int:
         why = (f"{stuck} smallest cells unresolved" if stuck else "the cell budget ran out")
         what = (f"penetration depth in [{r.lower:.9g}, {r.upper:.9g}] along ({along})"
                 + ("" if r.converged else f" (wider than the tolerance: {why})"))
-    made = made_solid_text({args.a: r.stats["changes"]["a"], args.b: r.stats["changes"]["b"]})
+    made = made_solid_text([(args.a, r.stats["changes"]["a"]), (args.b, r.stats["changes"]["b"])])
     sys.stdout.write(f"{args.a} into {args.b}: {what}; {checked}; {r.stats['cells']} cells, "
                      f"{r.stats['seconds']['total']:.3f} s{made}\n")
     return 0

@@ -232,10 +232,13 @@ def _search(source: Source, parts: tuple[Part, Part], width: float, cells: int,
     """The core's answer at the origin of ``B ⊕ (−A)`` and the facets it searched: those
     of the cube the search can reach first (:meth:`ExactSource.depth_pair`: two parts
     that overlap a little have few there), the whole reduced convolution when the
-    question reaches beyond them (parts apart, the separation farther than that cube)."""
+    question reaches beyond them (parts apart, the separation farther than that cube), or
+    at once when the parts' boxes do not overlap (the origin lies outside the sum's box)."""
     part_a, part_b = parts
     origin = np.zeros(3)
-    if isinstance(source, ExactSource):
+    (a_lo, a_hi), (b_lo, b_hi) = part_a.mesh.bounds, part_b.mesh.bounds
+    boxes_overlap = bool(np.all(b_lo - a_hi < 0.0) and np.all(b_hi - a_lo > 0.0))
+    if isinstance(source, ExactSource) and boxes_overlap:
         show("convolution facets near the origin")
         near = source.depth_pair(part_b, part_a, origin, width)
         show(f"searching cells down to a {width:.3g} wide interval")
@@ -246,6 +249,7 @@ def _search(source: Source, parts: tuple[Part, Part], width: float, cells: int,
                 raise
             log.debug("%s into %s: the separation reaches beyond the facets near the origin; "
                       "the whole convolution instead", part_a.name, part_b.name)
+        del near  # (its memory back before the whole convolution's)
     show("convolution facets")
     pair = source.pair(part_b, part_a, mirror_b=True)  # B ⊕ (−A)
     show(f"searching cells down to a {width:.3g} wide interval")

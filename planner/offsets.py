@@ -109,7 +109,7 @@ def _operand(obj, name: str, kind: str, repair: bool, radius: float) -> Classifi
     except InvalidMeshError as error:
         if kind != "solid":
             raise
-        ways = [] if repair else ["repair=True (--repair) fills its holes where it can"]
+        ways = [] if repair else ["repair=True (minkplan: --repair) fills its holes where it can"]
         if radius > 0 and _usable_as_surface(mesh, name):
             ways.append("kind='surface' (--kind surface) grows its triangles as they are (as "
                         "FCL sees them)")
@@ -201,7 +201,7 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
 
     Args:
         eps: resolution (default ``tol.eps_rel`` of the result's diagonal, at most
-            :data:`MORPHOLOGY_EPS_SHARE` of ``|r|``, and finer once more if the bound still
+            :data:`OFFSET_EPS_SHARE` of ``|r|``, and finer once more if the bound still
             reaches ``|r|``); the error bound is of this order. One given whose bound is
             not below ``|r|`` is warned of (the result need not even lie on the right side
             of ``mesh``).
@@ -230,6 +230,22 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
         GeometryError: an erosion that leaves nothing (``|r|`` past the solid's
             thickness).
     """
+    done = _offset_unwarned(mesh, r, eps=eps, max_cells=max_cells, name=name,
+                            progress=progress, method=method, kind=kind, repair=repair)
+    if done.error_bound >= abs(done.radius):
+        log.warning("%s offset by %g: the error bound %.3g is not below the radius, so the "
+                    "result need not even lie %s it; use eps below %.3g", name, done.radius,
+                    done.error_bound, "around" if done.radius > 0 else "inside",
+                    _eps_below(done, done.radius))
+    return done
+
+
+def _offset_unwarned(mesh, r: float, *, eps: float | None, max_cells: int | None, name: str,
+                     progress: bool | None, method: str, kind: str, repair: bool
+                     ) -> OffsetResult:
+    """:func:`offset` without its warning of a bound not below the radius (an opening's
+    or closing's stage, which refuses that instead); by default at an ``eps`` whose
+    bound is below it when one retry finds one."""
     t0 = time.perf_counter()
     radius, name, part = _prepared(mesh, r, method, name, kind, repair)
 
@@ -237,14 +253,9 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
         return _offset_part(part, radius, step, max_cells, name, progress, method, t0)
 
     if eps is None:
-        return within_radius(run, part.mesh, radius, None, f"{name} {_verb(radius)}")
-    done = run(eps)
-    if done.error_bound >= abs(radius):
-        log.warning("%s offset by %g: the error bound %.3g is not below the radius, so the "
-                    "result need not even lie %s it; use eps below %.3g", name, radius,
-                    done.error_bound, "around" if radius > 0 else "inside",
-                    _eps_below(done, radius))
-    return done
+        return _within_radius(run, part.mesh, radius, None, f"{name} {_verb(radius)}",
+                              refuse=False)
+    return run(eps)
 
 
 def _prepared(mesh, r: float, method: str, name: str, kind: str, repair: bool
@@ -391,15 +402,16 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     if not part.solid:
         _refuse_surface_closing(name)
     what = "an opening" if first < 0 else "a closing"
-    one = within_radius(
+    one = _within_radius(
         lambda step: _offset_part(part, radius, step, max_cells, name, progress, method, t0),
         part.mesh, radius, eps, f"{what}'s first stage ({name} {_verb(radius)})")
     # the second stage by the first's method: their errors then largely cancel (an
     # opening inside its input, a closing around it), where mixing a grid and a ball
     # leaves each stage's error in full, on opposite sides
     then = _second_method(method, one.stats["method"])
-    stage = functools.partial(offset, one.mesh, second, max_cells=max_cells,
-                              name=f"{name} ({stage_name})", progress=progress)
+    stage = functools.partial(_offset_unwarned, one.mesh, second, max_cells=max_cells,
+                              name=f"{name} ({stage_name})", progress=progress, kind="solid",
+                              repair=False)
 
     def second_stage(step: float) -> OffsetResult:
         try:
@@ -412,7 +424,7 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
         except (InvalidMeshError, InvalidParameterError) as error:
             raise _stage_output_refused(error, one, f"{name} ({stage_name})", what) from error
 
-    two = within_radius(second_stage, one.mesh, second, eps,
+    two = _within_radius(second_stage, one.mesh, second, eps,
                         f"{what}'s second stage ({name} {_verb(second)})")
     stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
              "method": f"{one.stats['method']} then {two.stats['method']}",
@@ -422,7 +434,7 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
 
 
-MORPHOLOGY_EPS_SHARE = 0.5
+OFFSET_EPS_SHARE = 0.5
 """An offset's default ``eps`` (each stage's of an opening or closing) is at most
 this share of its radius (and
 ``tol.eps_rel`` of each stage's result's diagonal, as an offset's): a stage's bound is
@@ -430,7 +442,7 @@ this share of its radius (and
 so it stays below the radius, without which the stage need not even lie on the right side
 of its input and the composition means nothing."""
 
-MORPHOLOGY_EPS_MARGIN = 0.5
+OFFSET_EPS_MARGIN = 0.5
 """A stage whose bound at the default ``eps`` still reaches the radius is done again at
 this share of the ``eps`` its bound says would just bring it below."""
 
@@ -443,20 +455,21 @@ def _verb(radius: float) -> str:
 def _stage_eps(solid: trimesh.Trimesh, radius: float) -> float:
     """The default ``eps`` of an offset (a morphology stage) of ``solid`` by ``radius``: an
     offset's default (``tol.eps_rel`` of the result's diagonal), at most
-    :data:`MORPHOLOGY_EPS_SHARE` of ``|radius|``."""
+    :data:`OFFSET_EPS_SHARE` of ``|radius|``."""
     from .tolerances import tol  # noqa: PLC0415
 
     extent = np.ptp(np.asarray(solid.bounds), axis=0)
     diagonal = float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
-    return min(tol.eps_rel * diagonal, MORPHOLOGY_EPS_SHARE * abs(radius))
+    return min(tol.eps_rel * diagonal, OFFSET_EPS_SHARE * abs(radius))
 
 
-def within_radius(run, solid: trimesh.Trimesh, radius: float, eps: float | None,
-                  what: str) -> OffsetResult:
+def _within_radius(run, solid: trimesh.Trimesh, radius: float, eps: float | None,
+                   what: str, *, refuse: bool = True) -> OffsetResult:
     """``run(eps)``, an offset of ``solid`` by ``radius`` (an offset at its default ``eps``,
     or a morphology stage), with an error bound below ``|radius|``: at the ``eps`` given,
     else refused (nothing is written); by default at :func:`_stage_eps`, done once more
-    finer if that was not fine enough."""
+    finer if that was not fine enough. Without ``refuse`` (a plain offset) what that
+    gives is returned as it is (:func:`offset` warns of it)."""
     done = run(_stage_eps(solid, radius) if eps is None else eps)
     if done.error_bound < abs(radius):
         return done
@@ -464,9 +477,9 @@ def within_radius(run, solid: trimesh.Trimesh, radius: float, eps: float | None,
     if eps is None:
         log.info("%s: the error bound %.3g at the default eps %.3g is not below the radius "
                  "%g; again at eps %.3g", what, done.error_bound, done.eps, abs(radius),
-                 MORPHOLOGY_EPS_MARGIN * needed)
-        done = run(MORPHOLOGY_EPS_MARGIN * needed)
-        if done.error_bound < abs(radius):
+                 OFFSET_EPS_MARGIN * needed)
+        done = run(OFFSET_EPS_MARGIN * needed)
+        if done.error_bound < abs(radius) or not refuse:
             return done
         needed = _eps_below(done, radius)
     raise InvalidParameterError(
@@ -528,7 +541,7 @@ def opening(mesh, r: float, *, eps: float | None = None, max_cells: int | None =
     """Erode by ``r`` then grow by ``r`` (``r > 0``): features thinner than ``2 r`` go.
     ``kind`` and ``repair`` as :func:`offset`'s (an erosion needs a solid). Each stage's
     error bound is below ``r``: by default its ``eps`` is at most
-    :data:`MORPHOLOGY_EPS_SHARE` of ``r``; an ``eps`` given that leaves a stage's bound at
+    :data:`OFFSET_EPS_SHARE` of ``r``; an ``eps`` given that leaves a stage's bound at
     ``r`` or above is refused (:class:`InvalidParameterError`, with the ``eps`` that would
     do)."""
     radius = _positive_radius(r, "an opening")

@@ -60,6 +60,6 @@ def solid_part(obj, role: str, *, repair: bool | None = None) -> Part:
                 repairs=solid.changes)
 
 
-REPAIR_OFFER = "repair=True (--repair) fills its holes where it can"
+REPAIR_OFFER = "repair=True (minkplan: --repair) fills its holes where it can"
 """What an open operand's refusal offers where the call takes ``repair`` (and its command
 ``--repair``)."""

@@ -128,7 +128,7 @@ try:
 except KeyboardInterrupt:
     stopped = time.perf_counter()
     after = planner.offset(solid, 0.2, eps=0.2, method="cells")   # not left cancelled
-    if companion.is_alive() or beside:
+    if len(sys.argv) > 3:
         companion.join()
     print("interrupted", stopped - signal_at[0], stopped - start, len(after.mesh.faces), *beside)
 """

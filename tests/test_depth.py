@@ -283,7 +283,8 @@ def test_a_tolerance_not_small_against_the_pair_is_refused_naming_the_ceiling():
 def test_an_open_operand_is_repaired_when_asked_and_says_what_changed():
     a, b = shapes.box(), shapes.box(center=(0.0, 0.75, 0.0))
     open_box = trimesh.Trimesh(a.vertices, a.faces[:-2], process=False)  # one square off
-    with pytest.raises(InvalidMeshError, match=r"not watertight.*repair=True \(--repair\)"):
+    with pytest.raises(InvalidMeshError,
+                       match=r"not watertight.*repair=True \(minkplan: --repair\)"):
         planner.penetration_depth(open_box, b)
     r = planner.penetration_depth(open_box, b, repair=True)
     assert r.lower <= 0.25 <= r.upper and r.validated

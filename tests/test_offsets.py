@@ -778,7 +778,7 @@ def test_a_morphologys_default_eps_keeps_each_stage_bound_below_the_radius(how, 
     with caplog.at_level("WARNING", logger="planner.offsets"):
         result = how(finned, 0.005)
     assert all(bound < 0.005 for bound in result.stats["stage_bounds"])
-    assert result.eps <= planner.offsets.MORPHOLOGY_EPS_SHARE * 0.005
+    assert result.eps <= planner.offsets.OFFSET_EPS_SHARE * 0.005
     assert "is not below the radius" not in caplog.text
 
 
@@ -796,7 +796,7 @@ def test_a_closings_second_stage_refusing_the_first_stages_surface_is_minkplans_
     it) is a GeometryError asking for a report, not advice to fix an input mesh."""
     from planner.errors import InvalidMeshError
 
-    offset = planner.offsets.offset
+    offset = planner.offsets._offset_unwarned
 
     def refusing(mesh, r, **options):
         if options["name"].endswith("(grown)"):
@@ -804,7 +804,7 @@ def test_a_closings_second_stage_refusing_the_first_stages_surface_is_minkplans_
                                    f"pairs); typically polygons triangulated wrongly")
         return offset(mesh, r, **options)
 
-    monkeypatch.setattr(planner.offsets, "offset", refusing)
+    monkeypatch.setattr(planner.offsets, "_offset_unwarned", refusing)
     with pytest.raises(GeometryError, match=r"first stage \(ball at eps .*\) made a surface "
                        r"its second stage cannot take as a solid \(surface overlaps itself "
                        r"\(1 pairs\)\); a fault of minkplan's") as info:
@@ -828,3 +828,16 @@ def test_the_offset_command_takes_an_eps_below_the_radius(tmp_path, capsys, capl
         assert main(["offset", str(part), "-r", "-0.005", "--eps", "0.02", "-o", str(out),
                      "--no-progress"]) == 0
     assert "is not below the radius" in caplog.text and "use eps below" in caplog.text
+
+
+def test_a_stage_retried_at_a_finer_eps_is_not_warned_of(monkeypatch, caplog):
+    """A stage whose bound at the default eps reaches the radius is done again finer, and
+    only the log's info line says so: no warning that its result means nothing (that is
+    for an eps the user gave)."""
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    monkeypatch.setattr(planner.offsets, "_stage_eps", lambda solid, radius: 3.0 * abs(radius))
+    with caplog.at_level("INFO", logger="planner.offsets"):
+        closed = planner.closing(box, 0.05, method="cells")
+    assert all(bound < 0.05 for bound in closed.stats["stage_bounds"])
+    assert "again at eps" in caplog.text
+    assert not [r for r in caplog.records if r.levelname == "WARNING"], caplog.text

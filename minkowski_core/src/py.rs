@@ -473,6 +473,19 @@ pub struct ExactSum {
     pieces: bool,
 }
 
+impl ExactSum {
+    /// Refuse `what` of a sum made for one depth query (`depth_near`): its facets beyond
+    /// that query's reach were left out, so the answer could be wrong.
+    fn whole(&self, what: &str) -> PyResult<()> {
+        match self.inner.region {
+            Some(_) => Err(InvalidParameterError::new_err(format!(
+                "{what}: this sum was made for one depth query (depth_near) and kept only the facets near its point; make it without depth_near"
+            ))),
+            None => Ok(()),
+        }
+    }
+}
+
 #[pymethods]
 impl ExactSum {
     /// `A ⊕ B` for `a` and `b` given as (vertices (n, 3), faces (m, 3)): solids (closed,
@@ -540,12 +553,14 @@ impl ExactSum {
     /// Whether the closed segment a → b misses the sum grown by the cube `margin`.
     #[pyo3(signature = (a, b, margin=0.0))]
     fn segment_is_free(&self, a: Vec<f64>, b: Vec<f64>, margin: f64) -> PyResult<bool> {
+        self.whole("segment_is_free")?;
         Ok(self.inner.segment_is_free(vec3_any(&a, "a")?, vec3_any(&b, "b")?, margin.max(0.0)))
     }
 
     /// Signed distance bounds of `points` (n, 3), (n,): outside, a lower bound on the
     /// distance to the sum; inside, minus a lower bound on the depth. Parallel.
     fn signed_distance<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        self.whole("signed_distance")?;
         let pts = points_of(&points, "points")?;
         let src = self.inner.clone();
         let out: Vec<f64> = py.detach(move || pts.par_iter().map(|p| src.signed_distance(*p)).collect());
@@ -554,6 +569,7 @@ impl ExactSum {
 
     /// The parameter intervals of the segment a → b inside the sum, sorted and merged.
     fn segment_intervals(&self, a: PyReadonlyArray1<'_, f64>, b: PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
+        self.whole("segment_intervals")?;
         Ok(self.inner.segment_intervals(vec3_of(&a, "a")?, vec3_of(&b, "b")?))
     }
 
@@ -588,6 +604,7 @@ impl ExactSum {
         if self.pieces {
             return Err(InvalidParameterError::new_err("surface: a sum built with pieces=True answers point and segment queries only (its surface needs the reduced convolution)"));
         }
+        self.whole("surface")?;
         let src = self.inner.clone();
         let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };
         let r = interruptible(py, move || approximate_solid(src.as_ref(), &src.aabb, &params))??;

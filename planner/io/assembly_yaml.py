@@ -131,7 +131,7 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
     settings = dataclasses.replace(settings, contact_tolerance=delta + interference)
     overlaps = _accepted_overlaps(parts, delta) if interference > 0 else ()
     parts = _with_escape_hints(parts, overlaps)
-    _check_assembled_pose(parts, delta, interference)
+    _check_assembled_pose(parts, delta, interference, overlaps)
     return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
                     settings=settings, path=path, interference=interference,
                     overlaps=overlaps)
@@ -141,11 +141,14 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
 _SUGGEST_UPTO = 0.1
 
 
-def _check_assembled_pose(parts: list[Part], delta: float, interference: float = 0.0) -> None:
+def _check_assembled_pose(parts: list[Part], delta: float, interference: float = 0.0,
+                          overlaps: tuple[dict, ...] = ()) -> None:
     """The assembled pose must be valid: no part overlaps another beyond the contact
     tolerance plus the interference tolerance. An overlap is reported with its
-    penetration depth (computed for that pair only)."""
+    penetration depth (from ``overlaps`` when it is there, else computed for that pair
+    only)."""
     allowed = delta + interference
+    known = {(o["part"], o["other"]): o["penetration_depth"] for o in overlaps}
     for i, part in enumerate(parts):
         others = parts[i + 1:]
         if not others:
@@ -156,10 +159,11 @@ def _check_assembled_pose(parts: list[Part], delta: float, interference: float =
         hit = checker.colliding_obstacle(np.zeros(3))
         other = next((p for p in others if hit and p.name == hit[0]), None)
         name = other.name if other is not None else "another part"
-        depth = _overlap_depth(part, other) if other is not None else None
-        if depth is not None and any(depth["direction"]):  # its way out, tried first
-            x, y, z = (float(c) for c in depth["direction"])
-            hinted = dataclasses.replace(part, escape_hints=part.escape_hints + ((x, y, z),))
+        depth = (None if other is None else known[(part.name, other.name)]
+                 if (part.name, other.name) in known else _overlap_depth(part, other))
+        way_out = _hint(depth)
+        if way_out is not None and way_out not in part.escape_hints:  # tried first
+            hinted = dataclasses.replace(part, escape_hints=part.escape_hints + (way_out,))
             checker = FclChecker.for_parts(hinted, others, contact_tolerance=allowed)
         suggested = _interference_accepting(checker, delta, depth)
         said = "" if depth is None else (
@@ -234,14 +238,22 @@ def _with_escape_hints(parts: list[Part], overlaps: tuple[dict, ...]) -> list[Pa
     flush on the block."""
     hints: dict[str, list[tuple[float, float, float]]] = {}
     for overlap in overlaps:
-        depth = overlap["penetration_depth"]
-        if depth is None or not depth.get("direction"):
+        hint = _hint(overlap["penetration_depth"])
+        if hint is None:
             continue
-        x, y, z = (float(c) for c in depth["direction"])
-        hints.setdefault(overlap["part"], []).append((x, y, z))
-        hints.setdefault(overlap["other"], []).append((-x, -y, -z))
+        hints.setdefault(overlap["part"], []).append(hint)
+        hints.setdefault(overlap["other"], []).append((-hint[0], -hint[1], -hint[2]))
     return [dataclasses.replace(p, escape_hints=p.escape_hints + tuple(hints[p.name]))
             if p.name in hints else p for p in parts]
+
+
+def _hint(depth: dict | None) -> tuple[float, float, float] | None:
+    """The direction a penetration depth (JSON values) frees its part along, or ``None``
+    (no depth, or parts apart)."""
+    if depth is None or depth["separated"] or not any(depth["direction"]):
+        return None
+    x, y, z = (float(c) for c in depth["direction"])
+    return (x, y, z)
 
 
 def _overlap_depth(part: Part, other: Part) -> dict | None:

@@ -34,7 +34,8 @@ contact); this case is exact.
 FCL cannot compute ``pd`` for meshes (``enable_signed_distance`` returns ``0`` for
 intersecting BVH meshes and the *positive* surface distance for nested ones), so for
 ``delta > 0`` the checker certifies validity with a *witness*: a translation ``u``, tried
-along the escape directions of FCL's contact normals and the six axis directions with
+along the checker's escape hints (a penetration depth's direction, given by the caller),
+then the escape directions of FCL's contact normals and the six axis directions, with
 lengths ``delta * CheckerTolerances.witness_fractions``, such that ``R + t + u`` is free
 with FCL clearance ``d_u``; then ``pd(t) <= |u| - d_u``. The FCL side is therefore
 conservative: it never accepts a ``t`` with ``pd(t) > delta``, and it may reject a ``t``
@@ -182,9 +183,7 @@ class FclChecker:
             raise InvalidParameterError(
                 f"solid: {len(solid)} flags for {len(obstacles)} obstacles"
             )
-        self.escape_hints = [h / np.linalg.norm(h) for h in
-                             (np.asarray(x, dtype=np.float64) for x in escape_hints)
-                             if np.all(np.isfinite(h)) and np.linalg.norm(h) > 0]
+        self.escape_hints = _unit_hints(escape_hints)
         self.robot = _Part(robot, "robot", robot_solid)
         self.obstacles = [_Part(m, n, k) for m, n, k in zip(obstacles, names, solid)]
         self.names = tuple(names)
@@ -674,3 +673,20 @@ class FclChecker:
             return True, None
         self.n_invalid_motions += 1
         return False, seg.last_valid_fraction
+
+
+def _unit_hints(hints: Sequence[ArrayLike]) -> list[np.ndarray]:
+    """The distinct unit directions of ``hints`` (3-vectors; zero or non-finite ones
+    dropped)."""
+    unique: list[np.ndarray] = []
+    for hint in hints:
+        h = np.asarray(hint, dtype=np.float64)
+        if h.shape != (3,):
+            raise InvalidParameterError(f"escape_hints: a hint has shape {h.shape}, not (3,)")
+        norm = float(np.linalg.norm(h))
+        if not (math.isfinite(norm) and norm > 0.0):
+            continue
+        d = h / norm
+        if not any(float(np.dot(d, u)) > 1.0 - 1e-9 for u in unique):
+            unique.append(d)
+    return unique

@@ -294,8 +294,8 @@ fn beyond_region(p: Vec3) -> CoreError {
 
 impl ExactSource {
     /// Whether every facet meeting the cube around `p` of half-width `r` was kept (always,
-    /// without a [`ExactSource::region`]).
-    fn holds_ball(&self, p: Vec3, r: f64) -> bool {
+    /// without a [`ExactSource::region`]): that cube holds the ball of radius `r`.
+    fn holds_cube(&self, p: Vec3, r: f64) -> bool {
         self.region.is_none_or(|reg| reg.min.cmple(p - Vec3::splat(r)).all() && (p + Vec3::splat(r)).cmple(reg.max).all())
     }
 
@@ -351,8 +351,8 @@ impl ExactSource {
             let nearest = (0..dist.len()).min_by(|&i, &j| dist[i].total_cmp(&dist[j]));
             let point = nearest.map_or(p, |i| facet_nearest(&self.facets[i], p));
             let d = (point - p).length();
-            if nearest.is_none_or(|_| !self.holds_ball(p, d)) {
-                return Err(beyond_region(p));
+            if self.region.is_some() && nearest.is_none_or(|_| !self.holds_cube(p, d)) {
+                return Err(beyond_region(p)); // a nearer facet may have been left out
             }
             return Ok(Depth { inside, lower: d, upper: d, point, converged: nearest.is_some(), cells: 0, facets_tried: 0, smallest_cells: 0 });
         }
@@ -360,7 +360,7 @@ impl ExactSource {
         s.box_exit();
         let facets_tried = s.nearest_facets();
         let nearest_facet = s.dist.iter().copied().fold(f64::INFINITY, f64::min).min(s.upper);
-        if !self.holds_ball(p, s.upper * (1.0 + 1e-9)) {
+        if !self.holds_cube(p, s.upper * (1.0 + 1e-9)) {
             return Err(beyond_region(p)); // (not for the point the source was made for)
         }
         let (lower, converged) = if s.upper - nearest_facet <= tol { (nearest_facet, true) } else { s.cells(max_cells) };
