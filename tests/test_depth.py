@@ -329,3 +329,24 @@ def test_two_meshing_gears_pushed_together_are_answered_from_the_facets_near_the
     assert 0 < r.stats["facets"] < 100_000
     assert 0.0 < r.lower <= r.upper <= 0.001 + r.tolerance
     assert_separating(medium, large, r)
+
+
+def test_a_sum_made_for_one_depth_query_refuses_other_queries():
+    """It keeps only the facets near its point: a distance bound or a segment test
+    elsewhere could be wrong, so they are refused; the point query (no facets) and the
+    depth it was made for are answered."""
+    from planner._minkowski_core import ExactSum
+
+    a, b = shapes.box(), shapes.box(center=(0.7, 0.0, 0.0))
+    arrays = [(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int64))
+              for m in (b, a)]
+    minus_a = (-arrays[1][0], arrays[1][1][:, ::-1].copy())
+    near = ExactSum(arrays[0], minus_a, depth_near=([0.0, 0.0, 0.0], 1e-3))
+    found = near.depth(np.zeros(3), 1e-3)
+    assert found["inside"] and found["lower"] <= 0.3 <= found["upper"]
+    assert near.contains(np.zeros((1, 3)))[0]
+    with pytest.raises(InvalidParameterError, match="signed_distance: this sum was made for "
+                       "one depth query"):
+        near.signed_distance(np.array([[0.0, 0.0, 1.2]]))
+    with pytest.raises(InvalidParameterError, match="segment_is_free"):
+        near.segment_is_free([0.0, 0.0, 0.0], [0.0, 0.0, 2.0])
