@@ -402,6 +402,31 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     if not part.solid:
         _refuse_surface_closing(name)
     what = "an opening" if first < 0 else "a closing"
+    stages = functools.partial(_stages, part, radius, second, eps, max_cells,
+                               (name, stage_name, what), progress, t0=t0)
+    try:
+        one, two = stages(method)
+    except _StageOutputRefused as refused:
+        if method != "auto" or refused.first_method == "cells":
+            raise
+        # auto's first choice made a surface its second stage cannot take: the cells
+        log.warning("%s; %s again by the cells", refused, what)
+        one, two = stages("cells")
+    stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
+             "method": f"{one.stats['method']} then {two.stats['method']}",
+             "stage_bounds": [one.error_bound, two.error_bound],
+             "kind": "solid", "changes": one.stats["changes"],
+             "seconds": one.stats["seconds"] + two.stats["seconds"]}
+    return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
+
+
+def _stages(part: Classified, radius: float, second: float, eps, max_cells,
+            names: tuple[str, str, str], progress: bool | None, method: str, *, t0: float
+            ) -> tuple[OffsetResult, OffsetResult]:
+    """The two stages of an opening or closing (``names``: the part's, the second stage's
+    word for the first, and ``"an opening"`` or ``"a closing"``) of the solid ``part``: by
+    ``radius``, then its result by ``second``, each with its bound below the radius."""
+    name, stage_name, what = names
     one = _within_radius(
         lambda step: _offset_part(part, radius, step, max_cells, name, progress, method, t0),
         part.mesh, radius, eps, f"{what}'s first stage ({name} {_verb(radius)})")
@@ -425,14 +450,8 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
             raise _stage_output_refused(error, one, f"{name} ({stage_name})", what) from error
 
     two = _within_radius(second_stage, one.mesh, second, eps,
-                        f"{what}'s second stage ({name} {_verb(second)})")
-    stats = {"triangles": two.stats["triangles"], "stages": [one.stats, two.stats],
-             "method": f"{one.stats['method']} then {two.stats['method']}",
-             "stage_bounds": [one.error_bound, two.error_bound],
-             "kind": "solid", "changes": one.stats["changes"],
-             "seconds": one.stats["seconds"] + two.stats["seconds"]}
-    return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
-
+                         f"{what}'s second stage ({name} {_verb(second)})")
+    return one, two
 
 OFFSET_EPS_SHARE = 0.5
 """An offset's default ``eps`` (each stage's of an opening or closing) is at most
@@ -498,11 +517,21 @@ def _stage_output_refused(error: Exception, one: OffsetResult, stage: str, what:
         return error
     found = str(error).split("; ", 1)[0].replace(f"mesh {stage!r}: ", "").replace(
         f"{stage}: ", "")
-    return GeometryError(
+    return _StageOutputRefused(
+        one.stats["method"],
         f"{stage}: {what}'s first stage ({one.stats['method']} at eps {one.eps:.3g}) made a "
         f"surface its second stage cannot take as a solid ({found}); a fault of minkplan's, "
         f"not of the input: try another eps or method (--method cells), and please report "
         f"this input")
+
+
+class _StageOutputRefused(GeometryError):
+    """The second stage of an opening or closing refused the first stage's surface (made
+    by ``first_method``) as a solid: minkplan's fault, not the input's."""
+
+    def __init__(self, first_method: str, message: str) -> None:
+        super().__init__(message)
+        self.first_method = first_method
 
 
 def _eps_below(done: OffsetResult, radius: float) -> float:

@@ -808,8 +808,30 @@ def test_a_closings_second_stage_refusing_the_first_stages_surface_is_minkplans_
     with pytest.raises(GeometryError, match=r"first stage \(ball at eps .*\) made a surface "
                        r"its second stage cannot take as a solid \(surface overlaps itself "
                        r"\(1 pairs\)\); a fault of minkplan's") as info:
-        planner.closing(_finned(), 0.05, name="fin")
+        planner.closing(_finned(), 0.05, name="fin", method="ball")
     assert "triangulated" not in str(info.value)
+
+
+def test_auto_closes_by_the_cells_when_the_balls_surface_is_refused(monkeypatch, caplog):
+    """With method auto, a first stage whose surface its second stage refuses (the ball's
+    on IndustReal's gear base at eps 5e-4: one triangle facing into the solid) is done
+    again by the cells, with a warning saying why."""
+    from planner.errors import InvalidMeshError
+
+    offset = planner.offsets._offset_unwarned
+
+    def refusing_the_balls(mesh, r, **options):
+        if options["name"].endswith("(grown)") and options["method"] == "ball":
+            raise InvalidMeshError(f"mesh {options['name']!r}: 1 of its faces face into the "
+                                   f"solid")
+        return offset(mesh, r, **options)
+
+    monkeypatch.setattr(planner.offsets, "_offset_unwarned", refusing_the_balls)
+    with caplog.at_level("WARNING", logger="planner.offsets"):
+        closed = planner.closing(_finned(), 0.05, name="fin")
+    assert closed.stats["method"] == "cells then cells"
+    assert "a fault of minkplan's" in caplog.text and "again by the cells" in caplog.text
+    assert closed.mesh.is_watertight and closed.mesh.volume >= _finned().volume
 
 
 def test_the_offset_command_takes_an_eps_below_the_radius(tmp_path, capsys, caplog):
