@@ -344,11 +344,33 @@ def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
         done = ball_offset(solid, radius, step, name=name, max_cells=max_cells,
                            progress=progress)
         if done is not None:
-            return done, "ball"
+            fault = _solid_fault(done[0], name)
+            if fault is None:
+                return done, "ball"
+            what = f"{name} offset by {radius:g}: the ball's surface is no clean solid ({fault})"
+            if method == "ball":
+                log.warning("%s, a fault of minkplan's (method 'cells' gives one)", what)
+                return done, "ball"
+            log.warning("%s, a fault of minkplan's; by the cells instead", what)
         if method == "ball":
             raise InvalidParameterError(f"method = 'ball': eps {step:.3g} is finer than the "
                                         f"finest icosphere of radius {abs(radius):g}")
     return _cell_offset(solid, radius, step, max_cells, name), "cells"
+
+
+def _solid_fault(mesh: trimesh.Trimesh, name: str) -> str | None:
+    """What keeps the ball's output from being a clean solid, or ``None``: the winding
+    check refusing it, or triangles with the solid in front of them too (two sheets that
+    meet; an erosion of it would refuse them). Its checked solid is remembered for the
+    next use of that mesh (an opening's or closing's second stage)."""
+    from .meshes.solids import validate_solid  # noqa: PLC0415
+
+    try:
+        checked = validate_solid(mesh, name=f"{name} (offset)")
+    except InvalidMeshError as error:
+        return str(error).split("; ", 1)[0]
+    inner = int(checked.metadata.get(FACES_INSIDE) or 0)
+    return f"{inner} of its triangles face into it" if inner else None
 
 
 FINE_FACETS = 0.05
