@@ -283,8 +283,7 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
         _check_surface_offset(radius, method, name, part.reason)
     elif radius < 0:
         _check_boundary_is_every_triangle(solid, name)
-    diagonal = float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
-    step = checked_eps(eps, diagonal)
+    step = checked_eps(eps, _result_diagonal(extent, radius))
     verb = "growing" if radius > 0 else "eroding"
     with StatusLine(progress) as line:
         line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
@@ -361,8 +360,7 @@ def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
 def _solid_fault(mesh: trimesh.Trimesh, name: str) -> str | None:
     """What keeps the ball's output from being a clean solid, or ``None``: the winding
     check refusing it, or triangles with the solid in front of them too (two sheets that
-    meet; an erosion of it would refuse them). Its checked solid is remembered for the
-    next use of that mesh (an opening's or closing's second stage)."""
+    meet; an erosion of it would refuse them)."""
     from .meshes.solids import validate_solid  # noqa: PLC0415
 
     try:
@@ -475,6 +473,7 @@ def _stages(part: Classified, radius: float, second: float, eps, max_cells,
                          f"{what}'s second stage ({name} {_verb(second)})")
     return one, two
 
+
 OFFSET_EPS_SHARE = 0.5
 """An offset's default ``eps`` (each stage's of an opening or closing) is at most
 this share of its radius (and
@@ -499,9 +498,14 @@ def _stage_eps(solid: trimesh.Trimesh, radius: float) -> float:
     :data:`OFFSET_EPS_SHARE` of ``|radius|``."""
     from .tolerances import tol  # noqa: PLC0415
 
-    extent = np.ptp(np.asarray(solid.bounds), axis=0)
-    diagonal = float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
+    diagonal = _result_diagonal(np.ptp(np.asarray(solid.bounds), axis=0), radius)
     return min(tol.eps_rel * diagonal, OFFSET_EPS_SHARE * abs(radius))
+
+
+def _result_diagonal(extent: np.ndarray, radius: float) -> float:
+    """The diagonal of the box around a solid of box ``extent`` offset by ``radius``
+    (grown: the box grows; eroded: taken as the solid's)."""
+    return float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
 
 
 def _within_radius(run, solid: trimesh.Trimesh, radius: float, eps: float | None,

@@ -353,8 +353,7 @@ class ExactSource(Source):
                                max_facets=budget.facets())
         if mirror_b:  # kept for the C-spaces of the same parts (the parts kept alive too)
             self._mirrored[(id(a), id(b))] = (a, b, native)
-        stats = {"triangles_a": int(native.triangles[0]), "triangles_b": int(native.triangles[1]),
-                 "facets": int(native.facets)}
+        stats = _exact_pair_stats(native)
         return PairCObstacle(native, exact=True, excess=0.0, stats=stats)
 
     def depth_pair(self, a: Part, b: Part, point: np.ndarray, tolerance: float
@@ -373,8 +372,7 @@ class ExactSource(Source):
                                max_facets=budget.facets(),
                                depth_near=(np.asarray(point, dtype=np.float64).tolist(),
                                            float(tolerance)))
-        stats = {"triangles_a": int(native.triangles[0]), "triangles_b": int(native.triangles[1]),
-                 "facets": int(native.facets)}
+        stats = _exact_pair_stats(native)
         return PairCObstacle(native, exact=True, excess=0.0, stats=stats)
 
     def describe(self, obstacles, robot):
@@ -386,6 +384,12 @@ class ExactSource(Source):
 
     def relative_to(self, parts):
         return "the meshes as given (exact boundary-convolution source)"
+
+
+def _exact_pair_stats(native) -> dict[str, int]:
+    """What an exact pair sum (``ExactSum``) was built from: triangles and facets."""
+    return {"triangles_a": int(native.triangles[0]), "triangles_b": int(native.triangles[1]),
+            "facets": int(native.facets)}
 
 
 class DecompositionSource(Source):

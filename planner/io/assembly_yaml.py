@@ -159,8 +159,11 @@ def _check_assembled_pose(parts: list[Part], delta: float, interference: float =
         hit = checker.colliding_obstacle(np.zeros(3))
         other = next((p for p in others if hit and p.name == hit[0]), None)
         name = other.name if other is not None else "another part"
-        depth = (None if other is None else known[(part.name, other.name)]
-                 if (part.name, other.name) in known else _overlap_depth(part, other))
+        pair = (part.name, name)
+        if other is None:
+            depth = None
+        else:
+            depth = known[pair] if pair in known else _overlap_depth(part, other)
         way_out = _hint(depth)
         if way_out is not None and way_out not in part.escape_hints:  # tried first
             hinted = dataclasses.replace(part, escape_hints=part.escape_hints + (way_out,))
