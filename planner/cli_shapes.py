@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from planner.cli import _fail, _missing_mesh
+from planner.errors import EmptyResultError
 
 __all__ = ["add_parsers", "add_repair_option", "cmd_depth", "cmd_offset", "made_solid_text"]
 
@@ -42,7 +43,8 @@ def _add_offset_parser(sub, common) -> None:
         help="grow or shrink a closed mesh by a radius (offset, erosion, opening, closing)",
         description="Write the offset {x : dist(x, P) <= r} of a closed mesh P (r > 0), its "
         "erosion (r < 0), or with --opening / --closing both in turn, with a two-sided "
-        "error bound. Exit 0; 2: bad input.",
+        "error bound. Exit 0; 1: nothing is left (every part of the solid thinner than 2|r|, "
+        "eroded or opened away; nothing written); 2: bad input.",
     )
     o.add_argument("mesh", help="closed mesh file")
     o.add_argument("-r", "--radius", type=float, required=True,
@@ -99,7 +101,11 @@ def cmd_offset(args) -> int:
                    method=args.method, kind=args.kind, repair=args.repair)
     how = planner.opening if args.opening else planner.closing if args.closing else \
         planner.offset
-    result = how(mesh, args.radius, eps=args.eps, **options)
+    try:
+        result = how(mesh, args.radius, eps=args.eps, **options)
+    except EmptyResultError as empty:  # an answer, not an error: no result, exit 1
+        sys.stderr.write(f"minkplan: offset: {empty}; nothing written\n")
+        return 1
     write_mesh(result.mesh, out)
     stats = result.stats
     of = "" if stats["kind"] == "solid" else ", of its triangles"

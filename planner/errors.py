@@ -11,6 +11,7 @@ built-in keep working::
     ├── ResourceLimitError(MinkplanError, MemoryError)    work would not fit in memory/time
     ├── TimeLimitError(MinkplanError, TimeoutError)       time limit passed in native work
     ├── GeometryError(MinkplanError, RuntimeError)        core failed on valid-looking input
+    │   └── EmptyResultError(GeometryError)               the result is empty (all eroded)
     └── ScenarioError(MinkplanError, ValueError)          scenario YAML problem (field, line)
 
 Messages are a single line that names the input (mesh name, file path or field), states
@@ -26,6 +27,7 @@ must never import the extension.
 from __future__ import annotations
 
 __all__ = [
+    "EmptyResultError",
     "GeometryError",
     "InvalidMeshError",
     "InvalidParameterError",
@@ -87,6 +89,13 @@ class GeometryError(MinkplanError, RuntimeError):
     """The native core (or a geometry library such as CoACD) could not process input that
     passed validation. This is a bug or a numerical limit, not a user error; the message
     names the input so it can be reproduced."""
+
+
+class EmptyResultError(GeometryError):
+    """The answer is the empty set: an erosion (or an opening's) that leaves nothing of
+    the solid, its every part thinner than twice the radius. Not a failure of the input
+    or the core: ``minkplan offset`` exits 1 (no result) and writes nothing. A
+    :class:`GeometryError` as before, for callers that catch that."""
 
 
 class ScenarioError(MinkplanError, ValueError):

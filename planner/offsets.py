@@ -48,6 +48,7 @@ import numpy as np
 import trimesh
 
 from planner.errors import (
+    EmptyResultError,
     GeometryError,
     InvalidMeshError,
     InvalidParameterError,
@@ -296,8 +297,8 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
         if not math.isfinite(bound):
             raise GeometryError(f"{name}: nothing was resolved of it offset by {radius:g} at "
                                 f"eps {step:g}; try a smaller eps")
-        raise GeometryError(f"{name}: nothing is left of it eroded by {-radius:g} (its "
-                            f"thickest part is thinner than {2 * -radius:g})")
+        raise EmptyResultError(f"{name}: nothing is left of it eroded by {-radius:g} (its "
+                               f"thickest part is thinner than {2 * -radius:g})")
     stats["method"] = used
     stats["kind"] = "solid" if part.solid else "surface"
     stats["changes"] = dict(part.changes)

@@ -173,7 +173,7 @@ def test_contact_tolerance_is_used_everywhere():
                                                          "did you mean 'base'?"),
     ("parts:\n  - {name: a, mesh: nope.stl}\n", "<assembly>:2: parts[0].mesh: file 'nope.stl'"),
     ("parts:\n  - {name: a, box: [1, 1, 1]}\n  - {name: b, box: [1, 1, 1]}\n",
-     "<assembly>:2: parts[0]: part 'a' collides with 'b'"),
+     "<assembly>:3: parts[1]: part 'b' collides with 'a'"),
     ("parts:\n  - {name: a, box: [1, 1, 1]}\ncontact_tolerance: -1\n",
      "<assembly>:3: contact_tolerance: must be >= 0"),
     ("parts:\n  - {name: a, box: [1, 1, 1]}\ncontact_tolerance: 0.1\n"

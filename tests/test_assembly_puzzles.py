@@ -129,7 +129,8 @@ def test_an_overlap_is_refused_without_an_interference_tolerance(tmp_path):
     with pytest.raises(ScenarioError) as info:
         load_assembly(_press_fit(tmp_path))
     message = str(info.value)
-    assert "collides with 'cap'" in message and "penetration depth in [0.02" in message
+    assert "part 'cap' collides with 'block'" in message
+    assert "penetration depth in [0.02" in message and "along (0, 0, 1)" in message
     assert "interference: 0.022 or more" in message
 
 
@@ -147,8 +148,9 @@ def test_an_interference_tolerance_plans_the_overlapping_pair(tmp_path):
     assert assembly.tolerance == pytest.approx(assembly.contact_tolerance + 0.03)
     assert assembly.settings.contact_tolerance == pytest.approx(assembly.tolerance)
     (overlap,) = assembly.overlaps
-    assert (overlap["part"], overlap["other"]) == ("block", "cap")
+    assert (overlap["part"], overlap["other"]) == ("cap", "block")  # the cap moves
     assert overlap["penetration_depth"]["lower"] == pytest.approx(0.02, abs=1e-6)
+    assert overlap["penetration_depth"]["direction"] == pytest.approx([0.0, 0.0, 1.0])
     result = plan_assembly(assembly)
     assert result.found and result.order == ["block", "cap"]
     (step,) = result.removal
@@ -192,7 +194,7 @@ def test_cli_interference_option(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "interference 0.03: 1 overlapping pair(s) accepted" in out
     report = json.loads((tmp_path / "yes" / "report.json").read_text())
-    assert report["interference"] == 0.03 and report["overlaps"][0]["other"] == "cap"
+    assert report["interference"] == 0.03 and report["overlaps"][0]["part"] == "cap"
     # the option replaces the file's value
     assert main(["assemble", str(_press_fit(tmp_path, 0.03)), "--out",
                  str(tmp_path / "less"), "--no-progress", "--interference", "0.01"]) == 2

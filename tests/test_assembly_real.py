@@ -42,7 +42,7 @@ def test_the_nut_pose_overlaps_the_thread_and_is_refused_without_a_tolerance():
         load_assembly(NUT_BOLT)
     message = str(info.value)
     assert "\n" not in message and "factory_nut_bolt_m12.yaml" in message
-    assert "part 'bolt' collides with 'nut'" in message
+    assert "part 'nut' collides with 'bolt'" in message  # the bolt is the base
     # the nut is a surface (no penetration depth): the smallest tolerance FCL's check
     # accepts is searched for and suggested, and that tolerance loads the assembly
     assert "no penetration depth (a surface has no inside)" in message
@@ -59,7 +59,7 @@ def test_the_nut_comes_off_within_the_interference_it_was_given(tmp_path, capsys
     of the lift lies within 1.6 mm of a free one, one every 1.75 mm pitch), each pose
     validated by FCL with a witness no longer than the tolerance."""
     assembly = load_assembly(NUT_BOLT, interference=NUT_INTERFERENCE)
-    assert [(o["part"], o["other"]) for o in assembly.overlaps] == [("bolt", "nut")]
+    assert [(o["part"], o["other"]) for o in assembly.overlaps] == [("nut", "bolt")]
     result = plan_assembly(assembly)
     assert result.found and result.order == ["bolt", "nut"], result.message
     (step,) = result.removal
@@ -67,7 +67,7 @@ def test_the_nut_comes_off_within_the_interference_it_was_given(tmp_path, capsys
     assert step.validation["tolerance"] == pytest.approx(assembly.tolerance)
     sequence = result.sequence_json()
     assert sequence["interference"] == NUT_INTERFERENCE
-    assert sequence["overlaps"][0]["other"] == "nut"
+    assert sequence["overlaps"][0]["part"] == "nut"
     # a larger allowance accepts what a smaller one did
     assert load_assembly(NUT_BOLT, interference=2 * NUT_INTERFERENCE).overlaps
     # the command line says the same, with exit code 0

@@ -79,13 +79,13 @@ def test_assemble_overlap_reports_depth(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["assemble", str(asm), "--out", str(out), "--no-progress"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "penetration depth in [" in err[0] and "(0, 0, -1)" in err[0]
+    assert len(err) == 1 and "penetration depth in [" in err[0] and "(0, 0, 1)" in err[0]
     report = json.loads((out / "report.json").read_text())
     assert report["status"] == "invalid_input"
     depth = report["overlap"]["penetration_depth"]
-    assert report["overlap"]["part"] == "a" and report["overlap"]["other"] == "b"
+    assert report["overlap"]["part"] == "b" and report["overlap"]["other"] == "a"
     assert depth["lower"] <= 0.4 <= depth["upper"]
-    assert depth["direction"] == pytest.approx([0.0, 0.0, -1.0])
+    assert depth["direction"] == pytest.approx([0.0, 0.0, 1.0])
 
 
 def test_depth_refuses_a_tolerance_as_wide_as_the_pair(pair, capsys):

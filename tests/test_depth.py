@@ -229,8 +229,9 @@ def test_assembled_pose_overlap_reports_the_depth():
     with pytest.raises(ScenarioError) as info:
         parse_assembly(text)
     message = str(info.value)
-    assert "part 'a' collides with 'b'" in message and "penetration depth in [" in message
-    assert "along (-1, 0, 0)" in message
+    # the later part is the one to move: its entry, and the way that frees it
+    assert "parts[1]: part 'b' collides with 'a'" in message
+    assert "penetration depth in [" in message and "along (1, 0, 0)" in message
     depth = info.value.details["overlap"]["penetration_depth"]
     assert depth["lower"] <= 0.3 <= depth["upper"]
 

@@ -14,7 +14,12 @@ import trimesh
 
 import planner
 from planner.cli import main
-from planner.errors import GeometryError, InvalidParameterError, ResourceLimitError
+from planner.errors import (
+    EmptyResultError,
+    GeometryError,
+    InvalidParameterError,
+    ResourceLimitError,
+)
 
 
 def _steiner(mesh: trimesh.Trimesh, r: float) -> float:
@@ -310,11 +315,13 @@ def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors():
         planner.offset(box, 0.0)
     with pytest.raises(InvalidParameterError, match="non-zero finite"):
         planner.offset(box, math.nan)
-    with pytest.raises(GeometryError, match="nothing is left"):
+    with pytest.raises(EmptyResultError, match="nothing is left"):
         planner.offset(box, -0.6, eps=0.05)
+    with pytest.raises(EmptyResultError, match="nothing is left"):
+        planner.opening(box, 0.6, eps=0.05)
     from shapes import l_bracket  # not convex: the sum with the ball's complement
 
-    with pytest.raises(GeometryError, match="nothing is left"):
+    with pytest.raises(EmptyResultError, match="nothing is left"):
         planner.offset(l_bracket(), -0.6, eps=0.05, method="ball")
     with pytest.raises(InvalidParameterError, match="method"):
         planner.offset(box, 0.1, method="sample")
@@ -428,6 +435,13 @@ def test_the_offset_command_writes_the_mesh_and_says_its_bound(tmp_path, capsys)
     assert shrunk.volume == pytest.approx(0.8 ** 3, rel=1e-6)  # (STL: float32)
     assert main(["offset", str(part), "-r", "0", "-o", str(tmp_path / "x.stl")]) == 2
     assert "radius" in capsys.readouterr().err
+    # an opening that leaves nothing is an answer (exit 1, no result), not bad input
+    gone = tmp_path / "gone.stl"
+    assert main(["offset", str(part), "-r", "0.6", "--opening", "-o", str(gone),
+                 "--eps", "0.05"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "nothing is left" in err and "nothing written" in err
+    assert not gone.exists()
 
 
 def test_a_real_cad_part_with_t_junctions_is_offset_as_the_assembly_reads_it():

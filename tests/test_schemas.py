@@ -85,7 +85,7 @@ def test_the_files_of_an_interference_fit_validate(tmp_path):
     _valid("sequence", sequence)
     _valid("assembly_report", report)
     assert sequence["interference"] == report["interference"] == 0.03
-    assert [o["other"] for o in report["overlaps"]] == ["b"]
+    assert [(o["part"], o["other"]) for o in report["overlaps"]] == [("b", "a")]
 
 
 def test_minkowski_stats_validate(tmp_path):

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from planner.errors import ScenarioError
 from planner.problem import DEFAULT_CONTACT_REL, Assembly, Part
 from planner.validation import FclChecker
 
@@ -129,9 +130,9 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
         delta = DEFAULT_CONTACT_REL * float(np.linalg.norm(bounds[:, 1].max(axis=0)
                                                            - bounds[:, 0].min(axis=0)))
     settings = dataclasses.replace(settings, contact_tolerance=delta + interference)
-    overlaps = _accepted_overlaps(parts, delta) if interference > 0 else ()
+    overlaps = _accepted_overlaps(parts, delta, base) if interference > 0 else ()
     parts = _with_escape_hints(parts, overlaps)
-    _check_assembled_pose(parts, delta, interference, overlaps)
+    _check_assembled_pose(parts, delta, interference, overlaps, base=base)
     return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
                     settings=settings, path=path, interference=interference,
                     overlaps=overlaps)
@@ -142,13 +143,12 @@ _SUGGEST_UPTO = 0.1
 
 
 def _check_assembled_pose(parts: list[Part], delta: float, interference: float = 0.0,
-                          overlaps: tuple[dict, ...] = ()) -> None:
+                          overlaps: tuple[dict, ...] = (), base: str | None = None) -> None:
     """The assembled pose must be valid: no part overlaps another beyond the contact
-    tolerance plus the interference tolerance. An overlap is reported with its
-    penetration depth (from ``overlaps`` when it is there, else computed for that pair
-    only)."""
+    tolerance plus the interference tolerance. An overlap is reported for the part to
+    move (:func:`_moving`), with its penetration depth (from ``overlaps`` when it is
+    there, else computed for that pair only)."""
     allowed = delta + interference
-    known = {(o["part"], o["other"]): o["penetration_depth"] for o in overlaps}
     for i, part in enumerate(parts):
         others = parts[i + 1:]
         if not others:
@@ -158,39 +158,73 @@ def _check_assembled_pose(parts: list[Part], delta: float, interference: float =
             continue
         hit = checker.colliding_obstacle(np.zeros(3))
         other = next((p for p in others if hit and p.name == hit[0]), None)
-        name = other.name if other is not None else "another part"
-        pair = (part.name, name)
-        if other is None:
-            depth = None
-        else:
-            depth = known[pair] if pair in known else _overlap_depth(part, other)
-        way_out = _hint(depth)
-        if way_out is not None and way_out not in part.escape_hints:  # tried first
-            hinted = dataclasses.replace(part, escape_hints=part.escape_hints + (way_out,))
-            checker = FclChecker.for_parts(hinted, others, contact_tolerance=allowed)
-        suggested = _interference_accepting(checker, delta, depth)
-        said = "" if depth is None else (
-            f"; penetration depth in [{depth['lower']:.6g}, {depth['upper']:.6g}] along "
-            f"({', '.join(f'{x:.4g}' for x in depth['direction'])})")
-        if depth is None and other is not None and not (part.solid and other.solid):
-            said = "; no penetration depth (a surface has no inside)"
-        beyond = (f"contact tolerance {delta:g}" if interference == 0 else
-                  f"contact tolerance {delta:g} + interference {interference:g}")
-        hint = "" if suggested is None else (
-            f"; to accept it as an interference fit, give interference: {suggested}"
-            + (" or more (assemble --interference)" if depth is not None else
-               " (assemble --interference; FCL's check accepts the pose with it)"))
-        error = field_error(f"parts[{i}]", f"part '{part.name}' collides with '{name}' in "
-                                           f"the assembled pose (overlap beyond {beyond}, "
-                                           f"or clamped between faces on opposite "
-                                           f"sides){said}{hint}")
-        error.details = {"overlap": {"part": part.name, "other": name,
-                                     "contact_tolerance": delta,
-                                     "interference": interference,
-                                     "penetration_depth": depth,
-                                     "suggested_interference":
-                                         None if suggested is None else float(suggested)}}
-        raise error
+        raise _overlap_error(parts, (part, other), checker, (delta, interference), overlaps,
+                             base)
+
+
+def _overlap_error(parts: list[Part], pair: tuple[Part, Part | None], checker: FclChecker,
+                   tolerances: tuple[float, float], overlaps: tuple[dict, ...],
+                   base: str | None) -> ScenarioError:
+    """The error for ``pair`` (a part, and the later one FCL's ``checker`` of the first
+    found it overlapping, if it named one) overlapping beyond the ``(contact,
+    interference)`` tolerances: the moving part's entry, its penetration depth and the
+    interference tolerance that accepts the pose."""
+    part, other = pair
+    delta, interference = tolerances
+    mover: Part = part
+    fixed: Part | None = None
+    depth = None
+    if other is not None:
+        mover, fixed = _moving(part, other, base)
+        known = {(o["part"], o["other"]): o["penetration_depth"] for o in overlaps}
+        key = (mover.name, fixed.name)
+        depth = known[key] if key in known else _overlap_depth(mover, fixed)
+    way_out = _hint(depth if mover is part else _reversed(depth))  # the checker's part's
+    if way_out is not None and way_out not in part.escape_hints:  # tried first
+        hinted = dataclasses.replace(part, escape_hints=part.escape_hints + (way_out,))
+        checker = FclChecker.for_parts(hinted, parts[parts.index(part) + 1:],
+                                       contact_tolerance=delta + interference)
+    suggested = _interference_accepting(checker, delta, depth)
+    fixed_name = fixed.name if fixed is not None else "another part"
+    said = "" if depth is None else (
+        f"; penetration depth in [{depth['lower']:.6g}, {depth['upper']:.6g}] "
+        f"(tolerance {depth['tolerance']:.2g}) along "
+        f"({', '.join(f'{x:.4g}' for x in depth['direction'])})")
+    if depth is None and fixed is not None and not (mover.solid and fixed.solid):
+        said = "; no penetration depth (a surface has no inside)"
+    beyond = (f"contact tolerance {delta:g}" if interference == 0 else
+              f"contact tolerance {delta:g} + interference {interference:g}")
+    hint = "" if suggested is None else (
+        f"; to accept it as an interference fit, give interference: {suggested}"
+        + (" or more (assemble --interference)" if depth is not None else
+           " (assemble --interference; FCL's check accepts the pose with it)"))
+    error = field_error(f"parts[{parts.index(mover)}]",
+                        f"part '{mover.name}' collides with '{fixed_name}' in the assembled "
+                        f"pose (overlap beyond {beyond}, or clamped between faces on "
+                        f"opposite sides){said}{hint}")
+    error.details = {"overlap": {"part": mover.name, "other": fixed_name,
+                                 "contact_tolerance": delta,
+                                 "interference": interference,
+                                 "penetration_depth": depth,
+                                 "suggested_interference":
+                                     None if suggested is None else float(suggested)}}
+    return error
+
+
+def _moving(part: Part, other: Part, base: str | None) -> tuple[Part, Part]:
+    """``(the part to move, the one it overlaps)`` of two overlapping parts, ``other``
+    listed after ``part``: the later one, unless it is the base (parts are listed in
+    assembly order, the base or the fixed part first)."""
+    return (part, other) if other.name == base else (other, part)
+
+
+def _reversed(depth: dict | None) -> dict | None:
+    """A penetration depth of one part into another (JSON values) as the other's: the
+    same interval, the direction and translation reversed."""
+    if depth is None:
+        return None
+    flip = {key: [-float(x) for x in depth[key]] for key in ("direction", "translation")}
+    return {**depth, **flip}
 
 
 def _interference_accepting(checker: FclChecker, delta: float, depth: dict | None) -> str | None:
@@ -220,17 +254,19 @@ def _round_up(x: float) -> str:
     return f"{math.ceil(x / step * (1 - 1e-12)) * step:.2g}"
 
 
-def _accepted_overlaps(parts: list[Part], delta: float) -> tuple[dict, ...]:
+def _accepted_overlaps(parts: list[Part], delta: float, base: str | None) -> tuple[dict, ...]:
     """The pairs that overlap beyond the contact tolerance (the interference tolerance
-    accepted them), each with its penetration depth."""
+    accepted them), each for the part to move (:func:`_moving`) with its penetration
+    depth."""
     found = []
     for i, part in enumerate(parts):
         for other in parts[i + 1:]:
             checker = FclChecker.for_parts(part, [other], contact_tolerance=delta)
             if checker.is_valid(np.zeros(3)):
                 continue
-            found.append({"part": part.name, "other": other.name,
-                          "penetration_depth": _overlap_depth(part, other)})
+            mover, fixed = _moving(part, other, base)
+            found.append({"part": mover.name, "other": fixed.name,
+                          "penetration_depth": _overlap_depth(mover, fixed)})
     return tuple(found)
 
 
