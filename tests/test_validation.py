@@ -167,6 +167,28 @@ def test_contact_tolerance_accepts_shallow_rejects_deep():
         FclChecker(ROBOT, [block], contact_tolerance=-1.0)
 
 
+def test_a_motion_through_a_tolerated_overlap_reuses_its_last_witness(monkeypatch):
+    """A cap pressed 0.01 into a block's top, slid off sideways under a tolerance just
+    above the overlap: every pose is tolerated, freed only by lifting it about 0.01. The
+    witness of each pose is tried first at the next (a search of every shorter length
+    along every direction first cost the Circle cap in its bottle 360 FCL queries a
+    pose), and the motion is valid exactly when the tolerance covers the overlap."""
+    block, cap = box([2, 2, 2]), box([1, 1, 1])
+    start, end = (0.0, 0.0, 1.49), (0.0, 3.0, 1.49)
+    calls = []
+    checker = FclChecker(cap, [block], contact_tolerance=0.0102)
+    original = checker._free_distance
+    monkeypatch.setattr(checker, "_free_distance", lambda t: calls.append(1) or original(t))
+    check = checker.check_segment(start, end)
+    assert check.valid and check.n_checks > 10
+    # the first tolerated pose searches the ladder; each later one: its own free test,
+    # the last witness, and one shorter length along it
+    assert len(calls) <= 3 * check.n_checks + len(checker._witness_lengths(0.0102)) * 8
+    assert checker.penetration_bound((0.0, 1.0, 1.49)) <= 0.0102
+    assert not FclChecker(cap, [block], contact_tolerance=0.009).check_segment(start,
+                                                                                end).valid
+
+
 def test_tolerance_accepting_finds_the_shortest_freeing_translation_of_a_surface():
     """A unit cube crossing a sheet (a surface: no penetration depth) 0.02 past its
     bottom: the tolerance returned is about 0.02 and accepted, a smaller one is not."""

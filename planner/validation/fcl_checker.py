@@ -48,6 +48,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import fcl
 import numpy as np
@@ -104,6 +105,16 @@ class _Part:
         )
         _, first_face = np.unique(labels, return_index=True)
         self.representatives = vertices[faces[first_face, 0]]
+
+
+@dataclass(frozen=True)
+class Witness:
+    """A translation ``length * direction`` that frees a tolerated pose, and the bound of
+    its penetration depth it certifies (``length`` minus the clearance there)."""
+
+    bound: float
+    direction: np.ndarray
+    length: float
 
 
 def _aabb_gap(lo_a: np.ndarray, hi_a: np.ndarray, lo_b: np.ndarray, hi_b: np.ndarray) -> float:
@@ -303,16 +314,51 @@ class FclChecker:
                  directions: list[np.ndarray] | None = None) -> float | None:
         """The witness bound of ``pd(t)`` under tolerance ``delta`` (default the
         checker's), or ``None`` when no witness of length ``<= delta`` was found."""
+        found = self._witness_found(t, delta, directions)
+        return None if found is None else found.bound
+
+    def _witness_found(self, t: np.ndarray, delta: float | None = None,
+                       directions: list[np.ndarray] | None = None,
+                       first: Witness | None = None) -> Witness | None:
+        """The shortest witness of ``pd(t)`` found under tolerance ``delta`` (the
+        checker's by default): every length of the ladder, shortest first, along every
+        escape direction; ``None`` when none of length ``<= delta`` frees ``t``. With
+        ``first`` (the witness of a pose just before, on a straight motion), its direction
+        at its length is tried before that search, and when it frees ``t``, shorter
+        lengths along it only (:meth:`_along`): a witness frees ``t`` whatever found it,
+        and on a motion through a tolerated overlap the last one nearly always does (a
+        cap pushed 1 mm into its bottle, lifted out under a 1.02 mm tolerance: each pose
+        spent 360 FCL queries on the lengths shorter than the overlap)."""
         delta = self.contact_tolerance if delta is None else delta
         if delta <= 0.0:
             return None
+        lengths = self._witness_lengths(delta)
+        if first is not None and first.length <= delta:
+            found = self._along(t, first.direction, first.length, lengths)
+            if found is not None:
+                return found
         unique = self._witness_directions(t) if directions is None else directions
-        for length in self._witness_lengths(delta):
+        for length in lengths:
             for direction in unique:
                 d_u = self._free_distance(t + length * direction)
                 if d_u is not None:  # the first (shortest) witness found
-                    return max(0.0, length - d_u)
+                    return Witness(max(0.0, length - d_u), direction, length)
         return None
+
+    def _along(self, t: np.ndarray, direction: np.ndarray, length: float,
+               lengths: list[float]) -> Witness | None:
+        """The witness ``t + length * direction`` if it frees ``t``, made shorter down
+        the ladder ``lengths`` while each shorter one frees it too; else ``None``."""
+        d_u = self._free_distance(t + length * direction)
+        if d_u is None:
+            return None
+        best = Witness(max(0.0, length - d_u), direction, length)
+        for shorter in reversed([x for x in lengths if x < length]):
+            d_u = self._free_distance(t + shorter * direction)
+            if d_u is None:
+                break
+            best = Witness(max(0.0, shorter - d_u), direction, shorter)
+        return best
 
     def _witness_lengths(self, delta: float) -> list[float]:
         """The witness lengths tried under tolerance ``delta``, shortest first: ``delta``
@@ -479,8 +525,10 @@ class FclChecker:
 
     # ------------------------------------------------------------------ motions
 
-    def _assess(self, t: np.ndarray) -> tuple[bool, float, float]:
-        """(valid, clearance, certified step) at ``t``.
+    def _assess(self, t: np.ndarray, last: Witness | None = None
+                ) -> tuple[bool, float, float, Witness | None]:
+        """(valid, clearance, certified step, the witness of a tolerated ``t``) at ``t``;
+        ``last``: the witness of the pose before on the motion, tried first.
 
         A free ``t`` with clearance ``d`` certifies every ``t + s`` with
         ``|s| <= d + delta`` (translations move every point of R by exactly ``|s|``, and
@@ -491,12 +539,12 @@ class FclChecker:
         delta = self.contact_tolerance
         if d is not None:
             if delta == 0.0 and d <= self.floor:
-                return False, d, 0.0
-            return True, d, d + delta
-        bound = self._witness(t)
-        if bound is None:
-            return False, 0.0, 0.0
-        return True, 0.0, delta - bound
+                return False, d, 0.0, None
+            return True, d, d + delta, None
+        found = self._witness_found(t, first=last)
+        if found is None:
+            return False, 0.0, 0.0, None
+        return True, 0.0, delta - found.bound, found
 
     def _obstacle_at(self, t: np.ndarray) -> str | None:
         hit = self.colliding_obstacle(t)
@@ -541,11 +589,12 @@ class FclChecker:
         s = 0.0
         n = 0
         certified: float | None = None
+        last: Witness | None = None  # the witness of the pose before, tried first
         samples: list[tuple[float, float]] = []
         all_free = True
         while True:
             p = pb.copy() if s >= length else pa + s * unit
-            valid, d, step = self._assess(p)
+            valid, d, step, last = self._assess(p, last)
             n += 1
             if valid and s < length:
                 if max_step is not None:
