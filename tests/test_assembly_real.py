@@ -204,3 +204,11 @@ def test_a_peg_pushed_aslant_into_its_bore_is_accepted_within_its_depth(tmp_path
     assembly = load_assembly(path, interference=suggested)
     result = plan_assembly(assembly)
     assert result.found and result.order == ["hole", "peg"], result.message
+    # a tolerance inside the depth's interval: the depth is found again finer, and its
+    # direction frees the peg within that tolerance (the first interval was too coarse)
+    between = 0.0003
+    assert depth["lower"] < between + assembly.contact_tolerance < depth["upper"]
+    tight = load_assembly(path, interference=between)
+    (fit,) = tight.overlaps
+    assert fit["penetration_depth"]["upper"] < tight.tolerance
+    assert fit["penetration_depth"]["lower"] >= depth["lower"]

@@ -130,7 +130,7 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
         delta = DEFAULT_CONTACT_REL * float(np.linalg.norm(bounds[:, 1].max(axis=0)
                                                            - bounds[:, 0].min(axis=0)))
     settings = dataclasses.replace(settings, contact_tolerance=delta + interference)
-    overlaps = _accepted_overlaps(parts, delta, base) if interference > 0 else ()
+    overlaps = _accepted_overlaps(parts, delta, interference, base) if interference > 0 else ()
     parts = _with_escape_hints(parts, overlaps)
     _check_assembled_pose(parts, delta, interference, overlaps, base=base)
     return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
@@ -178,7 +178,8 @@ def _overlap_error(parts: list[Part], pair: tuple[Part, Part | None], checker: F
         mover, fixed = _moving(part, other, base)
         known = {(o["part"], o["other"]): o["penetration_depth"] for o in overlaps}
         key = (mover.name, fixed.name)
-        depth = known[key] if key in known else _overlap_depth(mover, fixed)
+        depth = known[key] if key in known else _overlap_depth(mover, fixed,
+                                                               delta + interference)
     way_out = _hint(depth if mover is part else _reversed(depth))  # the checker's part's
     if way_out is not None and way_out not in part.escape_hints:  # tried first
         hinted = dataclasses.replace(part, escape_hints=part.escape_hints + (way_out,))
@@ -254,10 +255,12 @@ def _round_up(x: float) -> str:
     return f"{math.ceil(x / step * (1 - 1e-12)) * step:.2g}"
 
 
-def _accepted_overlaps(parts: list[Part], delta: float, base: str | None) -> tuple[dict, ...]:
+def _accepted_overlaps(parts: list[Part], delta: float, interference: float,
+                       base: str | None) -> tuple[dict, ...]:
     """The pairs that overlap beyond the contact tolerance (the interference tolerance
     accepted them), each for the part to move (:func:`_moving`) with its penetration
     depth."""
+    allowed = delta + interference
     found = []
     for i, part in enumerate(parts):
         for other in parts[i + 1:]:
@@ -266,7 +269,7 @@ def _accepted_overlaps(parts: list[Part], delta: float, base: str | None) -> tup
                 continue
             mover, fixed = _moving(part, other, base)
             found.append({"part": mover.name, "other": fixed.name,
-                          "penetration_depth": _overlap_depth(mover, fixed)})
+                          "penetration_depth": _overlap_depth(mover, fixed, allowed)})
     return tuple(found)
 
 
@@ -295,16 +298,30 @@ def _hint(depth: dict | None) -> tuple[float, float, float] | None:
     return (x, y, z)
 
 
-def _overlap_depth(part: Part, other: Part) -> dict | None:
+def _overlap_depth(part: Part, other: Part, allowed: float | None = None) -> dict | None:
     """The penetration depth of ``part`` into ``other`` (JSON values), or ``None`` when it
-    is not defined (a surface) or cannot be computed."""
+    is not defined (a surface) or cannot be computed. When the tolerance ``allowed``
+    (contact plus interference) lies inside its interval, the depth is found again to a
+    width that tells them apart where it can: its direction is then the hint that frees
+    the part within ``allowed`` (the default width left Factory's round peg, pushed
+    0.3 mm aslant into its hole, refused at 0.3 mm in [0.284, 0.308])."""
     if not (part.solid and other.solid):
         return None
-    from planner.depth import penetration_depth  # noqa: PLC0415
+    from planner.depth import FINEST_TOLERANCE, penetration_depth  # noqa: PLC0415
     from planner.errors import MinkplanError  # noqa: PLC0415
 
+    def depth(tolerance: float | None = None):
+        return penetration_depth(part, other, validate=False, max_cells=_DEPTH_CELLS,
+                                 tolerance=tolerance)
+
     try:
-        result = penetration_depth(part, other, validate=False, max_cells=_DEPTH_CELLS)
+        result = depth()
+        if allowed is not None and result.lower < allowed < result.upper:
+            size = float(np.linalg.norm(np.ptp(np.vstack([part.mesh.bounds,
+                                                          other.mesh.bounds]), axis=0)))
+            finer = max(0.5 * (allowed - result.lower), 1.01 * FINEST_TOLERANCE * size)
+            if finer < result.upper - result.lower:
+                result = depth(finer)
     except MinkplanError as exc:
         log.warning("penetration depth of %s into %s not computed: %s", part.name,
                     other.name, exc)
