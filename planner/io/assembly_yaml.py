@@ -316,16 +316,20 @@ def _overlap_depth(part: Part, other: Part, allowed: float | None = None) -> dic
 
     try:
         result = depth()
-        if allowed is not None and result.lower < allowed < result.upper:
-            size = float(np.linalg.norm(np.ptp(np.vstack([part.mesh.bounds,
-                                                          other.mesh.bounds]), axis=0)))
-            finer = max(0.5 * (allowed - result.lower), 1.01 * FINEST_TOLERANCE * size)
-            if finer < result.upper - result.lower:
-                result = depth(finer)
     except MinkplanError as exc:
         log.warning("penetration depth of %s into %s not computed: %s", part.name,
                     other.name, exc)
         return None
+    if allowed is not None and result.lower < allowed < result.upper:
+        size = float(np.linalg.norm(np.ptp(np.vstack([part.mesh.bounds,
+                                                      other.mesh.bounds]), axis=0)))
+        finer = max(0.5 * (allowed - result.lower), 1.01 * FINEST_TOLERANCE * size)
+        if finer < result.upper - result.lower:
+            try:
+                result = depth(finer)
+            except MinkplanError as exc:  # the coarser interval stands
+                log.warning("penetration depth of %s into %s not found finer than %.3g: "
+                            "%s", part.name, other.name, result.upper - result.lower, exc)
     out = result.describe()
     out.pop("validated")
     return out

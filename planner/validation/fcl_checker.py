@@ -40,7 +40,10 @@ lengths ``delta * CheckerTolerances.witness_fractions``, such that ``R + t + u``
 with FCL clearance ``d_u``; then ``pd(t) <= |u| - d_u``. The FCL side is therefore
 conservative: it never accepts a ``t`` with ``pd(t) > delta``, and it may reject a ``t``
 with ``pd(t) <= delta`` whose only escape directions were not tried (for instance a part
-that fits its hole exactly, with zero clearance on opposite sides).
+that fits its hole exactly, with zero clearance on opposite sides). Along a motion
+(:meth:`FclChecker.check_segment`) the last tolerated pose's witness is tried first at
+the next: any witness certifies, so a motion may accept a pose whose own directions
+would not have freed it, never one deeper than ``delta``.
 """
 
 from __future__ import annotations
@@ -589,12 +592,13 @@ class FclChecker:
         s = 0.0
         n = 0
         certified: float | None = None
-        last: Witness | None = None  # the witness of the pose before, tried first
+        last: Witness | None = None  # the last tolerated pose's witness, tried first
         samples: list[tuple[float, float]] = []
         all_free = True
         while True:
             p = pb.copy() if s >= length else pa + s * unit
-            valid, d, step, last = self._assess(p, last)
+            valid, d, step, found = self._assess(p, last)
+            last = found or last
             n += 1
             if valid and s < length:
                 if max_step is not None:
