@@ -43,7 +43,14 @@ import trimesh
 from planner.errors import ResourceLimitError
 from planner.problem import Part
 
-from .offsets_convex import convex_hull, hull_mesh, representatives, rounding_allowance, unit_ball
+from .offsets_convex import (
+    BALL_INNER,
+    convex_hull,
+    hull_mesh,
+    representatives,
+    rounding_allowance,
+    unit_ball,
+)
 
 __all__ = ["BALL_SHARE", "MAX_SUBDIVISIONS", "Ball", "ball_offset", "face_directions",
            "inscribed_ball"]
@@ -80,9 +87,9 @@ def inscribed_ball(radius: float, delta_max: float, normals: np.ndarray) -> Ball
     them than its vertices (every point on the sphere, so they only shrink ``δ``);
     ``None`` when even the finest (:data:`MAX_SUBDIVISIONS`) is coarser."""
     for subdivisions in range(MAX_SUBDIVISIONS + 1):
-        unit, inner = unit_ball(subdivisions)
-        if radius * (1.0 - inner) > delta_max:
+        if radius * (1.0 - BALL_INNER[subdivisions]) > delta_max:
             continue
+        unit, _ = unit_ball(subdivisions)
         with_normals = 0 < len(normals) <= len(unit)
         hull = convex_hull(radius * (np.vstack([unit, normals]) if with_normals else unit))
         delta = radius + float(hull.equations[:, 3].max())  # r - least facet distance

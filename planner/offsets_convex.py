@@ -45,8 +45,9 @@ import trimesh
 
 from .meshes.closest import mesh_distance
 
-__all__ = ["MAX_FACES", "MAX_POINTS", "convex_hull", "convex_offset", "hull_mesh",
-           "representatives", "rounding_allowance", "unit_ball"]
+__all__ = ["BALL_CONE_ANGLE", "BALL_INNER", "MAX_FACES", "MAX_POINTS", "convex_hull",
+           "convex_offset", "hull_mesh", "measured_ball", "representatives",
+           "rounding_allowance", "unit_ball"]
 
 MAX_FACES = 5000
 """Solids with more triangles are left to the cell source (the test is faces × hull
@@ -303,10 +304,10 @@ def _grown(hull: _Hull, radius: float, eps: float
     :data:`MAX_SUBDIVISIONS` subdivisions."""
     moved = (hull.triangles + radius * hull.triangle_normals[:, None, :]).reshape(-1, 3)
     for subdivisions in range(MAX_SUBDIVISIONS + 1):
-        unit, inner = unit_ball(subdivisions)
-        chord = radius * (1.0 - inner)
+        chord = radius * (1.0 - BALL_INNER[subdivisions])
         if chord > eps:
             continue
+        unit, _ = unit_ball(subdivisions)
         if len(unit) * len(hull.corners) > MAX_POINTS:
             return None
         corner, direction = _extreme_pairs(hull, unit, ball_cone_angle(subdivisions))
@@ -355,26 +356,45 @@ def representatives(points: np.ndarray, radius: float) -> np.ndarray:
     return np.flatnonzero(~dropped)
 
 
+BALL_INNER = (0.7946544722917661, 0.9341723589627156, 0.982246946376846,
+              0.9954716323905444, 0.9988621167296411, 0.9997151646458344,
+              0.9999287683373553, 0.9999821906571972)
+"""Per subdivision of the unit icosphere (``0 .. MAX_SUBDIVISIONS``), the least distance
+from its centre to a facet plane (:func:`measured_ball`: a test checks them), so the
+coarsest fine enough is chosen without building the finer ones: a first offset in a
+process built and hulled every icosphere up to the one it took (27 ms of a box's 49)."""
+
+BALL_CONE_ANGLE = (0.6523581397843682, 0.36486382811348356, 0.18871053078356245,
+                   0.09520283008485891, 0.04770951964236602, 0.0238683420897177,
+                   0.01193587100459241, 0.00596814806538639)
+"""Per subdivision, the largest angle between a vertex of the unit icosphere and the
+normal of a facet at it: each vertex's normal cone lies within that angle of the
+vertex (:func:`measured_ball`)."""
+
+
 @functools.lru_cache(maxsize=None)
 def unit_ball(subdivisions: int) -> tuple[np.ndarray, float]:
     """The unit icosphere's vertices and the least distance from its centre to a facet
-    plane."""
-    sphere = _unit_hull(subdivisions)
-    return np.asarray(sphere.points[sphere.vertices]), float(-sphere.equations[:, 3].max())
+    plane (:data:`BALL_INNER`)."""
+    vertices = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0).vertices
+    unit = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
+    return np.ascontiguousarray(unit), BALL_INNER[subdivisions]
 
 
-@functools.lru_cache(maxsize=None)
 def ball_cone_angle(subdivisions: int) -> float:
-    """The largest angle between a vertex of the unit icosphere and the normal of a facet
-    at it: each vertex's normal cone lies within that angle of the vertex."""
-    sphere = _unit_hull(subdivisions)
+    """:data:`BALL_CONE_ANGLE` of the subdivision."""
+    return BALL_CONE_ANGLE[subdivisions]
+
+
+def measured_ball(subdivisions: int) -> tuple[float, float]:
+    """``(inner distance, cone angle)`` of the unit icosphere measured on its qhull hull:
+    what :data:`BALL_INNER` and :data:`BALL_CONE_ANGLE` hold."""
+    sphere = convex_hull(trimesh.creation.icosphere(subdivisions=subdivisions,
+                                                    radius=1.0).vertices)
     corners = sphere.points[sphere.simplices]                  # (facets, 3, 3), unit
     cosines = np.einsum("fkj,fj->fk", corners, sphere.equations[:, :3])
-    return float(np.arccos(np.clip(cosines.min(), -1.0, 1.0)))
-
-
-def _unit_hull(subdivisions: int):
-    return convex_hull(trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0).vertices)
+    return (float(-sphere.equations[:, 3].max()),
+            float(np.arccos(np.clip(cosines.min(), -1.0, 1.0))))
 
 
 def convex_hull(points: np.ndarray):

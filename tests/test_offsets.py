@@ -417,6 +417,22 @@ def _on_the_offset(solid: trimesh.Trimesh, r: float, count: int, seed: int) -> n
     return moved[np.abs(check - abs(r)) < 1e-9]
 
 
+def test_the_tabled_icospheres_are_the_measured_ones():
+    """The inner distance and cone angle of every unit icosphere the offsets take are
+    tabled (a first offset in a process built and hulled each one up to its own): the
+    table must be what qhull measures, and the vertices unit and as many as trimesh's."""
+    import planner.offsets_convex as convex
+
+    for subdivisions in range(convex.MAX_SUBDIVISIONS + 1):
+        inner, angle = convex.measured_ball(subdivisions)
+        assert convex.BALL_INNER[subdivisions] == pytest.approx(inner, rel=1e-12)
+        assert convex.ball_cone_angle(subdivisions) == pytest.approx(angle, rel=1e-12)
+        unit, tabled = convex.unit_ball(subdivisions)
+        assert tabled == convex.BALL_INNER[subdivisions]
+        assert len(unit) == 10 * 4 ** subdivisions + 2
+        np.testing.assert_allclose(np.linalg.norm(unit, axis=1), 1.0, atol=1e-15)
+
+
 def test_the_offset_command_writes_the_mesh_and_says_its_bound(tmp_path, capsys):
     part = tmp_path / "part.stl"
     trimesh.creation.box([1.0, 1.0, 1.0]).export(part)
