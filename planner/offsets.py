@@ -344,7 +344,8 @@ def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
         done = ball_offset(solid, radius, step, name=name, max_cells=max_cells,
                            progress=progress)
         if done is not None:
-            fault = _solid_fault(done[0], name)
+            # (nothing left of an erosion is an answer, said as one by the caller)
+            fault = _solid_fault(done[0], name) if len(done[0].faces) else None
             if fault is None:
                 return done, "ball"
             what = f"{name} offset by {radius:g}: the ball's surface is no clean solid ({fault})"

@@ -156,6 +156,56 @@ def test_cli_writes_sequence(tmp_path):
         1e-4 * np.linalg.norm([2.0, 1.0, 0.9]))
 
 
+def _frame_with_peg(tmp_path: Path, peg_lines: str, header: str = "") -> Path:
+    """A square frame of four boxes (a 1.02 x 1.02 hole) and the given pegs."""
+    import trimesh
+
+    walls = [((0.49, 2.0, 1.0), (0.755, 0, 0)), ((0.49, 2.0, 1.0), (-0.755, 0, 0)),
+             ((1.02, 0.49, 1.0), (0, 0.755, 0)), ((1.02, 0.49, 1.0), (0, -0.755, 0))]
+    frame = trimesh.util.concatenate([trimesh.creation.box(e).apply_translation(c)
+                                      for e, c in walls])
+    frame.export(tmp_path / "frame.stl")
+    path = tmp_path / "frame.yaml"
+    path.write_text(f"{header}parts:\n  - {{name: frame, mesh: frame.stl}}\n{peg_lines}")
+    return path
+
+
+def test_an_overlap_within_the_tolerance_whose_way_out_is_aslant_is_accepted(tmp_path):
+    """A peg pushed 0.006 into the corner of its frame overlaps two walls: along no axis
+    and no contact normal does 0.01 free it, diagonally 0.0085 does (its penetration
+    depth). Within a contact tolerance of 0.01 the pose is valid: the depth's direction
+    is tried, accepts it, and stays with both parts as their escape hint."""
+    path = _frame_with_peg(tmp_path, "  - {name: peg, box: [1, 1, 1], "
+                                     "position: [0.016, 0.016, 0]}\n",
+                           header="contact_tolerance: 0.01\n")
+    assembly = load_assembly(path)
+    frame, peg = assembly.parts
+    (hint,) = peg.escape_hints
+    assert hint == pytest.approx((-2 ** -0.5, -2 ** -0.5, 0.0), abs=1e-3)
+    assert frame.escape_hints == (tuple(-x for x in hint),)
+    without = FclChecker(peg.mesh, [frame.mesh], contact_tolerance=0.01)
+    assert not without.is_valid(np.zeros(3))  # the axes and normals alone: refused
+
+
+def test_each_pair_is_checked_on_its_own_in_the_assembled_pose(tmp_path):
+    """A key pushed 0.01 sideways into two stacked blocks that touch face to face: each
+    pair overlaps within the interference, but no one translation frees the lower
+    block from the upper (it touches) and from the key at once. The pose is valid pair
+    by pair (it was refused: the lower block was checked against both at once)."""
+    path = tmp_path / "stack.yaml"
+    path.write_text("parts:\n  - {name: lower, box: [2, 2, 1]}\n"
+                    "  - {name: upper, box: [2, 2, 1], position: [0, 0, 1]}\n"
+                    "  - {name: key, box: [0.5, 0.5, 2], position: [1.24, 0, 0.5]}\n")
+    assembly = load_assembly(path, interference=0.02)
+    assert sorted((o["part"], o["other"]) for o in assembly.overlaps) == [
+        ("key", "lower"), ("key", "upper")]
+    lower, upper, key = assembly.parts
+    assert not FclChecker.for_parts(lower, [upper, key],
+                                    contact_tolerance=assembly.tolerance).is_valid(np.zeros(3))
+    with pytest.raises(ScenarioError, match="part 'key' collides with 'lower'"):
+        load_assembly(path, interference=0.005)
+
+
 def test_contact_tolerance_is_used_everywhere():
     text = (DEMOS / "peg_in_block.yaml").read_text() + "contact_tolerance: 0.001\n"
     assembly = parse_assembly(text, DEMOS)

@@ -131,7 +131,11 @@ def test_an_overlap_is_refused_without_an_interference_tolerance(tmp_path):
     message = str(info.value)
     assert "part 'cap' collides with 'block'" in message
     assert "penetration depth in [0.02" in message and "along (0, 0, 1)" in message
-    assert "interference: 0.022 or more" in message
+    # the depth's upper bound less what the contact tolerance already allows, rounded up;
+    # and that interference accepts the pose
+    suggested = info.value.details["overlap"]["suggested_interference"]
+    assert "interference: 0.021 or more" in message and suggested == 0.021
+    assert load_assembly(_press_fit(tmp_path, suggested)).overlaps
 
 
 def test_an_interference_tolerance_short_of_the_overlap_still_refuses(tmp_path):

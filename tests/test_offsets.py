@@ -309,7 +309,7 @@ def test_an_opening_removes_a_fin_thinner_than_twice_the_radius():
     assert closed.mesh.bounds[1][0] >= 1.05 - sum(closed.stats["stage_bounds"])
 
 
-def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors():
+def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors(caplog):
     box = trimesh.creation.box([1.0, 1.0, 1.0])
     with pytest.raises(InvalidParameterError, match="non-zero finite"):
         planner.offset(box, 0.0)
@@ -323,6 +323,10 @@ def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors():
 
     with pytest.raises(EmptyResultError, match="nothing is left"):
         planner.offset(l_bracket(), -0.6, eps=0.05, method="ball")
+    with pytest.raises(EmptyResultError, match="nothing is left"):
+        planner.offset(l_bracket(), -0.6, eps=0.05)
+    # the empty answer is said once, not first warned of as a faulty solid
+    assert "no clean solid" not in caplog.text
     with pytest.raises(InvalidParameterError, match="method"):
         planner.offset(box, 0.1, method="sample")
     with pytest.raises(InvalidParameterError, match="not convex"):

@@ -46,6 +46,10 @@ log = logging.getLogger(__name__)
 # cut short still gives a proved, wider interval)
 _DEPTH_CELLS = 100_000
 
+# how many times, at most, an overlap's depth is found again finer while the tolerance
+# lies inside its interval (each halves the gap below the tolerance: about twice the cells)
+_FINER_DEPTHS = 3
+
 
 TOP_LEVEL_KEYS = ("name", "units", "parts", "base", "contact_tolerance", "interference",
                   "planner")
@@ -132,7 +136,7 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
     settings = dataclasses.replace(settings, contact_tolerance=delta + interference)
     overlaps = _accepted_overlaps(parts, delta, interference, base) if interference > 0 else ()
     parts = _with_escape_hints(parts, overlaps)
-    _check_assembled_pose(parts, delta, interference, overlaps, base=base)
+    parts = _check_assembled_pose(parts, delta, interference, overlaps, base=base)
     return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
                     settings=settings, path=path, interference=interference,
                     overlaps=overlaps)
@@ -143,55 +147,74 @@ _SUGGEST_UPTO = 0.1
 
 
 def _check_assembled_pose(parts: list[Part], delta: float, interference: float = 0.0,
-                          overlaps: tuple[dict, ...] = (), base: str | None = None) -> None:
+                          overlaps: tuple[dict, ...] = (), base: str | None = None
+                          ) -> list[Part]:
     """The assembled pose must be valid: no part overlaps another beyond the contact
-    tolerance plus the interference tolerance. An overlap is reported for the part to
-    move (:func:`_moving`), with its penetration depth (from ``overlaps`` when it is
-    there, else computed for that pair only)."""
+    tolerance plus the interference tolerance, pair by pair (one part checked against
+    all later ones at once first: a witness that frees it from all frees it from each).
+    A pair FCL's check refuses is tried again along its penetration depth's direction;
+    when that frees it (a depth within the tolerance, whose way out is along no contact
+    normal or axis), the parts keep that direction as an escape hint. Else the overlap is
+    reported for the part to move (:func:`_moving`), with its penetration depth (from
+    ``overlaps`` when it is there, else computed for that pair only). Returns the parts
+    with those hints."""
     allowed = delta + interference
+    hints: dict[str, list[tuple[float, float, float]]] = {}
+    origin = np.zeros(3)
     for i, part in enumerate(parts):
         others = parts[i + 1:]
-        if not others:
+        if not others or FclChecker.for_parts(part, others,
+                                              contact_tolerance=allowed).is_valid(origin):
             continue
-        checker = FclChecker.for_parts(part, others, contact_tolerance=allowed)
-        if checker.is_valid(np.zeros(3)):
-            continue
-        hit = checker.colliding_obstacle(np.zeros(3))
-        other = next((p for p in others if hit and p.name == hit[0]), None)
-        raise _overlap_error(parts, (part, other), checker, (delta, interference), overlaps,
-                             base)
+        for other in others:
+            checker = FclChecker.for_parts(part, [other], contact_tolerance=allowed)
+            if checker.is_valid(origin):
+                continue
+            mover, fixed = _moving(part, other, base)
+            depth = _known_depth(overlaps, mover, fixed, allowed)
+            way_out = _hint(depth if mover is part else _reversed(depth))  # part's way
+            if way_out is not None and FclChecker.for_parts(
+                    dataclasses.replace(part, escape_hints=(way_out,)), [other],
+                    contact_tolerance=allowed).is_valid(origin):
+                hints.setdefault(part.name, []).append(way_out)
+                hints.setdefault(other.name, []).append((-way_out[0], -way_out[1],
+                                                         -way_out[2]))
+                continue
+            raise _overlap_error(parts, (part, other), checker, (delta, interference),
+                                 (mover, fixed), depth)
+    return [dataclasses.replace(p, escape_hints=p.escape_hints + tuple(hints[p.name]))
+            if p.name in hints else p for p in parts]
 
 
-def _overlap_error(parts: list[Part], pair: tuple[Part, Part | None], checker: FclChecker,
-                   tolerances: tuple[float, float], overlaps: tuple[dict, ...],
-                   base: str | None) -> ScenarioError:
-    """The error for ``pair`` (a part, and the later one FCL's ``checker`` of the first
-    found it overlapping, if it named one) overlapping beyond the ``(contact,
-    interference)`` tolerances: the moving part's entry, its penetration depth and the
+def _known_depth(overlaps: tuple[dict, ...], mover: Part, fixed: Part,
+                 allowed: float) -> dict | None:
+    """The penetration depth of ``mover`` into ``fixed`` (JSON values): from the accepted
+    ``overlaps`` when it is there, else computed (:func:`_overlap_depth`)."""
+    known = {(o["part"], o["other"]): o["penetration_depth"] for o in overlaps}
+    key = (mover.name, fixed.name)
+    return known[key] if key in known else _overlap_depth(mover, fixed, allowed)
+
+
+def _overlap_error(parts: list[Part], pair: tuple[Part, Part], checker: FclChecker,
+                   tolerances: tuple[float, float], moving: tuple[Part, Part],
+                   depth: dict | None) -> ScenarioError:
+    """The error for ``pair`` (a part, and a later one it overlaps, as FCL's ``checker``
+    of the pair found) overlapping beyond the ``(contact, interference)`` tolerances,
+    reported for ``moving`` (the part to move, the one it overlaps; ``depth``: the
+    first's penetration depth into the second): its entry, its depth and the
     interference tolerance that accepts the pose."""
     part, other = pair
     delta, interference = tolerances
-    mover: Part = part
-    fixed: Part | None = None
-    depth = None
-    if other is not None:
-        mover, fixed = _moving(part, other, base)
-        known = {(o["part"], o["other"]): o["penetration_depth"] for o in overlaps}
-        key = (mover.name, fixed.name)
-        depth = known[key] if key in known else _overlap_depth(mover, fixed,
-                                                               delta + interference)
+    mover, fixed = moving
     way_out = _hint(depth if mover is part else _reversed(depth))  # the checker's part's
     if way_out is not None and way_out not in part.escape_hints:  # tried first
         hinted = dataclasses.replace(part, escape_hints=part.escape_hints + (way_out,))
-        checker = FclChecker.for_parts(hinted, parts[parts.index(part) + 1:],
-                                       contact_tolerance=delta + interference)
+        checker = FclChecker.for_parts(hinted, [other], contact_tolerance=delta + interference)
     suggested = _interference_accepting(checker, delta, depth)
-    fixed_name = fixed.name if fixed is not None else "another part"
     said = "" if depth is None else (
         f"; penetration depth in [{depth['lower']:.6g}, {depth['upper']:.6g}] "
-        f"(tolerance {depth['tolerance']:.2g}) along "
-        f"({', '.join(f'{x:.4g}' for x in depth['direction'])})")
-    if depth is None and fixed is not None and not (mover.solid and fixed.solid):
+        f"(tolerance {depth['tolerance']:.2g}) along ({_direction_text(depth['direction'])})")
+    if depth is None and not (mover.solid and fixed.solid):
         said = "; no penetration depth (a surface has no inside)"
     beyond = (f"contact tolerance {delta:g}" if interference == 0 else
               f"contact tolerance {delta:g} + interference {interference:g}")
@@ -200,16 +223,22 @@ def _overlap_error(parts: list[Part], pair: tuple[Part, Part | None], checker: F
         + (" or more (assemble --interference)" if depth is not None else
            " (assemble --interference; FCL's check accepts the pose with it)"))
     error = field_error(f"parts[{parts.index(mover)}]",
-                        f"part '{mover.name}' collides with '{fixed_name}' in the assembled "
+                        f"part '{mover.name}' collides with '{fixed.name}' in the assembled "
                         f"pose (overlap beyond {beyond}, or clamped between faces on "
                         f"opposite sides){said}{hint}")
-    error.details = {"overlap": {"part": mover.name, "other": fixed_name,
+    error.details = {"overlap": {"part": mover.name, "other": fixed.name,
                                  "contact_tolerance": delta,
                                  "interference": interference,
                                  "penetration_depth": depth,
                                  "suggested_interference":
                                      None if suggested is None else float(suggested)}}
     return error
+
+
+def _direction_text(direction) -> str:
+    """A unit direction as a message gives it: components within rounding of zero (below
+    1e-12) as 0, not as ``1.7e-16``."""
+    return ", ".join(f"{0.0 if abs(x) < 1e-12 else x:.4g}" for x in direction)
 
 
 def _moving(part: Part, other: Part, base: str | None) -> tuple[Part, Part]:
@@ -230,13 +259,14 @@ def _reversed(depth: dict | None) -> dict | None:
 
 def _interference_accepting(checker: FclChecker, delta: float, depth: dict | None) -> str | None:
     """The interference tolerance to suggest for a rejected assembled pose, as written
-    in the message: the penetration depth's upper bound rounded up when it is known
-    (solids), else the smallest tolerance found under which FCL's check accepts the pose
-    (:meth:`FclChecker.tolerance_accepting`, a surface). Only a value the check accepts
+    in the message: the penetration depth's upper bound less the contact tolerance (then
+    all of it) rounded up when it is known (solids), else the smallest tolerance found
+    under which FCL's check accepts the pose (:meth:`FclChecker.tolerance_accepting`, a
+    surface). Only a value the check accepts
     (contact tolerance plus it) is suggested; ``None`` when none was found."""
     origin = np.zeros(3)
-    if depth is not None:
-        candidates = [depth["upper"]]
+    if depth is not None:  # what the contact tolerance leaves to cover, then all of it
+        candidates = [max(depth["upper"] - delta, 0.0), depth["upper"]]
     else:
         needed = checker.tolerance_accepting(origin, upto=_SUGGEST_UPTO * checker.scale)
         candidates = [] if needed is None else [needed - delta]
@@ -300,11 +330,12 @@ def _hint(depth: dict | None) -> tuple[float, float, float] | None:
 
 def _overlap_depth(part: Part, other: Part, allowed: float | None = None) -> dict | None:
     """The penetration depth of ``part`` into ``other`` (JSON values), or ``None`` when it
-    is not defined (a surface) or cannot be computed. When the tolerance ``allowed``
+    is not defined (a surface) or cannot be computed. While the tolerance ``allowed``
     (contact plus interference) lies inside its interval, the depth is found again to a
-    width that tells them apart where it can: its direction is then the hint that frees
-    the part within ``allowed`` (the default width left Factory's round peg, pushed
-    0.3 mm aslant into its hole, refused at 0.3 mm in [0.284, 0.308])."""
+    width that tells them apart where it can (:data:`_FINER_DEPTHS` times at most): its
+    direction is then the hint that frees the part within ``allowed`` (the default width
+    left Factory's round peg, pushed 0.3 mm aslant into its hole, refused at 0.3 mm in
+    [0.284, 0.308])."""
     if not (part.solid and other.solid):
         return None
     from planner.depth import FINEST_TOLERANCE, penetration_depth  # noqa: PLC0415
@@ -320,16 +351,20 @@ def _overlap_depth(part: Part, other: Part, allowed: float | None = None) -> dic
         log.warning("penetration depth of %s into %s not computed: %s", part.name,
                     other.name, exc)
         return None
-    if allowed is not None and result.lower < allowed < result.upper:
-        size = float(np.linalg.norm(np.ptp(np.vstack([part.mesh.bounds,
-                                                      other.mesh.bounds]), axis=0)))
+    size = float(np.linalg.norm(np.ptp(np.vstack([part.mesh.bounds, other.mesh.bounds]),
+                                       axis=0)))
+    for _ in range(_FINER_DEPTHS):
+        if allowed is None or not result.lower < allowed < result.upper:
+            break
         finer = max(0.5 * (allowed - result.lower), 1.01 * FINEST_TOLERANCE * size)
-        if finer < result.upper - result.lower:
-            try:
-                result = depth(finer)
-            except MinkplanError as exc:  # the coarser interval stands
-                log.warning("penetration depth of %s into %s not found finer than %.3g: "
-                            "%s", part.name, other.name, result.upper - result.lower, exc)
+        if finer >= result.upper - result.lower:
+            break
+        try:
+            result = depth(finer)
+        except MinkplanError as exc:  # the coarser interval stands
+            log.warning("penetration depth of %s into %s not found finer than %.3g: %s",
+                        part.name, other.name, result.upper - result.lower, exc)
+            break
     out = result.describe()
     out.pop("validated")
     return out
