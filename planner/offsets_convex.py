@@ -304,10 +304,10 @@ def _grown(hull: _Hull, radius: float, eps: float
     :data:`MAX_SUBDIVISIONS` subdivisions."""
     moved = (hull.triangles + radius * hull.triangle_normals[:, None, :]).reshape(-1, 3)
     for subdivisions in range(MAX_SUBDIVISIONS + 1):
-        chord = radius * (1.0 - BALL_INNER[subdivisions])
-        if chord > eps:
+        if radius * (1.0 - BALL_INNER[subdivisions]) > eps:
             continue
-        unit, _ = unit_ball(subdivisions)
+        unit, inner = unit_ball(subdivisions)
+        chord = radius * (1.0 - inner)
         if len(unit) * len(hull.corners) > MAX_POINTS:
             return None
         corner, direction = _extreme_pairs(hull, unit, ball_cone_angle(subdivisions))
@@ -375,10 +375,15 @@ vertex (:func:`measured_ball`)."""
 @functools.lru_cache(maxsize=None)
 def unit_ball(subdivisions: int) -> tuple[np.ndarray, float]:
     """The unit icosphere's vertices and the least distance from its centre to a facet
-    plane (:data:`BALL_INNER`)."""
-    vertices = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0).vertices
-    unit = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
-    return np.ascontiguousarray(unit), BALL_INNER[subdivisions]
+    plane, measured on its own triangles (what :data:`BALL_INNER` tables, so a bound
+    stays its own whatever trimesh builds)."""
+    sphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    unit = sphere.vertices / np.linalg.norm(sphere.vertices, axis=1, keepdims=True)
+    corners = unit[sphere.faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    inner = float(np.min(np.abs(np.einsum("ij,ij->i", normals, corners[:, 0]))))
+    return np.ascontiguousarray(unit), inner
 
 
 def ball_cone_angle(subdivisions: int) -> float:
