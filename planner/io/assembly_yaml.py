@@ -173,15 +173,16 @@ def _check_assembled_pose(parts: list[Part], delta: float, interference: float =
             mover, fixed = _moving(part, other, base)
             depth = _known_depth(overlaps, mover, fixed, allowed)
             way_out = _hint(depth if mover is part else _reversed(depth))  # part's way
-            if way_out is not None and FclChecker.for_parts(
-                    dataclasses.replace(part, escape_hints=(way_out,)), [other],
-                    contact_tolerance=allowed).is_valid(origin):
-                hints.setdefault(part.name, []).append(way_out)
-                hints.setdefault(other.name, []).append((-way_out[0], -way_out[1],
-                                                         -way_out[2]))
-                continue
-            raise _overlap_error(parts, (part, other), checker, (delta, interference),
-                                 (mover, fixed), depth)
+            if way_out is not None and way_out not in part.escape_hints:  # tried first
+                hinted = dataclasses.replace(part, escape_hints=part.escape_hints + (way_out,))
+                checker = FclChecker.for_parts(hinted, [other], contact_tolerance=allowed)
+                if checker.is_valid(origin):
+                    hints.setdefault(part.name, []).append(way_out)
+                    hints.setdefault(other.name, []).append((-way_out[0], -way_out[1],
+                                                             -way_out[2]))
+                    continue
+            raise _overlap_error(parts, (mover, fixed), checker, (delta, interference),
+                                 depth)
     return [dataclasses.replace(p, escape_hints=p.escape_hints + tuple(hints[p.name]))
             if p.name in hints else p for p in parts]
 
@@ -195,21 +196,15 @@ def _known_depth(overlaps: tuple[dict, ...], mover: Part, fixed: Part,
     return known[key] if key in known else _overlap_depth(mover, fixed, allowed)
 
 
-def _overlap_error(parts: list[Part], pair: tuple[Part, Part], checker: FclChecker,
-                   tolerances: tuple[float, float], moving: tuple[Part, Part],
-                   depth: dict | None) -> ScenarioError:
-    """The error for ``pair`` (a part, and a later one it overlaps, as FCL's ``checker``
-    of the pair found) overlapping beyond the ``(contact, interference)`` tolerances,
-    reported for ``moving`` (the part to move, the one it overlaps; ``depth``: the
-    first's penetration depth into the second): its entry, its depth and the
-    interference tolerance that accepts the pose."""
-    part, other = pair
+def _overlap_error(parts: list[Part], moving: tuple[Part, Part], checker: FclChecker,
+                   tolerances: tuple[float, float], depth: dict | None) -> ScenarioError:
+    """The error for ``moving`` (the part to move, and the one it overlaps; ``depth``:
+    the first's penetration depth into the second) overlapping beyond the ``(contact,
+    interference)`` tolerances, as FCL's ``checker`` of the pair (its depth's direction
+    tried) refused it: the moving part's entry, its depth and the interference
+    tolerance that accepts the pose."""
     delta, interference = tolerances
     mover, fixed = moving
-    way_out = _hint(depth if mover is part else _reversed(depth))  # the checker's part's
-    if way_out is not None and way_out not in part.escape_hints:  # tried first
-        hinted = dataclasses.replace(part, escape_hints=part.escape_hints + (way_out,))
-        checker = FclChecker.for_parts(hinted, [other], contact_tolerance=delta + interference)
     suggested = _interference_accepting(checker, delta, depth)
     said = "" if depth is None else (
         f"; penetration depth in [{depth['lower']:.6g}, {depth['upper']:.6g}] "
