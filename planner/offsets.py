@@ -18,7 +18,10 @@ ball when ``P`` has many triangles, small for ``eps``: :data:`FINE_FACETS`):
   classified by exact distances to ``P``'s triangles, the surface extracted with the
   grid's bound. Flat parts (the prisms over faces; all of an eroded box) are exact: cells
   in the column over one face are cut by its offset plane at their size
-  (``stats["planar_pieces"]``), only the round parts are sampled, at ``eps``.
+  (``stats["planar_pieces"]``), only the round parts are sampled, at ``eps``. Where the
+  offsets of two features meet in a crease (between a gear's teeth), the sampled chords
+  cut the valley off; triangles that sag there by more than a sixteenth of the grid's
+  bound are split on the crease, or flipped along it, a few rounds (:data:`SAG_STATS`).
 
 An open mesh (a triangle soup) is offset as its triangles when asked (``kind``): grown,
 ``{x : dist(x, triangles) <= r}`` by the cells; it has no erosion, opening or closing.
@@ -413,7 +416,14 @@ def _cell_offset(mesh: trimesh.Trimesh, radius: float, step: float, max_cells: i
                              cells_given=budget.cells_setting(from_memory)) from exc
     surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
     return surface, float(raw["error_bound"]), {"triangles": len(surface.faces),
-                                                **surface_stats(raw)}
+                                                **surface_stats(raw),
+                                                **{key: raw[key] for key in SAG_STATS}}
+
+
+SAG_STATS = ("sag_rounds", "sag_tested", "sag_splits", "sag_left", "seconds_sag")
+"""What the cells' refinement where the surface sags from the offset did (its creases,
+:mod:`minkowski_core::surface::sag`): rounds, points tested, edges split, the largest sag
+seen in its last round, seconds."""
 
 
 def _composed(mesh, first: float, second: float, eps, max_cells, name: str,

@@ -33,6 +33,7 @@ use crate::flat_faces::FlatFaces;
 use crate::math::{Aabb, Vec3};
 use crate::octree::{merge_sorted, CellSource, Label};
 use crate::surface::planar::Cut;
+use crate::surface::sag::BoundaryPoint;
 
 /// Record flag: the cell lies in the triangle's column and crosses one face of its slab
 /// only (the face [`SLAB_FRONT`] says); the triangle's neighbourhood there is that slab.
@@ -40,6 +41,9 @@ const SLAB: u32 = 1 << 31;
 /// Record flag with [`SLAB`]: the face of the slab in front of the triangle (along its
 /// normal), else the one behind it.
 const SLAB_FRONT: u32 = 1 << 30;
+/// How far, relative to the radius, a boundary point found beyond the surface point it
+/// projects may lie off the boundary ([`OffsetSource::boundary_point`]): rounding only.
+const BOUNDARY_POINT_TOL: f64 = 1e-9;
 /// The triangle index of a record.
 const INDEX: u32 = SLAB_FRONT - 1;
 /// Record of no triangle: the cell misses `∂P` and lies inside `P`. A cell that misses
@@ -203,6 +207,36 @@ impl CellSource for OffsetSource<'_> {
         } else {
             triangles(cand).all(|t| self.distance(t, p) >= self.radius) && side()
         }
+    }
+
+    /// Along the ray from `x`'s nearest point `q` on `∂P` through `x`, the point at the
+    /// radius. A point within `reach` below the radius of a boundary point lies on the
+    /// offset's side of `∂P` (outside `P` grown, inside eroded: the signed distance changes
+    /// no faster than the point moves), so its distance to the triangles is its distance to
+    /// that side, and `q` stays nearest along the ray up to `x`: the point is on the
+    /// boundary when `x` lies at least the radius out (the chord across a crease); beyond
+    /// `x` it is checked.
+    fn boundary_point(&self, x: Vec3, reach: f64) -> Option<BoundaryPoint> {
+        if reach >= self.radius {
+            return None;
+        }
+        let (q, d) = self.mesh.nearest(x)?;
+        if d <= 0.0 {
+            return None;
+        }
+        let out = (x - q) / d;
+        let p = q + out * self.radius;
+        if d < self.radius {
+            let (_, at_p) = self.mesh.nearest(p)?;
+            if (at_p - self.radius).abs() > BOUNDARY_POINT_TOL * self.radius {
+                return None;
+            }
+        }
+        Some((p, if self.grow { out } else { -out }))
+    }
+
+    fn has_boundary_points(&self) -> bool {
+        true
     }
 
     /// The slab faces of the records, when every record has [`SLAB`] and they lie on at

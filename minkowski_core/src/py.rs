@@ -260,6 +260,12 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("planar_straight_dropped", s.regions.straight_dropped)?;
     d.set_item("planar_deviation", s.planar_deviation)?;
     d.set_item("planes_fallback_edges", r.planes_fallback_edges)?;
+    d.set_item("sag_rounds", r.sag.rounds)?;
+    d.set_item("sag_tested", r.sag.tested)?;
+    d.set_item("sag_splits", r.sag.splits)?;
+    d.set_item("sag_left", r.sag.sag_left)?;
+    d.set_item("sag_covering", r.sag.covering)?;
+    d.set_item("seconds_sag", r.seconds_sag)?;
     // the bound by where it comes from: plane-resolved cells (0: exact), the sampled band
     // (the grid's), and cells where the lattice may have missed boundary (their reach);
     // vertices moved apart where sheets touched add to the planes' (they are in the join)

@@ -6,6 +6,7 @@ use crate::math::Aabb;
 use crate::minkowski::PolytopeSet;
 use crate::octree::{CellSource, Label, LevelCounts, Octree};
 use crate::polytope::PLANE_TOL_REL;
+use crate::surface::sag::{refine_sag, SagStats};
 use crate::surface::{extract, loose_reach, merge_coplanar, ResolvedCells, Surface, EDGE_CLAMP, MAX_OPEN_REPORTED};
 use std::time::Instant;
 
@@ -64,6 +65,11 @@ pub struct UnionResult {
     /// Open edges seen where plane-resolved cells met the band, over the rebuilds that then
     /// sampled around them (0: none).
     pub planes_fallback_edges: usize,
+    /// What the refinement where the surface sags from the boundary did (for a source with
+    /// boundary points, [`CellSource::boundary_point`]).
+    pub sag: SagStats,
+    /// Seconds of that refinement.
+    pub seconds_sag: f64,
 }
 
 /// Rebuilds sampling around the edges where plane-resolved cells failed to join the band,
@@ -177,6 +183,8 @@ fn exact_hulls(surface: Surface, set: &PolytopeSet, params: &UnionParams) -> Uni
         seconds_surface: 0.0,
         seconds_simplify: 0.0,
         planes_fallback_edges: 0,
+        sag: SagStats::default(),
+        seconds_sag: 0.0,
     };
     if params.simplify {
         simplify(&mut r, scale, 1e-18 * scale * scale);
@@ -190,6 +198,25 @@ fn simplify(r: &mut UnionResult, scale: f64, min_area: f64) {
     let t = Instant::now();
     merge_coplanar(&mut r.surface, 1e-10 * scale, min_area);
     r.seconds_simplify = t.elapsed().as_secs_f64();
+}
+
+/// The share of the grid's bound a triangle may sag from the boundary before it is split
+/// ([`crate::surface::sag`]): well below the bound, about what the sampled band's smooth
+/// parts sag by, so the creases no longer set the error.
+const SAG_SHARE: f64 = 1.0 / 16.0;
+
+/// Refine `r`'s surface where it sags from `set`'s boundary ([`refine_sag`]); the bound
+/// takes the new triangles' covering radius, off by what vertices moved apart.
+fn refine_sag_of<S: CellSource>(r: &mut UnionResult, set: &S) {
+    if !r.error_bound.is_finite() {
+        return;
+    }
+    let t = Instant::now();
+    let off = r.surface.sheets_apart;
+    let tol = SAG_SHARE * grid_error_bound(r.h);
+    r.sag = refine_sag(&mut r.surface, &|x, reach| set.boundary_point(x, reach), (tol, r.error_bound - off), off);
+    r.error_bound = r.error_bound.max(r.sag.covering + r.surface.sheets_apart);
+    r.seconds_sag = t.elapsed().as_secs_f64();
 }
 
 /// Part the vertices a reader welding by position would merge, a last time: what the
@@ -272,6 +299,8 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
             seconds_simplify: 0.0,
             triangles_extracted: 0,
             planes_fallback_edges: open_seen,
+            sag: SagStats::default(),
+            seconds_sag: 0.0,
         });
         if done || !next_fits {
             break;
@@ -285,6 +314,9 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
     if params.simplify {
         let min_area = 1e-12 * r.h * r.h;
         simplify(&mut r, region.diagonal(), min_area);
+    }
+    if set.has_boundary_points() {
+        refine_sag_of(&mut r, set);
     }
     kept_apart(&mut r);
     Ok(r)

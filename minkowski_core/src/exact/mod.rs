@@ -45,6 +45,7 @@ mod inside_grid;
 #[cfg(test)]
 mod inside_grid_tests;
 mod mesh;
+mod nearest;
 mod piece;
 pub mod shells;
 #[cfg(test)]

@@ -17,6 +17,7 @@ use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
 use crate::polytope::ConvexPolytope;
 use crate::surface::planar::Cut;
+use crate::surface::sag::BoundaryPoint;
 use crate::surface::{cell_key, resolve_cell, ResolvedCells};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -107,6 +108,20 @@ pub trait CellSource: Sync {
         Self: Sized,
     {
         inside && planes_clear(self, cell, own)
+    }
+    /// The boundary point that `x`, a point within `reach` of some boundary point (a
+    /// vertex of an extracted surface), moves to along the gradient of the distance the
+    /// source is a level set of, and the boundary's outward unit normal there, when the
+    /// source can find it exactly: the surface is then refined where it sags from the
+    /// boundary ([`crate::surface::sag`]). Default: `None` (see
+    /// [`CellSource::has_boundary_points`]).
+    fn boundary_point(&self, x: Vec3, reach: f64) -> Option<BoundaryPoint> {
+        let _ = (x, reach);
+        None
+    }
+    /// Whether [`CellSource::boundary_point`] may give points. Default: `false`.
+    fn has_boundary_points(&self) -> bool {
+        false
     }
     /// The planes of the boundary candidates of a MIXED cell with records `own`, when
     /// every candidate is flat and they lie on at most [`planar::MAX_PLANES`] planes (the

@@ -24,6 +24,7 @@ pub mod regions;
 mod resolve;
 #[cfg(test)]
 mod resolve_tests;
+pub mod sag;
 mod simplify;
 pub mod stitch;
 #[cfg(test)]

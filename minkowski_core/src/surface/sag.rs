@@ -1,0 +1,468 @@
+//! Refinement of an extracted surface where it sags from the true boundary, for a source
+//! that can find the boundary point a point moves to ([`crate::octree::CellSource::boundary_point`]:
+//! the offsets, whose boundary is a level set of the exact distance to a mesh).
+//!
+//! Marching tetrahedra puts every vertex on the boundary, but a triangle is a chord: across
+//! a crease of the boundary (where the offsets of two teeth of a gear meet) it cuts off the
+//! crease's valley by a good part of the grid's bound, while on smooth parts it lies far
+//! closer. So the error of a whole surface is set by its creases, a set of lines. Here each
+//! triangle whose vertices' normals turn enough for it to sag by more than `tol` is tested
+//! at its edges' midpoints and its centroid; an edge whose midpoint lies farther than `tol`
+//! from its boundary point is split (also the longest edge of a triangle whose centroid
+//! does), and the triangles around it are split with it, so the mesh stays closed,
+//! manifold and oriented the same way. The split point is on the crease when the edge's
+//! ends' normals turn by much ([`on_crease`]: where their tangent planes meet, moved to the
+//! boundary), else the midpoint's boundary point. A split that would fold a triangle over
+//! (its opposite vertex lies about where the crease does) is refused, and the edge is
+//! flipped to the diagonal between its opposite vertices instead when that sags less than
+//! half as much. Rounds repeat on the new triangles, at a cost in triangles that grows
+//! with the creases' length, not the surface's area.
+//!
+//! The bound the extraction stated still holds: every vertex it made is kept (the argument
+//! that every boundary point lies near one holds as before), and a point of a new triangle
+//! lies within the triangle's covering radius (at most its longest edge over `sqrt 3`) of a
+//! vertex on the boundary, the distance changing no faster than the point moves
+//! ([`SagStats::covering`] gives the largest, which the caller takes into the bound).
+
+use super::Surface;
+use crate::math::Vec3;
+use crate::util::{FastMap, FastSet};
+use rayon::prelude::*;
+
+/// Rounds of splitting, at most.
+const MAX_ROUNDS: u32 = 8;
+/// The refinement stops once the surface has this many times the triangles it had.
+const MAX_GROWTH: usize = 3;
+/// An edge whose ends' normals turn by more than this (cosine) crosses a crease: it is
+/// split where the tangent planes at its ends meet ([`on_crease`]), not at its midpoint.
+const CREASE_COS: f64 = 0.94;
+/// ... and only when that meeting lies this share of the edge's length or more from its ends.
+const CREASE_ALONG: f64 = 0.1;
+
+/// A boundary point and the boundary's outward unit normal there.
+pub type BoundaryPoint = (Vec3, Vec3);
+
+/// Edges to split, and where.
+type Splits = FastMap<(u32, u32), BoundaryPoint>;
+
+/// A point's boundary point, given how far the point lies from some boundary point at most
+/// (see [`crate::octree::CellSource::boundary_point`]).
+pub type Boundary<'a> = dyn Fn(Vec3, f64) -> Option<BoundaryPoint> + Sync + 'a;
+
+/// What [`refine_sag`] did.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SagStats {
+    /// Rounds of splitting made.
+    pub rounds: u32,
+    /// Points tested (edge midpoints and centroids).
+    pub tested: usize,
+    /// Edges split.
+    pub splits: usize,
+    /// Edges flipped to the diagonal along a crease.
+    pub flips: usize,
+    /// The largest sag seen among the points tested in the last round (0 when none was).
+    pub sag_left: f64,
+    /// The largest covering radius of a triangle made here (what the bound must cover).
+    pub covering: f64,
+}
+
+/// The key of the undirected edge `a`–`b`.
+fn edge_key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+/// The longest edge of the triangle `f` over `|b − a|`.
+fn longest_edge(v: &[Vec3], f: [u32; 3]) -> (f64, (u32, u32)) {
+    (0..3)
+        .map(|k| {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            ((v[b as usize] - v[a as usize]).length(), edge_key(a, b))
+        })
+        .fold((0.0, (0, 0)), |best, e| if e.0 > best.0 { e } else { best })
+}
+
+/// Whether the triangle `f` may sag by more than `tol`: its longest edge times the angle its
+/// vertices' normals turn through, over 2 (a chord across a crease of that angle sags by
+/// about a quarter of it, across a smooth bend by an eighth).
+/// Only triangles whose covering radius is at most `covers` are split (so that none made
+/// here needs a larger bound: large flat triangles lie on their plane exactly).
+fn may_sag(v: &[Vec3], normals: &[Option<Vec3>], f: [u32; 3], (tol, covers): (f64, f64)) -> bool {
+    let [Some(a), Some(b), Some(c)] = f.map(|i| normals[i as usize]) else { return false };
+    let least_cos = a.dot(b).min(b.dot(c)).min(c.dot(a)).clamp(-1.0, 1.0);
+    let longest = longest_edge(v, f).0;
+    longest / 3f64.sqrt() <= covers && longest * least_cos.acos() * 0.5 > tol
+}
+
+/// The triangles `f` is split into, given the new vertex on each of its edges that is split
+/// (`mid[k]` on the edge from `f[k]` to `f[k + 1]`), in `f`'s orientation.
+fn split_triangle(v: &[Vec3], f: [u32; 3], mid: [Option<u32>; 3], out: &mut Vec<[u32; 3]>) {
+    let splits = mid.iter().filter(|m| m.is_some()).count();
+    match splits {
+        0 => out.push(f),
+        1 => {
+            let k = (0..3).find(|&k| mid[k].is_some()).expect("one split");
+            let (a, b, c, m) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3], mid[k].expect("split"));
+            out.extend([[a, m, c], [m, b, c]]);
+        }
+        2 => {
+            // the unsplit edge is c -> a; the corner b between the two split edges is cut off
+            let k = (0..3).find(|&k| mid[k].is_none()).expect("one unsplit");
+            let (c, a, b) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
+            let (m1, m2) = (mid[(k + 1) % 3].expect("a -> b split"), mid[(k + 2) % 3].expect("b -> c split"));
+            out.push([m1, b, m2]);
+            // the quad a, m1, m2, c by its shorter diagonal
+            let pos = |i: u32| v[i as usize];
+            if (pos(m2) - pos(a)).length() <= (pos(c) - pos(m1)).length() {
+                out.extend([[a, m1, m2], [a, m2, c]]);
+            } else {
+                out.extend([[a, m1, c], [m1, m2, c]]);
+            }
+        }
+        _ => {
+            let [m0, m1, m2] = mid.map(|m| m.expect("all split"));
+            out.extend([[f[0], m0, m2], [m0, f[1], m1], [m2, m1, f[2]], [m0, m1, m2]]);
+        }
+    }
+}
+
+/// The unnormalised normal of the triangle `a b c`.
+fn normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    (b - a).cross(c - a)
+}
+
+/// Whether putting the point `m` on the edge `a`–`b` of the triangle `a b c` keeps both
+/// halves facing within a right angle of it (so the split folds nothing over).
+fn split_keeps_facing([a, b, c]: [Vec3; 3], m: Vec3) -> bool {
+    let n = normal(a, b, c);
+    [normal(a, m, c), normal(m, b, c)].iter().all(|h| n.dot(*h) > 0.0)
+}
+
+/// The sag of the point `x`, within `reach` of a boundary point: how far its boundary
+/// point lies, and the point.
+fn sag_at(boundary: &Boundary<'_>, x: Vec3, reach: f64) -> Option<(f64, BoundaryPoint)> {
+    boundary(x, reach).map(|(p, n)| ((p - x).length(), (p, n)))
+}
+
+/// The boundary point on the crease the edge `e` crosses, when its ends' normals turn by
+/// more than [`CREASE_COS`]: where the line the tangent planes at its ends meet in passes
+/// under the edge (through the plane of the edge and the ends' mean normal), moved to the
+/// boundary. `None` when the normals turn less, the line runs about along the edge, or it
+/// passes off the middle of the edge.
+fn on_crease(v: &[Vec3], normals: &[Option<Vec3>], (i, j): (u32, u32), (boundary, off): (&Boundary<'_>, f64)) -> Option<BoundaryPoint> {
+    let (a, b) = (v[i as usize], v[j as usize]);
+    let (na, nb) = (normals[i as usize]?, normals[j as usize]?);
+    let cos = na.dot(nb);
+    if cos > CREASE_COS {
+        return None;
+    }
+    // x = mid + s na + t nb on both planes: the 2 x 2 system of the normals' Gram matrix
+    let mid = (a + b) * 0.5;
+    let (ra, rb) = (na.dot(a - mid), nb.dot(b - mid));
+    let det = 1.0 - cos * cos;
+    let (s, t) = ((ra - cos * rb) / det, (rb - cos * ra) / det);
+    let nearest = mid + na * s + nb * t;
+    // along the crease, to where it passes under the edge: the plane through the edge and
+    // the ends' mean normal
+    let (crease, across) = (na.cross(nb), (b - a).cross(na + nb));
+    let slope = across.dot(crease);
+    if slope.abs() <= CREASE_ALONG * across.length() * crease.length() {
+        return None;
+    }
+    let x = nearest + crease * (across.dot(mid - nearest) / slope);
+    let along = (x - a).dot(b - a) / (b - a).length_squared();
+    if !(CREASE_ALONG..=1.0 - CREASE_ALONG).contains(&along) {
+        return None;
+    }
+    boundary(x, (x - a).length().min((x - b).length()) + off)
+}
+
+/// One round's tests on the triangles `cands` of `faces`: the point to split each edge at
+/// whose midpoint sags by more than `tol` (on the crease it crosses, else the midpoint's
+/// boundary point), also the longest edge of a triangle whose centroid does. Records the
+/// largest sag seen.
+fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cands: &[usize], (boundary, off): (&Boundary<'_>, f64), tol: f64, stats: &mut SagStats) -> Splits {
+    let mut edges: Vec<(u32, u32)> = cands.iter().flat_map(|&fi| (0..3).map(move |k| edge_key(faces[fi][k], faces[fi][(k + 1) % 3]))).collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let at_mid: Vec<_> = edges
+        .par_iter()
+        .map(|&(a, b)| {
+            let (a, b) = (v[a as usize], v[b as usize]);
+            sag_at(boundary, (a + b) * 0.5, 0.5 * (b - a).length() + off)
+        })
+        .collect();
+    let at_centre: Vec<_> = cands
+        .par_iter()
+        .map(|&fi| {
+            let corners = faces[fi].map(|i| v[i as usize]);
+            let c = (corners[0] + corners[1] + corners[2]) / 3.0;
+            sag_at(boundary, c, corners.iter().map(|&p| (p - c).length()).fold(f64::INFINITY, f64::min) + off)
+        })
+        .collect();
+    stats.tested += edges.len() + cands.len();
+    stats.sag_left = at_mid.iter().chain(&at_centre).flatten().map(|s| s.0).fold(0.0, f64::max);
+    let mid_of: FastMap<(u32, u32), Option<(f64, BoundaryPoint)>> = edges.iter().copied().zip(at_mid).collect();
+    let sagging: Vec<((u32, u32), BoundaryPoint)> = mid_of.iter().filter_map(|(&e, s)| s.filter(|s| s.0 > tol).map(|s| (e, s.1))).collect();
+    let mut split: Splits = sagging.into_par_iter().map(|(e, at_mid)| (e, on_crease(v, normals, e, (boundary, off)).unwrap_or(at_mid))).collect();
+    for (&fi, centre) in cands.iter().zip(&at_centre) {
+        let sags = matches!(centre, Some(s) if s.0 > tol);
+        let f = faces[fi];
+        if sags && !(0..3).any(|k| split.contains_key(&edge_key(f[k], f[(k + 1) % 3]))) {
+            let e = longest_edge(v, f).1;
+            if let Some(Some((_, p))) = mid_of.get(&e) {
+                split.insert(e, *p);
+            }
+        }
+    }
+    split
+}
+
+/// Drop from `split` every edge next to a triangle whose covering radius is above `covers`,
+/// or would be in a half of it, or which its boundary point would fold
+/// ([`split_keeps_facing`]). Returns the edges dropped.
+fn keep_unfolded_splits(v: &[Vec3], faces: &[[u32; 3]], split: &mut FastMap<(u32, u32), BoundaryPoint>, covers: f64) -> Vec<(u32, u32)> {
+    let mut refused = Vec::new();
+    for &f in faces {
+        for k in 0..3 {
+            let corners = [f[k], f[(k + 1) % 3], f[(k + 2) % 3]];
+            let e = edge_key(corners[0], corners[1]);
+            let Some(&m) = split.get(&e) else { continue };
+            let folds = !split_keeps_facing(corners.map(|i| v[i as usize]), m.0);
+            let p = corners.map(|i| v[i as usize]);
+            let halves_wide = [[p[0], m.0, p[2]], [m.0, p[1], p[2]]].iter().any(|h| (0..3).any(|k| (h[k] - h[(k + 1) % 3]).length() / 3f64.sqrt() > covers));
+            if folds || halves_wide || longest_edge(v, f).0 / 3f64.sqrt() > covers {
+                refused.push(e);
+            }
+        }
+    }
+    for e in &refused {
+        split.remove(e);
+    }
+    refused.sort_unstable();
+    refused.dedup();
+    refused
+}
+
+/// The edges of `faces`.
+fn edge_set(faces: &[[u32; 3]]) -> FastSet<(u32, u32)> {
+    faces.iter().flat_map(|f| (0..3).map(move |k| edge_key(f[k], f[(k + 1) % 3]))).collect()
+}
+
+/// Flip each edge of `refused` (it sags, but a split there would fold a triangle: the
+/// opposite vertex of a triangle next to it lies about where the crease does) to the
+/// diagonal between its two opposite vertices, when that sags less than half as much and
+/// the two new triangles face the way the old ones did; a triangle flips once a round, and
+/// not next to an edge `split`, and not to a diagonal longer than `sqrt 3` times `covers`.
+/// Returns the triangles changed.
+fn flip_sagging(s: &mut Surface, refused: &[(u32, u32)], split: &FastMap<(u32, u32), BoundaryPoint>, (boundary, off): (&Boundary<'_>, f64), covers: f64) -> Vec<usize> {
+    let wanted: FastSet<(u32, u32)> = refused.iter().copied().collect();
+    let mut around: FastMap<(u32, u32), Vec<usize>> = FastMap::default();
+    for (fi, f) in s.faces.iter().enumerate() {
+        for k in 0..3 {
+            let e = edge_key(f[k], f[(k + 1) % 3]);
+            if wanted.contains(&e) {
+                around.entry(e).or_default().push(fi);
+            }
+        }
+    }
+    let mut edges = edge_set(&s.faces);
+    let mut changed = Vec::new();
+    let v = |i: u32| s.vertices[i as usize];
+    let near_split = |f: [u32; 3]| (0..3).any(|k| split.contains_key(&edge_key(f[k], f[(k + 1) % 3])));
+    for e in refused {
+        let Some(fs) = around.get(e) else { continue };
+        let [f1, f2] = fs[..] else { continue };
+        if changed.contains(&f1) || changed.contains(&f2) || near_split(s.faces[f1]) || near_split(s.faces[f2]) {
+            continue;
+        }
+        // f1 = a b c runs a -> b, f2 = b a d back
+        let k = (0..3).find(|&k| edge_key(s.faces[f1][k], s.faces[f1][(k + 1) % 3]) == *e).expect("edge of f1");
+        let (a, b, c) = (s.faces[f1][k], s.faces[f1][(k + 1) % 3], s.faces[f1][(k + 2) % 3]);
+        let Some(&d) = s.faces[f2].iter().find(|&&x| x != a && x != b) else { continue };
+        if c == d || edges.contains(&edge_key(c, d)) {
+            continue;
+        }
+        let sag = |p: u32, q: u32| sag_at(boundary, (v(p) + v(q)) * 0.5, 0.5 * (v(q) - v(p)).length() + off).map(|x| x.0);
+        let (Some(across), Some(along)) = (sag(a, b), sag(c, d)) else { continue };
+        let was = normal(v(a), v(b), v(c)) + normal(v(b), v(a), v(d));
+        let (g1, g2) = (normal(v(a), v(d), v(c)), normal(v(d), v(b), v(c)));
+        let too_wide = (v(c) - v(d)).length() / 3f64.sqrt() > covers;
+        if too_wide || along >= 0.5 * across || g1.dot(was) <= 0.0 || g2.dot(was) <= 0.0 || g1.dot(g2) <= 0.0 {
+            continue;
+        }
+        s.faces[f1] = [a, d, c];
+        s.faces[f2] = [d, b, c];
+        edges.remove(e);
+        edges.insert(edge_key(c, d));
+        changed.extend([f1, f2]);
+    }
+    changed
+}
+
+/// Refine `s` where it sags from the boundary by more than `tol` (see the module
+/// documentation), splitting only triangles whose covering radius is at most `covers`;
+/// `boundary` gives a point's boundary point and normal, `None` where it cannot. Every
+/// vertex of `s` must lie within `off` of the boundary.
+pub fn refine_sag(s: &mut Surface, boundary: &Boundary<'_>, (tol, covers): (f64, f64), off: f64) -> SagStats {
+    let mut stats = SagStats::default();
+    let mut normals: Vec<Option<Vec3>> = s.vertices.par_iter().map(|&x| boundary(x, off).map(|(_, n)| n)).collect();
+    let budget = s.faces.len().saturating_mul(MAX_GROWTH);
+    let mut cands: Vec<usize> = (0..s.faces.len()).filter(|&fi| may_sag(&s.vertices, &normals, s.faces[fi], (tol, covers))).collect();
+    while !cands.is_empty() && stats.rounds < MAX_ROUNDS && s.faces.len() < budget && !crate::deadline::cancelled() {
+        let mut split = edges_to_split(&s.vertices, &normals, &s.faces, &cands, (boundary, off), tol, &mut stats);
+        let refused = keep_unfolded_splits(&s.vertices, &s.faces, &mut split, covers);
+        let flipped = flip_sagging(s, &refused, &split, (boundary, off), covers);
+        if split.is_empty() && flipped.is_empty() {
+            break;
+        }
+        stats.rounds += 1;
+        stats.splits += split.len();
+        stats.flips += flipped.len() / 2;
+        let mut changed = vec![false; s.faces.len()];
+        for fi in flipped {
+            changed[fi] = true;
+        }
+        let mut order: Vec<(u32, u32)> = split.keys().copied().collect();
+        order.sort_unstable();
+        let first_new = s.vertices.len() as u32;
+        let index: FastMap<(u32, u32), u32> = order.iter().enumerate().map(|(i, &e)| (e, first_new + i as u32)).collect();
+        for e in &order {
+            let (p, n) = split[e];
+            s.vertices.push(p);
+            normals.push(Some(n));
+        }
+        let mut faces = Vec::with_capacity(s.faces.len() + 3 * split.len());
+        cands.clear();
+        for (old, &f) in s.faces.iter().enumerate() {
+            let mid = [0, 1, 2].map(|k| index.get(&edge_key(f[k], f[(k + 1) % 3])).copied());
+            let from = faces.len();
+            split_triangle(&s.vertices, f, mid, &mut faces);
+            if changed[old] || mid.iter().any(Option::is_some) {
+                for (fi, &g) in faces.iter().enumerate().skip(from) {
+                    stats.covering = stats.covering.max(longest_edge(&s.vertices, g).0 / 3f64.sqrt());
+                    if may_sag(&s.vertices, &normals, g, (tol, covers)) {
+                        cands.push(fi);
+                    }
+                }
+            }
+        }
+        s.faces = faces;
+    }
+    stats
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The valley `z = SLOPE |x|` (solid below it, outward normal up): a point's nearest
+    /// point on it, and the normal there.
+    const SLOPE: f64 = 1.0;
+
+    fn on_valley(p: Vec3) -> BoundaryPoint {
+        let sides = [Vec3::new(-SLOPE, 0.0, 1.0).normalize(), Vec3::new(SLOPE, 0.0, 1.0).normalize()];
+        // the nearest point on each half-plane through the crease (x = 0, z = 0), clamped to it
+        let on_half = |n: Vec3, sign: f64| {
+            let q = p - n * p.dot(n);
+            if q.x * sign >= 0.0 {
+                (q, n)
+            } else {
+                (Vec3::new(0.0, p.y, 0.0), n)
+            }
+        };
+        let (a, b) = (on_half(sides[0], 1.0), on_half(sides[1], -1.0));
+        if (p - a.0).length() <= (p - b.0).length() {
+            a
+        } else {
+            b
+        }
+    }
+
+    /// A strip of the valley across `x` in `[-1, 1]`, `y` in `[0, len]`: vertices on it at
+    /// `x` = ±1 and ±0.4 (so the crease runs through the middle of triangles), triangles
+    /// wound to face up.
+    fn strip(len: usize) -> Surface {
+        let xs = [-1.0, -0.4, 0.4, 1.0];
+        let mut s = Surface::default();
+        for j in 0..=len {
+            for &x in &xs {
+                s.vertices.push(Vec3::new(x, j as f64 * 0.5, SLOPE * f64::abs(x)));
+            }
+        }
+        for j in 0..len as u32 {
+            for i in 0..3u32 {
+                let (a, b, c, d) = (4 * j + i, 4 * j + i + 1, 4 * (j + 1) + i, 4 * (j + 1) + i + 1);
+                s.faces.extend([[a, b, d], [a, d, c]]);
+            }
+        }
+        s
+    }
+
+    /// The largest distance of sampled points of `s`'s triangles to the valley.
+    fn largest_sag(s: &Surface) -> f64 {
+        let mut worst: f64 = 0.0;
+        for f in &s.faces {
+            let [a, b, c] = f.map(|i| s.vertices[i as usize]);
+            for (u, v) in [(0.33, 0.33), (0.5, 0.0), (0.0, 0.5), (0.5, 0.5), (0.25, 0.5), (0.5, 0.25), (0.2, 0.2)] {
+                let p = a + (b - a) * u + (c - a) * v;
+                worst = worst.max((on_valley(p).0 - p).length());
+            }
+        }
+        worst
+    }
+
+    /// Every edge used once each way, except along the strip's border.
+    fn interior_edges_paired(s: &Surface) -> bool {
+        let mut count: FastMap<(u32, u32), i32> = FastMap::default();
+        for f in &s.faces {
+            for k in 0..3 {
+                let (a, b) = (f[k], f[(k + 1) % 3]);
+                *count.entry(edge_key(a, b)).or_default() += if a < b { 1 } else { -1 };
+            }
+        }
+        count.values().all(|&c| c.abs() <= 1)
+    }
+
+    #[test]
+    fn a_chord_across_a_crease_is_refined_until_it_sags_less_than_the_tolerance() {
+        let mut s = strip(6);
+        let before = largest_sag(&s);
+        let tol = 0.01;
+        assert!(before > 20.0 * tol, "the strip's chords across the crease sag by {before}");
+        let stats = refine_sag(&mut s, &|p, _| Some(on_valley(p)), (tol, 10.0), 0.0);
+        let after = largest_sag(&s);
+        assert!(stats.splits > 0, "{stats:?}");
+        // flat sheets: the split points lie on the crease itself, so one round takes it all
+        assert!(after <= tol, "still sags by {after} after {stats:?}");
+        assert!(interior_edges_paired(&s), "the split strip is not one consistently wound sheet");
+        // every vertex made lies on the valley, every triangle still faces up
+        assert!(s.vertices.iter().all(|&v| (on_valley(v).0 - v).length() < 1e-12));
+        assert!(s.faces.iter().all(|f| {
+            let [a, b, c] = f.map(|i| s.vertices[i as usize]);
+            normal(a, b, c).z > 0.0
+        }));
+        // the bound's share: no triangle made covers more than the ones it came from
+        assert!(stats.covering <= 0.75, "{stats:?}");
+    }
+
+    #[test]
+    fn a_flat_surface_is_left_alone() {
+        let mut s = strip(3);
+        for v in &mut s.vertices {
+            v.z = 0.0;
+        }
+        let faces = s.faces.clone();
+        let stats = refine_sag(&mut s, &|p, _| Some((Vec3::new(p.x, p.y, 0.0), Vec3::Z)), (1e-6, 10.0), 0.0);
+        assert_eq!((stats.splits, stats.tested), (0, 0));
+        assert_eq!(s.faces, faces);
+    }
+
+    #[test]
+    fn triangles_wider_than_the_cover_are_not_split() {
+        let mut s = strip(6);
+        let faces = s.faces.clone();
+        let stats = refine_sag(&mut s, &|p, _| Some(on_valley(p)), (0.01, 0.1), 0.0);
+        assert_eq!(stats.splits, 0);
+        assert_eq!(s.faces, faces);
+    }
+}
