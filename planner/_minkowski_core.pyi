@@ -20,6 +20,7 @@ __all__ = [
     "front_windings",
     "num_threads",
     "offset_surface",
+    "rounded_polytope",
     "set_record_budget",
     "set_time_limit",
     "solid_windings",
@@ -125,6 +126,12 @@ def offset_surface(
     max_cells: int = 8000000,
     max_refinements: int = 2,
     simplify: bool = True,
+) -> dict[str, Any]: ...
+def rounded_polytope(
+    points: npt.NDArray[np.float64],
+    radius: float,
+    tol: float,
+    max_triangles: int = 20000000,
 ) -> dict[str, Any]: ...
 
 @final

@@ -1,13 +1,22 @@
 """Offsets of a convex solid (or one convex up to its file's rounding), without a grid:
-grown, the hull of its vertices' balls (tessellated within the error asked for); eroded,
-its hull's facet planes moved inward.
+grown, its hull's facets, edges and corners moved out and tessellated within the error
+asked for (else the hull of its vertices' tessellated balls); eroded, its hull's facet
+planes moved inward.
 
 For the hull ``H = {x : n_k · x <= d_k}`` of the solid ``P``'s vertices:
 
 * ``H`` eroded by ``r`` is ``{x : n_k · x <= d_k - r}`` (inside a convex solid the
   distance to the boundary is the least distance to a facet plane), flat faces only;
   empty when ``r`` reaches the inradius;
-* ``H`` grown by ``r`` is ``H ⊕ ball(r)``. The hull of the points ``v + u`` (vertices
+* ``H`` grown by ``r`` is ``H ⊕ ball(r)``: its boundary is ``H``'s facets moved out by
+  ``r``, cylinders over its edges and spheres at its corners. The core
+  (``rounded_polytope``) tessellates them along ``H``'s own structure, no hull computed:
+  the facets exactly flat, each edge's cylinder a strip over its dihedral arc, each
+  corner's sphere patch graded rows over its normal cone, the round points a hair outside
+  ``r`` so the chords' sag is split between the two sides (the bound is measured on the
+  triangles: see ``minkowski_core/src/polytope/rounded.rs``). When that is not possible
+  (too many triangles, two facets meeting at so small an angle that their moved corners
+  would weld), the hull of the points ``v + u`` (vertices
   ``v`` of ``H``, ``u`` of an icosphere of radius ``r``) and of every facet's corners moved
   ``r`` along its normal holds ``H ⊕ icosphere`` and lies inside the true offset: its flat
   faces are ``H``'s moved out by exactly ``r``, its round parts chords of the true
@@ -35,6 +44,7 @@ points, qhull unable to build a hull); the caller then uses the cell source.
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import time
 from dataclasses import dataclass
@@ -43,11 +53,14 @@ from typing import Any
 import numpy as np
 import trimesh
 
+from .errors import InvalidMeshError, InvalidParameterError
 from .meshes.closest import mesh_distance
 
-__all__ = ["BALL_CONE_ANGLE", "BALL_INNER", "MAX_FACES", "MAX_POINTS", "convex_hull",
+__all__ = ["BALL_CONE_ANGLE", "BALL_INNER", "MAX_FACES", "MAX_POINTS", "ROUNDED", "convex_hull",
            "convex_offset", "hull_mesh", "measured_ball", "representatives",
            "rounding_allowance", "unit_ball"]
+
+log = logging.getLogger(__name__)
 
 MAX_FACES = 5000
 """Solids with more triangles are left to the cell source (the test is faces × hull
@@ -60,6 +73,13 @@ PLANE_TOL_REL = 1e-9
 """Relative to the solid's diagonal: the rounding allowance added to every bound."""
 
 MAX_SUBDIVISIONS = 7
+
+MAX_ROUNDED_TRIANGLES = 4_000_000
+"""Most triangles the rounded hull (:func:`_rounded`) may make: the core keeps about 120
+bytes per triangle while it builds them, so about 0.5 GB."""
+
+ROUNDED = "facets moved out, edges' cylinders and corners' spheres tessellated"
+"""``stats["convex"]`` of a grown convex solid tessellated along its own structure."""
 
 MERGE_REL = 1e-6
 """Grown hulls' points closer than this, relative to their size and distance from the
@@ -79,24 +99,32 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
         hull = _hull_planes(solid, eps)
         if hull is None:
             return None
-        # H's deepest point: inside H_t (H's planes moved in by the depth), so inside the
-        # solid by one winding number exactly when H_t is
-        deepest = _deepest_point(hull.normals, hull.offsets)
+        # a point inside H_t (H's planes moved in by the depth), so inside the solid by
+        # one winding number exactly when H_t is
+        deepest = _inner_point(hull, eps)
         if deepest is None or deepest[1] <= hull.depth or not _inside_at(solid, deepest[0]):
             return None
+        extra: dict[str, Any] = {}
         if radius < 0:
             mesh, between = _eroded(hull, -radius, rounding)
             method, subdivisions, chord = "hull's facet planes moved inward", None, 0.0
         else:
-            grown = _grown(hull, radius, eps)
-            if grown is None:
-                return None
-            mesh, chord, subdivisions = grown
             # growing is 1-Lipschitz: the grown H and H_t are no farther apart than H, H_t
             between = _gap_bound(hull, *deepest)
-            if chord + between + rounding > eps:
+            if between > eps / 4:
                 between = min(between, _gap_exact(hull))
-            method = "hull of the vertices' tessellated balls"
+            rounded = _rounded(hull, radius, eps - between - rounding)
+            if rounded is not None:
+                mesh, chord, extra = rounded
+                subdivisions, method = None, ROUNDED
+            else:
+                grown = _grown(hull, radius, eps)
+                if grown is None:
+                    return None
+                mesh, chord, subdivisions = grown
+                if chord + between + rounding > eps:
+                    between = min(between, _gap_exact(hull))
+                method = "hull of the vertices' tessellated balls"
     except QhullError:  # a hull too thin for qhull: the cell source decides
         return None
     bound = chord + between + rounding
@@ -108,7 +136,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
              "bound_by_region": {"planes": between + rounding, "sampled": 0.0, "missed": 0.0,
                                  "round": chord},
              "holes_closed": 0, "sheets_unzipped": 0, "sheets_apart": 0.0, "convex": method,
-             "hull_depth": hull.depth, "ball_subdivisions": subdivisions,
+             "hull_depth": hull.depth, "ball_subdivisions": subdivisions, **extra,
              "seconds": time.perf_counter() - t0}
     return mesh, bound, stats
 
@@ -278,6 +306,18 @@ def _merged_hull(points: np.ndarray) -> tuple[trimesh.Trimesh, float]:
     return hull_mesh(convex_hull(points[kept])), merge if len(kept) < len(points) else 0.0
 
 
+def _inner_point(hull: _Hull, eps: float) -> tuple[np.ndarray, float] | None:
+    """``(x, t)``: a point inside ``H`` and its depth, for the winding test and the gap
+    bound: the mean of ``H``'s corners when it lies deeper than ``H``'s depth and its gap
+    bound is within a quarter of ``eps`` (always for a solid that is its own hull), else
+    ``H``'s deepest point (a linear program)."""
+    centre = hull.corners.mean(axis=0)
+    depth = float(np.min(hull.offsets - hull.normals @ centre))
+    if depth > hull.depth and _gap_bound(hull, centre, depth) <= eps / 4:
+        return centre, depth
+    return _deepest_point(hull.normals, hull.offsets)
+
+
 def _deepest_point(normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, float] | None:
     """``(x, t)`` maximising ``t`` with ``n · x + t <= d`` for the unit normals (the
     Chebyshev centre of ``{x : n · x <= d}`` and its depth), ``t >= 0``; ``None`` when
@@ -315,6 +355,32 @@ def _grown(hull: _Hull, radius: float, eps: float
                                                moved]))
         return mesh, chord + merged, subdivisions
     return None
+
+
+def _rounded(hull: _Hull, radius: float, tol: float
+             ) -> tuple[trimesh.Trimesh, float, dict[str, Any]] | None:
+    """``(mesh, chord, stats)``: ``H`` grown by ``radius`` and tessellated along its own
+    facets, edges and corners by the core (:data:`ROUNDED`), its two-sided bound
+    ``chord`` within ``tol``; ``None`` when that is not possible within
+    :data:`MAX_ROUNDED_TRIANGLES`, or when two facets meet at so small an angle that their
+    moved corners would lie closer than :data:`MERGE_REL` (a float32 file would weld
+    them): the hull of the tessellated balls takes those."""
+    from ._minkowski_core import rounded_polytope  # noqa: PLC0415
+
+    if tol <= 0:
+        return None
+    corners = np.ascontiguousarray(hull.corners, dtype=np.float64)
+    try:
+        out = rounded_polytope(corners, radius, tol, MAX_ROUNDED_TRIANGLES)
+    except (InvalidMeshError, InvalidParameterError) as error:
+        log.debug("the rounded hull is not used: %s", error)
+        return None
+    merge = MERGE_REL * float(np.max(np.abs(corners)) + np.ptp(corners, axis=0).max() + radius)
+    if radius * out["narrowest"] < merge:
+        return None
+    mesh = trimesh.Trimesh(out["vertices"], out["faces"], process=False)
+    return mesh, float(out["chord"]), {"round_step": float(out["step"]),
+                                       "round_scale": float(out["scale"])}
 
 
 def _extreme_pairs(hull: _Hull, unit: np.ndarray, ball_angle: float

@@ -20,6 +20,7 @@ from planner.errors import (
     InvalidParameterError,
     ResourceLimitError,
 )
+from planner.offsets_convex import ROUNDED
 
 
 def _steiner(mesh: trimesh.Trimesh, r: float) -> float:
@@ -113,11 +114,12 @@ def test_every_output_point_is_within_the_bound_of_the_true_offset_surface(metho
 
 
 def test_a_convex_offset_needs_no_grid_and_its_bound_holds_both_ways():
-    """One convex body (a random hull of 40 points): grown, the hull of its corners'
-    tessellated balls — every output vertex at most r from the solid and at least
-    r - bound, the flat faces' points exactly r away, the bound within eps; eroded, the
-    face planes moved inward — every output vertex exactly |r| inside. Against exact
-    distances to the solid (trimesh's closest points) and the solid's own face planes."""
+    """One convex body (a random hull of 40 points): grown, its facets, edges and
+    corners moved out and tessellated — every output point within the bound of r from
+    the solid, the round parts' points split between the two sides, the bound within
+    eps; eroded, the face planes moved inward — every output vertex exactly |r| inside.
+    Against exact distances to the solid (trimesh's closest points) and the solid's own
+    face planes."""
     from shapes import random_convex
 
     solid = random_convex(40, (1.0, 0.8, 0.6), seed=3)
@@ -129,7 +131,10 @@ def test_a_convex_offset_needs_no_grid_and_its_bound_holds_both_ways():
     points = np.vstack([grown.mesh.vertices,
                         trimesh.sample.sample_surface(grown.mesh, 4000, seed=2)[0]])
     _, distance, _ = trimesh.proximity.closest_point(solid, points)
-    assert np.all(distance <= r + 1e-9) and np.all(distance >= r - grown.error_bound)
+    assert np.all(np.abs(distance - r) <= grown.error_bound + 1e-9)
+    # the chords' sag split: about half of the bound out, half in
+    assert distance.max() - r > 0.3 * grown.error_bound
+    assert r - distance.min() > 0.3 * grown.error_bound
     eroded = planner.offset(solid, -0.05, eps=eps)
     normals = solid.face_normals
     offsets = np.einsum("ij,ij->i", normals, solid.triangles[:, 0])
@@ -210,6 +215,27 @@ def test_a_solid_convex_up_to_rounding_is_offset_by_its_hull_within_the_bound():
          [dented.faces[0][1], dented.faces[0][2], len(dented.vertices) - 1],
          [dented.faces[0][2], dented.faces[0][0], len(dented.vertices) - 1]]]), process=False)
     assert "convex" not in planner.offset(dented, r, eps=0.25).stats
+
+
+def test_a_convex_solid_whose_facets_meet_almost_flat_is_grown_by_the_hull_of_balls():
+    """A unit cube with one corner moved 1e-7 out of its face: the hull's two facets there
+    meet at about 1e-7 rad, so their corners moved out by r would lie 1e-8 apart (a
+    float32 file welds them). The tessellation along the hull's structure is refused and
+    the hull of the corners' balls takes it, within its bound of the exact distance."""
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    vertices = np.array(box.vertices)
+    vertices[int(np.argmax(vertices @ [1.0, 1.0, 1.0]))] += [1e-7, 0.0, 0.0]
+    nudged = trimesh.Trimesh(vertices, box.faces, process=False)
+    r = 0.1
+    grown = planner.offset(nudged, r, eps=1e-3)
+    assert grown.stats["convex"] == "hull of the vertices' tessellated balls"
+    assert grown.mesh.is_watertight and 0 < grown.error_bound <= 1e-3
+    points = np.vstack([grown.mesh.vertices,
+                        trimesh.sample.sample_surface(grown.mesh, 4000, seed=5)[0]])
+    _, distance, _ = trimesh.proximity.closest_point(nudged, points)
+    assert np.all(np.abs(distance - r) <= grown.error_bound + 1e-12)
+    # the same cube without the nudge takes the tessellation along its structure
+    assert planner.offset(box, r, eps=1e-3).stats["convex"] == ROUNDED
 
 
 def test_a_non_convex_solid_is_offset_by_the_sum_with_an_inscribed_ball():

@@ -231,6 +231,29 @@ fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f6
     surface_dict(py, &r)
 }
 
+/// The offset of the convex hull of `points` by `radius`, tessellated along the hull's
+/// own facets, edges and vertices with its two-sided bound within `tol`
+/// ([`crate::polytope::rounded`]): a dict of `vertices`, `faces`, `chord` (the bound),
+/// `scale`, `step` and `narrowest`.
+#[pyfunction]
+#[pyo3(signature = (points, radius, tol, max_triangles=20_000_000))]
+fn rounded_polytope<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, radius: f64, tol: f64, max_triangles: usize) -> PyResult<Bound<'py, PyDict>> {
+    let points = points_of(&points, "points")?;
+    let out = py.detach(move || {
+        let poly = crate::polytope::ConvexPolytope::try_from_points(&points, "hull corners")?;
+        crate::polytope::rounded(&poly, radius, tol, max_triangles)
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("vertices", to_array2(out.vertices.iter().map(|v| v.to_array())).into_pyarray(py))?;
+    let flat: Vec<i64> = out.triangles.iter().flat_map(|f| f.iter().map(|&x| x as i64)).collect();
+    d.set_item("faces", Array2::from_shape_vec((out.triangles.len(), 3), flat).expect("m x 3").into_pyarray(py))?;
+    d.set_item("chord", out.chord)?;
+    d.set_item("scale", out.scale)?;
+    d.set_item("step", out.step)?;
+    d.set_item("narrowest", out.narrowest)?;
+    Ok(d)
+}
+
 fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let s = &r.surface;
@@ -663,6 +686,7 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Primitives>()?;
     m.add_function(wrap_pyfunction!(union_surface, m)?)?;
     m.add_function(wrap_pyfunction!(offset_surface, m)?)?;
+    m.add_function(wrap_pyfunction!(rounded_polytope, m)?)?;
     m.add_function(wrap_pyfunction!(build_octree, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
     m.add_function(wrap_pyfunction!(set_record_budget, m)?)?;

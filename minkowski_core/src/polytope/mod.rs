@@ -9,6 +9,8 @@ mod hull;
 #[cfg(test)]
 mod polytope_tests;
 mod queries;
+mod rounded;
 
 pub use hull::{ConvexPolytope, PLANE_TOL_REL};
 pub use queries::{clip_planes, closest_on_triangle, point_triangle_distance2};
+pub use rounded::{rounded, Rounded};

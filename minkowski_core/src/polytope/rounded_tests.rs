@@ -1,0 +1,141 @@
+use super::*;
+use std::collections::HashSet;
+use std::f64::consts::PI;
+
+fn box_polytope(size: Vec3) -> ConvexPolytope {
+    let points: Vec<Vec3> =
+        (0..8).map(|k| Vec3::new(if k & 1 == 1 { size.x } else { 0.0 }, if k & 2 == 2 { size.y } else { 0.0 }, if k & 4 == 4 { size.z } else { 0.0 })).collect();
+    ConvexPolytope::from_points(&points)
+}
+
+/// A convex hull of points on a lumpy sphere (a fixed linear congruential sequence).
+fn lumpy_polytope(count: usize) -> ConvexPolytope {
+    let mut state: u64 = 12345;
+    let mut next = || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let points: Vec<Vec3> = (0..count)
+        .map(|_| {
+            let (z, phi) = (2.0 * next() - 1.0, 2.0 * PI * next());
+            let ring = (1.0 - z * z).sqrt();
+            Vec3::new(ring * phi.cos() * 1.3, ring * phi.sin() * 0.8, z * 0.6) * (0.9 + 0.2 * next())
+        })
+        .collect();
+    ConvexPolytope::from_points(&points)
+}
+
+/// Every directed edge once, each with its twin: closed and consistently wound.
+fn assert_closed_and_oriented(triangles: &[[u32; 3]]) {
+    let mut directed = HashSet::new();
+    for t in triangles {
+        assert!(t[0] != t[1] && t[1] != t[2] && t[2] != t[0], "a triangle repeats a corner: {t:?}");
+        for k in 0..3 {
+            assert!(directed.insert((t[k], t[(k + 1) % 3])), "edge ({}, {}) is used twice the same way", t[k], t[(k + 1) % 3]);
+        }
+    }
+    for &(a, b) in &directed {
+        assert!(directed.contains(&(b, a)), "edge ({a}, {b}) has no twin");
+    }
+}
+
+fn volume(vertices: &[Vec3], triangles: &[[u32; 3]]) -> f64 {
+    triangles.iter().map(|t| vertices[t[0] as usize].dot(vertices[t[1] as usize].cross(vertices[t[2] as usize])) / 6.0).sum()
+}
+
+/// Points of every triangle on a barycentric grid (corners, edge points, inner points).
+fn samples(vertices: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut out = Vec::new();
+    for t in triangles {
+        let [a, b, c] = t.map(|i| vertices[i as usize]);
+        for (u, v) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.5, 0.0), (0.0, 0.5), (0.5, 0.5), (1.0 / 3.0, 1.0 / 3.0), (0.2, 0.6)] {
+            out.push(a + (b - a) * u + (c - a) * v);
+        }
+    }
+    out
+}
+
+fn mesh_distance(vertices: &[Vec3], triangles: &[[u32; 3]], p: Vec3) -> f64 {
+    triangles.iter().map(|t| point_triangle_distance2(p, vertices[t[0] as usize], vertices[t[1] as usize], vertices[t[2] as usize])).fold(f64::INFINITY, f64::min).sqrt()
+}
+
+/// The output's points are within the bound of `r` from the polytope (exact distance),
+/// and the exact offset's boundary points in many directions within the bound of the
+/// output.
+fn assert_bound_holds_both_ways(poly: &ConvexPolytope, radius: f64, out: &Rounded) {
+    let slack = 1e-12;
+    for p in samples(&out.vertices, &out.triangles) {
+        let d = poly.signed_distance(p);
+        assert!((d - radius).abs() <= out.chord + slack, "output point {p:?} at {d}, radius {radius} bound {}", out.chord);
+    }
+    let golden = PI * (3.0 - 5f64.sqrt());
+    for k in 0..400 {
+        let z = 1.0 - 2.0 * (k as f64 + 0.5) / 400.0;
+        let ring = (1.0 - z * z).sqrt();
+        let u = Vec3::new(ring * (golden * k as f64).cos(), ring * (golden * k as f64).sin(), z);
+        let support = poly.vertices.iter().copied().max_by(|a, b| a.dot(u).total_cmp(&b.dot(u))).expect("vertices");
+        let exact = support + u * radius;
+        let d = mesh_distance(&out.vertices, &out.triangles, exact);
+        assert!(d <= out.chord + slack, "exact boundary point {exact:?} is {d} from the output, bound {}", out.chord);
+    }
+}
+
+#[test]
+fn a_grown_box_is_closed_flat_on_its_faces_and_within_its_bound() {
+    let (size, radius) = (Vec3::new(1.0, 0.6, 0.4), 0.1);
+    let poly = box_polytope(size);
+    for tol in [2e-2, 1e-3, 1e-4] {
+        let out = rounded(&poly, radius, tol, 10_000_000).expect("rounded");
+        assert!(out.chord <= tol && out.chord > 0.0, "chord {} for tol {tol}", out.chord);
+        assert_closed_and_oriented(&out.triangles);
+        assert_bound_holds_both_ways(&poly, radius, &out);
+        // the six faces are the box's moved out by exactly r: 12 triangles on those planes
+        let on_faces = out
+            .triangles
+            .iter()
+            .filter(|t| {
+                let [a, b, c] = t.map(|i| out.vertices[i as usize]);
+                poly.normals.iter().zip(&poly.offsets).any(|(n, d)| [a, b, c].iter().all(|p| n.dot(*p) == d + radius))
+            })
+            .count();
+        assert_eq!(on_faces, 12, "tol {tol}");
+        // Steiner's formula between the offsets by r -+ chord, which hold and are held by it
+        let steiner = |r: f64| {
+            size.x * size.y * size.z + 2.0 * r * (size.x * size.y + size.y * size.z + size.z * size.x) + PI * r * r * (size.x + size.y + size.z) + 4.0 / 3.0 * PI * r * r * r
+        };
+        let v = volume(&out.vertices, &out.triangles);
+        assert!(steiner(radius - out.chord) <= v && v <= steiner(radius + out.chord), "volume {v}, tol {tol}");
+    }
+}
+
+#[test]
+fn a_grown_lumpy_polytope_is_closed_and_within_its_bound_both_ways() {
+    let poly = lumpy_polytope(60);
+    let out = rounded(&poly, 0.3, 2e-3, 10_000_000).expect("rounded");
+    assert!(out.chord <= 2e-3);
+    assert_closed_and_oriented(&out.triangles);
+    assert_bound_holds_both_ways(&poly, 0.3, &out);
+}
+
+#[test]
+fn the_round_points_straddle_the_exact_offset() {
+    // the sag is split: the round parts reach out past r and dip in below it, each by
+    // about half the chord a sphere inscribed in the same points would leave
+    let poly = lumpy_polytope(30);
+    let (radius, tol) = (0.5, 1e-2);
+    let out = rounded(&poly, radius, tol, 10_000_000).expect("rounded");
+    let distances: Vec<f64> = samples(&out.vertices, &out.triangles).into_iter().map(|p| poly.signed_distance(p)).collect();
+    let most = distances.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let least = distances.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(most - radius > 0.5 * out.chord, "outward {} of chord {}", most - radius, out.chord);
+    assert!(radius - least > 0.5 * out.chord, "inward {} of chord {}", radius - least, out.chord);
+    assert!(out.scale > 1.0);
+}
+
+#[test]
+fn a_tolerance_too_fine_for_the_budget_or_not_positive_is_refused() {
+    let poly = box_polytope(Vec3::ONE);
+    assert!(matches!(rounded(&poly, 1.0, 1e-9, 1000), Err(CoreError::InvalidParameter { .. })));
+    assert!(matches!(rounded(&poly, 1.0, 0.0, 1000), Err(CoreError::InvalidParameter { .. })));
+    assert!(matches!(rounded(&poly, f64::NAN, 1e-3, 1000), Err(CoreError::InvalidParameter { .. })));
+}
