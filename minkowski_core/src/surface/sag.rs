@@ -223,6 +223,7 @@ fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cand
 fn keep_unfolded_splits(v: &[Vec3], faces: &[[u32; 3]], split: &mut FastMap<(u32, u32), BoundaryPoint>, covers: f64) -> Vec<(u32, u32)> {
     let mut refused = Vec::new();
     for &f in faces {
+        let wide = longest_edge(v, f).0 / 3f64.sqrt() > covers;
         for k in 0..3 {
             let corners = [f[k], f[(k + 1) % 3], f[(k + 2) % 3]];
             let e = edge_key(corners[0], corners[1]);
@@ -230,7 +231,7 @@ fn keep_unfolded_splits(v: &[Vec3], faces: &[[u32; 3]], split: &mut FastMap<(u32
             let folds = !split_keeps_facing(corners.map(|i| v[i as usize]), m.0);
             let p = corners.map(|i| v[i as usize]);
             let halves_wide = [[p[0], m.0, p[2]], [m.0, p[1], p[2]]].iter().any(|h| (0..3).any(|k| (h[k] - h[(k + 1) % 3]).length() / 3f64.sqrt() > covers));
-            if folds || halves_wide || longest_edge(v, f).0 / 3f64.sqrt() > covers {
+            if folds || halves_wide || wide {
                 refused.push(e);
             }
         }
@@ -267,12 +268,13 @@ fn flip_sagging(s: &mut Surface, refused: &[(u32, u32)], split: &FastMap<(u32, u
     }
     let mut edges = edge_set(&s.faces);
     let mut changed = Vec::new();
+    let mut flipped = vec![false; s.faces.len()];
     let v = |i: u32| s.vertices[i as usize];
     let near_split = |f: [u32; 3]| (0..3).any(|k| split.contains_key(&edge_key(f[k], f[(k + 1) % 3])));
     for e in refused {
         let Some(fs) = around.get(e) else { continue };
         let [f1, f2] = fs[..] else { continue };
-        if changed.contains(&f1) || changed.contains(&f2) || near_split(s.faces[f1]) || near_split(s.faces[f2]) {
+        if flipped[f1] || flipped[f2] || near_split(s.faces[f1]) || near_split(s.faces[f2]) {
             continue;
         }
         // f1 = a b c runs a -> b, f2 = b a d back
@@ -295,6 +297,8 @@ fn flip_sagging(s: &mut Surface, refused: &[(u32, u32)], split: &FastMap<(u32, u
         edges.remove(e);
         edges.insert(edge_key(c, d));
         changed.extend([f1, f2]);
+        flipped[f1] = true;
+        flipped[f2] = true;
     }
     changed
 }
