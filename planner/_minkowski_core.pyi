@@ -131,6 +131,7 @@ def rounded_polytope(
     points: npt.NDArray[np.float64],
     radius: float,
     tol: float,
+    weld: float = 0.0,
     max_triangles: int = 20000000,
 ) -> dict[str, Any]: ...
 

@@ -14,17 +14,18 @@ For the hull ``H = {x : n_k · x <= d_k}`` of the solid ``P``'s vertices:
   the facets exactly flat, each edge's cylinder a strip over its dihedral arc, each
   corner's sphere patch graded rows over its normal cone, the round points a hair outside
   ``r`` so the chords' sag is split between the two sides (the bound is measured on the
-  triangles: see ``minkowski_core/src/polytope/rounded.rs``). When that is not possible
-  (too many triangles, two facets meeting at so small an angle that their moved corners
-  would weld), the hull of the points ``v + u`` (vertices
-  ``v`` of ``H``, ``u`` of an icosphere of radius ``r``) and of every facet's corners moved
-  ``r`` along its normal holds ``H ⊕ icosphere`` and lies inside the true offset: its flat
-  faces are ``H``'s moved out by exactly ``r``, its round parts chords of the true
-  cylinders and spheres. Minkowski sums are 1-Lipschitz in the Hausdorff distance, so it
-  lies within the chord ``r (1 - c)`` of the true offset, ``c`` the least distance from
-  the centre to a facet plane of the unit icosphere, the coarsest subdivision whose chord
-  is within ``eps``. A point ``v + u`` is a vertex only where some direction finds both
-  ``v`` and ``u`` extreme: pairs whose normal cones lie apart are left out beforehand.
+  triangles: see ``minkowski_core/src/polytope/rounded.rs``), points closer than
+  :data:`MERGE_REL` of the size welded (the bound adds the move). When that is not
+  possible (too many triangles, a weld that would open the surface), the hull of the
+  points ``v + u`` (vertices ``v`` of ``H``, ``u`` of an icosphere of radius ``r``) and of
+  every facet's corners moved ``r`` along its normal holds ``H ⊕ icosphere`` and lies
+  inside the true offset: its flat faces are ``H``'s moved out by exactly ``r``, its round
+  parts chords of the true cylinders and spheres. Minkowski sums are 1-Lipschitz in the
+  Hausdorff distance, so it lies within the chord ``r (1 - c)`` of the true offset, ``c``
+  the least distance from the centre to a facet plane of the unit icosphere, the coarsest
+  subdivision whose chord is within ``eps``. A point ``v + u`` is a vertex only where
+  some direction finds both ``v`` and ``u`` extreme: pairs whose normal cones lie apart
+  are left out beforehand.
 
 ``P`` need not be ``H`` exactly (CAD exports round their coordinates): with ``t`` a
 depth such that every triangle of ``P`` has all its corners within ``t`` of one facet
@@ -361,26 +362,27 @@ def _rounded(hull: _Hull, radius: float, tol: float
              ) -> tuple[trimesh.Trimesh, float, dict[str, Any]] | None:
     """``(mesh, chord, stats)``: ``H`` grown by ``radius`` and tessellated along its own
     facets, edges and corners by the core (:data:`ROUNDED`), its two-sided bound
-    ``chord`` within ``tol``; ``None`` when that is not possible within
-    :data:`MAX_ROUNDED_TRIANGLES`, or when two facets meet at so small an angle that their
-    moved corners would lie closer than :data:`MERGE_REL` (a float32 file would weld
-    them): the hull of the tessellated balls takes those."""
+    ``chord`` within ``tol``. Points closer than :data:`MERGE_REL` of the size are welded
+    (a float32 file's nearly coplanar facets meet at angles of 1e-6, their moved corners
+    that times ``r`` apart, which a reader would weld into edges of four triangles); the
+    bound adds how far that moved them. ``None`` when the core refuses (more than
+    :data:`MAX_ROUNDED_TRIANGLES`, or a weld that would open the surface or turn a
+    triangle over): the hull of the tessellated balls takes those."""
     from ._minkowski_core import rounded_polytope  # noqa: PLC0415
 
     if tol <= 0:
         return None
     corners = np.ascontiguousarray(hull.corners, dtype=np.float64)
+    merge = MERGE_REL * float(np.max(np.abs(corners)) + np.ptp(corners, axis=0).max() + radius)
     try:
-        out = rounded_polytope(corners, radius, tol, MAX_ROUNDED_TRIANGLES)
+        out = rounded_polytope(corners, radius, tol, merge, MAX_ROUNDED_TRIANGLES)
     except (InvalidMeshError, InvalidParameterError) as error:
         log.debug("the rounded hull is not used: %s", error)
         return None
-    merge = MERGE_REL * float(np.max(np.abs(corners)) + np.ptp(corners, axis=0).max() + radius)
-    if radius * out["narrowest"] < merge:
-        return None
     mesh = trimesh.Trimesh(out["vertices"], out["faces"], process=False)
     return mesh, float(out["chord"]), {"round_step": float(out["step"]),
-                                       "round_scale": float(out["scale"])}
+                                       "round_scale": float(out["scale"]),
+                                       "round_welded": float(out["welded"])}
 
 
 def _extreme_pairs(hull: _Hull, unit: np.ndarray, ball_angle: float

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 import trimesh
+from scipy.spatial import cKDTree
 
 import planner
 from planner.cli import main
@@ -217,25 +218,48 @@ def test_a_solid_convex_up_to_rounding_is_offset_by_its_hull_within_the_bound():
     assert "convex" not in planner.offset(dented, r, eps=0.25).stats
 
 
-def test_a_convex_solid_whose_facets_meet_almost_flat_is_grown_by_the_hull_of_balls():
-    """A unit cube with one corner moved 1e-7 out of its face: the hull's two facets there
-    meet at about 1e-7 rad, so their corners moved out by r would lie 1e-8 apart (a
-    float32 file welds them). The tessellation along the hull's structure is refused and
-    the hull of the corners' balls takes it, within its bound of the exact distance."""
+def _nudged_cube() -> trimesh.Trimesh:
+    """A unit cube with one corner moved 1e-7 out of its face: the hull's two facets
+    there meet at about 1e-7 rad."""
     box = trimesh.creation.box((1.0, 1.0, 1.0))
     vertices = np.array(box.vertices)
     vertices[int(np.argmax(vertices @ [1.0, 1.0, 1.0]))] += [1e-7, 0.0, 0.0]
-    nudged = trimesh.Trimesh(vertices, box.faces, process=False)
-    r = 0.1
+    return trimesh.Trimesh(vertices, box.faces, process=False)
+
+
+def _assert_within_bound_both_ways(solid: trimesh.Trimesh, r: float, grown) -> None:
+    """Output points (corners and samples) within the bound of ``r`` from the solid."""
+    points = np.vstack([grown.mesh.vertices,
+                        trimesh.sample.sample_surface(grown.mesh, 4000, seed=5)[0]])
+    _, distance, _ = trimesh.proximity.closest_point(solid, points)
+    assert np.all(np.abs(distance - r) <= grown.error_bound + 1e-12)
+
+
+def test_facets_meeting_almost_flat_are_welded_into_the_bound():
+    """The nudged cube grown by r = 0.1: its two facets' corners moved out lie about 1e-8
+    apart, closer than a float32 file keeps apart; they are welded, the bound adds the
+    move, and no two output points are closer than the weld distance."""
+    nudged, r = _nudged_cube(), 0.1
+    grown = planner.offset(nudged, r, eps=1e-3)
+    assert grown.stats["convex"] == ROUNDED and 0 < grown.stats["round_welded"] < 1e-7
+    assert grown.mesh.is_watertight and grown.mesh.is_winding_consistent
+    assert 0 < grown.error_bound <= 1e-3
+    _assert_within_bound_both_ways(nudged, r, grown)
+    closest, _ = cKDTree(grown.mesh.vertices).query(grown.mesh.vertices, k=2)
+    assert closest[:, 1].min() > 1e-7
+
+
+def test_the_hull_of_the_corners_balls_takes_what_the_core_refuses(monkeypatch):
+    """The fallback alone (the core's tessellation refused): the hull of the corners'
+    icosphere balls, within its bound of the exact distance."""
+    from planner import offsets_convex
+
+    monkeypatch.setattr(offsets_convex, "_rounded", lambda *args: None)
+    nudged, r = _nudged_cube(), 0.1
     grown = planner.offset(nudged, r, eps=1e-3)
     assert grown.stats["convex"] == "hull of the vertices' tessellated balls"
     assert grown.mesh.is_watertight and 0 < grown.error_bound <= 1e-3
-    points = np.vstack([grown.mesh.vertices,
-                        trimesh.sample.sample_surface(grown.mesh, 4000, seed=5)[0]])
-    _, distance, _ = trimesh.proximity.closest_point(nudged, points)
-    assert np.all(np.abs(distance - r) <= grown.error_bound + 1e-12)
-    # the same cube without the nudge takes the tessellation along its structure
-    assert planner.offset(box, r, eps=1e-3).stats["convex"] == ROUNDED
+    _assert_within_bound_both_ways(nudged, r, grown)
 
 
 def test_a_non_convex_solid_is_offset_by_the_sum_with_an_inscribed_ball():

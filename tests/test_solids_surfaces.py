@@ -174,7 +174,7 @@ def test_kinds_force_a_solid_or_a_surface():
     with pytest.raises(InvalidMeshError, match="not watertight"):
         classify(open_box, name="lid", kind="solid")
     asked = classify(box, name="box", kind="surface")
-    assert not asked.solid and asked.reason == "asked (kind: surface)"
+    assert not asked.solid and asked.reason == "kind surface asked for"
     repaired = classify(open_box, name="lid", kind="solid", repair=True)
     assert repaired.solid and repaired.changes["filled_holes"] == 1
     with pytest.raises(InvalidMeshError, match="kind 'hollow'"):

@@ -232,16 +232,16 @@ fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f6
 }
 
 /// The offset of the convex hull of `points` by `radius`, tessellated along the hull's
-/// own facets, edges and vertices with its two-sided bound within `tol`
-/// ([`crate::polytope::rounded`]): a dict of `vertices`, `faces`, `chord` (the bound),
-/// `scale`, `step` and `narrowest`.
+/// own facets, edges and vertices with its two-sided bound within `tol`, points closer
+/// than `weld` welded ([`crate::polytope::rounded`]): a dict of `vertices`, `faces`,
+/// `chord` (the bound), `scale`, `step`, `narrowest` and `welded`.
 #[pyfunction]
-#[pyo3(signature = (points, radius, tol, max_triangles=20_000_000))]
-fn rounded_polytope<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, radius: f64, tol: f64, max_triangles: usize) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (points, radius, tol, weld=0.0, max_triangles=20_000_000))]
+fn rounded_polytope<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, radius: f64, tol: f64, weld: f64, max_triangles: usize) -> PyResult<Bound<'py, PyDict>> {
     let points = points_of(&points, "points")?;
     let out = py.detach(move || {
         let poly = crate::polytope::ConvexPolytope::try_from_points(&points, "hull corners")?;
-        crate::polytope::rounded(&poly, radius, tol, max_triangles)
+        crate::polytope::rounded(&poly, radius, tol, weld, max_triangles)
     })?;
     let d = PyDict::new(py);
     d.set_item("vertices", to_array2(out.vertices.iter().map(|v| v.to_array())).into_pyarray(py))?;
@@ -251,6 +251,7 @@ fn rounded_polytope<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, ra
     d.set_item("scale", out.scale)?;
     d.set_item("step", out.step)?;
     d.set_item("narrowest", out.narrowest)?;
+    d.set_item("welded", out.welded)?;
     Ok(d)
 }
 

@@ -70,7 +70,7 @@ def classify(mesh: trimesh.Trimesh, *, name: str, kind: str = "auto",
     if kind not in KINDS:
         raise InvalidMeshError(f"mesh {name!r}: kind {kind!r}: use one of {', '.join(KINDS)}")
     if kind == "surface":
-        return Classified(_surface(mesh, name), False, "asked (kind: surface)")
+        return Classified(_surface(mesh, name), False, "kind surface asked for")
     try:
         return Classified(validate_solid(mesh, name=name), True, SOLID_REASON)
     except InvalidMeshError as error:

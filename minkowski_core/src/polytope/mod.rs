@@ -10,6 +10,7 @@ mod hull;
 mod polytope_tests;
 mod queries;
 mod rounded;
+mod weld;
 
 pub use hull::{ConvexPolytope, PLANE_TOL_REL};
 pub use queries::{clip_planes, closest_on_triangle, point_triangle_distance2};

@@ -14,9 +14,14 @@
 //! graph over its cone (checked: every triangle of a region faces the same way), so every
 //! true boundary point `v + r u` has a point of the output on its ray within the same
 //! interval: the bound holds both ways.
+//!
+//! Facets meeting at a tiny angle (a float32 file's nearly coplanar triangles) put their
+//! moved corners `r` times that angle apart; points closer than the caller's weld
+//! distance are welded ([`super::weld`]), and the bound adds how far that moved them.
 
 use super::hull::ConvexPolytope;
 use super::queries::point_triangle_distance2;
+use super::weld::weld;
 use crate::error::{CoreError, CoreResult};
 use crate::math::Vec3;
 use std::collections::HashMap;
@@ -43,13 +48,15 @@ pub struct Rounded {
     /// Least angle between the normals of two facets that meet (radians): their moved
     /// corners are `r` times that apart.
     pub narrowest: f64,
+    /// How far welding points closer than asked moved the surface (part of `chord`).
+    pub welded: f64,
 }
 
 /// The feature a triangle's points are nearest to.
 #[derive(Clone, Copy, Debug)]
 enum Centre {
-    /// A facet: its points are exactly `r` out.
-    Facet,
+    /// A facet (its unit normal): its points are exactly `r` out.
+    Facet(Vec3),
     /// An edge through `a` with unit direction `e`.
     Edge { a: Vec3, e: Vec3 },
     /// A vertex.
@@ -66,22 +73,29 @@ struct Node {
 }
 
 /// The offset of `poly` by `radius > 0` with its two-sided bound within `tol`, on at most
-/// `max_triangles` triangles.
+/// `max_triangles` triangles, its points closer than `weld_within` welded (see
+/// [`super::weld`]; the bound adds how far that moved them).
 ///
 /// # Errors
 /// [`CoreError::InvalidParameter`] for a radius or tolerance that is not positive and
 /// finite, or when the tolerance needs more than `max_triangles`;
 /// [`CoreError::Degenerate`] when `P`'s structure is not that of a convex polytope (a
-/// facet meeting a vertex twice, a normal cone wider than a hemisphere) or a patch folds.
-pub fn rounded(poly: &ConvexPolytope, radius: f64, tol: f64, max_triangles: usize) -> CoreResult<Rounded> {
+/// facet meeting a vertex twice, a normal cone wider than a hemisphere), a patch folds, or
+/// the weld opens the surface or turns a triangle over.
+pub fn rounded(poly: &ConvexPolytope, radius: f64, tol: f64, weld_within: f64, max_triangles: usize) -> CoreResult<Rounded> {
     for (name, value) in [("radius", radius), ("tol", tol)] {
         #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must be refused
         if !(value > 0.0 && value.is_finite()) {
             return Err(CoreError::InvalidParameter { name: name.into(), value, detail: "must be positive and finite".into() });
         }
     }
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must be refused
+    if !(weld_within >= 0.0 && weld_within.is_finite()) {
+        return Err(CoreError::InvalidParameter { name: "weld".into(), value: weld_within, detail: "must be finite and not negative".into() });
+    }
     let structure = Structure::of(poly)?;
     let mut step = (0.9 * (12.0 * tol / radius).sqrt()).min(MAX_STEP);
+    let mut budget = tol;
     for _ in 0..MAX_TRIES {
         let estimate = structure.estimated_triangles(step);
         if estimate > max_triangles as f64 {
@@ -93,11 +107,21 @@ pub fn rounded(poly: &ConvexPolytope, radius: f64, tol: f64, max_triangles: usiz
         }
         let mesh = Tessellation::build(poly, &structure, step)?;
         let (scale, chord) = mesh.balanced(radius);
-        if chord <= tol {
-            let (vertices, triangles) = mesh.into_mesh(radius, scale)?;
-            return Ok(Rounded { vertices, triangles, chord, scale, step, narrowest: structure.narrowest });
+        if chord <= budget {
+            let (vertices, triangles, welded) = mesh.into_welded(radius, scale, weld_within)?;
+            if chord + welded <= tol {
+                return Ok(Rounded { vertices, triangles, chord: chord + welded, scale, step, narrowest: structure.narrowest, welded });
+            }
+            budget = tol - welded;
+            if budget <= 0.0 {
+                return Err(CoreError::InvalidParameter {
+                    name: "eps".into(),
+                    value: tol,
+                    detail: format!("welding points within {weld_within:.3e} moved the surface by {welded:.3e}, past it"),
+                });
+            }
         }
-        step *= 0.9 * (tol / chord).sqrt();
+        step *= 0.9 * (budget / chord).sqrt();
     }
     Err(CoreError::InvalidParameter { name: "eps".into(), value: tol, detail: format!("the rounded polytope's chords stay wider after {MAX_TRIES} finer steps") })
 }
@@ -208,7 +232,7 @@ impl Tessellation {
             let f = poly.triangle_facet[t];
             let corners = tri.map(|v| mesh.corner(poly, &mut shared, v, f));
             mesh.triangles.push(corners);
-            mesh.centres.push(Centre::Facet);
+            mesh.centres.push(Centre::Facet(poly.normals[f as usize]));
         }
         for &(a, b, f, g) in &structure.edges {
             let from = mesh.arc_row(poly, &mut shared, a, f, g, step);
@@ -285,6 +309,26 @@ impl Tessellation {
             return Err(CoreError::Degenerate { what: "convex polytope".into(), detail: format!("vertex {v}'s normal cone is not within a hemisphere") });
         }
         let rows = normals.iter().map(|&n| pieces(angle(axis, n), step)).max().unwrap_or(1);
+        let arcs: Vec<Vec<u32>> = (0..facets.len()).map(|j| self.arc_row(poly, shared, v, facets[j], facets[(j + 1) % facets.len()], step)).collect();
+        let begin = self.triangles.len();
+        if rows == 1 && arcs.iter().all(|arc| arc.len() == 2) {
+            // a cone narrower than a step with no arc points: a fan of its corners
+            for j in 1..facets.len() - 1 {
+                self.push(Centre::Vertex(base), [arcs[0][0], arcs[j][0], arcs[j][1]]);
+            }
+            self.regions.push(begin..self.triangles.len());
+            return Ok(());
+        }
+        if let (3, Some(short)) = (facets.len(), arcs.iter().position(|arc| arc.len() == 2)) {
+            // a thin three-sided cone (a float32 cylinder's rim): the two long arcs from
+            // the corner opposite the short one, zipped
+            let lower = &arcs[(short + 2) % 3];
+            let upper: Vec<u32> = arcs[(short + 1) % 3].iter().rev().copied().collect();
+            self.push(Centre::Vertex(base), [lower[0], lower[1], upper[1]]);
+            self.zip_rows(Centre::Vertex(base), &lower[1..], &upper[1..]);
+            self.regions.push(begin..self.triangles.len());
+            return Ok(());
+        }
         let apex = self.node(base, axis, false);
         let spokes: Vec<Vec<u32>> = facets
             .iter()
@@ -346,7 +390,7 @@ impl Tessellation {
     fn depth(&self, t: usize, radius: f64, scale: f64) -> Option<f64> {
         let [p, q, w] = self.triangles[t].map(|i| self.position(i, radius, scale));
         match self.centres[t] {
-            Centre::Facet => None,
+            Centre::Facet(_) => None,
             Centre::Vertex(v) => Some(point_triangle_distance2(v, p, q, w).sqrt()),
             Centre::Edge { a, e } => {
                 // a strip's parallelogram: across the edge, its triangles are one segment
@@ -371,14 +415,17 @@ impl Tessellation {
         (scale, inside.max(radius * (scale - 1.0)))
     }
 
-    /// The points and triangles, each region turned to face out (away from its feature).
-    fn into_mesh(mut self, radius: f64, scale: f64) -> CoreResult<(Vec<Vec3>, Vec<[u32; 3]>)> {
+    /// The points and triangles, each region turned to face out (away from its feature),
+    /// the points closer than `within` welded: `(points, triangles, how far the weld moved
+    /// them)`.
+    fn into_welded(mut self, radius: f64, scale: f64, within: f64) -> CoreResult<(Vec<Vec3>, Vec<[u32; 3]>, f64)> {
         let vertices: Vec<Vec3> = (0..self.nodes.len() as u32).map(|i| self.position(i, radius, scale)).collect();
+        let folds = || CoreError::Degenerate { what: "rounded polytope".into(), detail: "a round patch folds over".into() };
         for region in self.regions.clone() {
-            let facing: Vec<f64> = region.clone().map(|t| self.facing(&vertices, t)).collect();
+            let facing: Vec<f64> = region.clone().map(|t| facing(self.centres[t], self.triangles[t].map(|i| vertices[i as usize]))).collect();
             let outward = facing.iter().all(|&f| f > 0.0);
             if !outward && !facing.iter().all(|&f| f < 0.0) {
-                return Err(CoreError::Degenerate { what: "rounded polytope".into(), detail: "a round patch folds over".into() });
+                return Err(folds());
             }
             if !outward {
                 for t in region {
@@ -386,20 +433,26 @@ impl Tessellation {
                 }
             }
         }
-        Ok((vertices, self.triangles))
+        let welded = weld(&vertices, &self.triangles, within)?;
+        for (w, &t) in welded.triangles.iter().zip(&welded.kept) {
+            if facing(self.centres[t], w.map(|i| welded.vertices[i as usize])) <= 0.0 {
+                return Err(CoreError::Degenerate { what: "rounded polytope".into(), detail: "the weld turns a triangle over".into() });
+            }
+        }
+        Ok((welded.vertices, welded.triangles, welded.moved))
     }
+}
 
-    /// The triangle's normal along the direction from its feature to its centroid.
-    fn facing(&self, vertices: &[Vec3], t: usize) -> f64 {
-        let [p, q, w] = self.triangles[t].map(|i| vertices[i as usize]);
-        let centroid = (p + q + w) / 3.0;
-        let away = match self.centres[t] {
-            Centre::Facet => return 1.0,
-            Centre::Vertex(v) => centroid - v,
-            Centre::Edge { a, e } => (centroid - a) - e * (centroid - a).dot(e),
-        };
-        (q - p).cross(w - p).dot(away)
-    }
+/// A triangle's normal along the direction from its feature to its centroid (for a
+/// facet, along the facet's normal).
+fn facing(centre: Centre, [p, q, w]: [Vec3; 3]) -> f64 {
+    let centroid = (p + q + w) / 3.0;
+    let away = match centre {
+        Centre::Facet(n) => n,
+        Centre::Vertex(v) => centroid - v,
+        Centre::Edge { a, e } => (centroid - a) - e * (centroid - a).dot(e),
+    };
+    (q - p).cross(w - p).dot(away)
 }
 
 /// The angle between two unit vectors.

@@ -85,7 +85,7 @@ fn a_grown_box_is_closed_flat_on_its_faces_and_within_its_bound() {
     let (size, radius) = (Vec3::new(1.0, 0.6, 0.4), 0.1);
     let poly = box_polytope(size);
     for tol in [2e-2, 1e-3, 1e-4] {
-        let out = rounded(&poly, radius, tol, 10_000_000).expect("rounded");
+        let out = rounded(&poly, radius, tol, 0.0, 10_000_000).expect("rounded");
         assert!(out.chord <= tol && out.chord > 0.0, "chord {} for tol {tol}", out.chord);
         assert_closed_and_oriented(&out.triangles);
         assert_bound_holds_both_ways(&poly, radius, &out);
@@ -111,7 +111,7 @@ fn a_grown_box_is_closed_flat_on_its_faces_and_within_its_bound() {
 #[test]
 fn a_grown_lumpy_polytope_is_closed_and_within_its_bound_both_ways() {
     let poly = lumpy_polytope(60);
-    let out = rounded(&poly, 0.3, 2e-3, 10_000_000).expect("rounded");
+    let out = rounded(&poly, 0.3, 2e-3, 0.0, 10_000_000).expect("rounded");
     assert!(out.chord <= 2e-3);
     assert_closed_and_oriented(&out.triangles);
     assert_bound_holds_both_ways(&poly, 0.3, &out);
@@ -123,7 +123,7 @@ fn the_round_points_straddle_the_exact_offset() {
     // about half the chord a sphere inscribed in the same points would leave
     let poly = lumpy_polytope(30);
     let (radius, tol) = (0.5, 1e-2);
-    let out = rounded(&poly, radius, tol, 10_000_000).expect("rounded");
+    let out = rounded(&poly, radius, tol, 0.0, 10_000_000).expect("rounded");
     let distances: Vec<f64> = samples(&out.vertices, &out.triangles).into_iter().map(|p| poly.signed_distance(p)).collect();
     let most = distances.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let least = distances.iter().copied().fold(f64::INFINITY, f64::min);
@@ -135,7 +135,59 @@ fn the_round_points_straddle_the_exact_offset() {
 #[test]
 fn a_tolerance_too_fine_for_the_budget_or_not_positive_is_refused() {
     let poly = box_polytope(Vec3::ONE);
-    assert!(matches!(rounded(&poly, 1.0, 1e-9, 1000), Err(CoreError::InvalidParameter { .. })));
-    assert!(matches!(rounded(&poly, 1.0, 0.0, 1000), Err(CoreError::InvalidParameter { .. })));
-    assert!(matches!(rounded(&poly, f64::NAN, 1e-3, 1000), Err(CoreError::InvalidParameter { .. })));
+    assert!(matches!(rounded(&poly, 1.0, 1e-9, 0.0, 1000), Err(CoreError::InvalidParameter { .. })));
+    assert!(matches!(rounded(&poly, 1.0, 0.0, 0.0, 1000), Err(CoreError::InvalidParameter { .. })));
+    assert!(matches!(rounded(&poly, f64::NAN, 1e-3, 0.0, 1000), Err(CoreError::InvalidParameter { .. })));
+}
+
+#[test]
+fn facets_meeting_almost_flat_are_welded_and_the_move_is_in_the_bound() {
+    // a box with one corner moved 1e-7 out of a face: that face is two facets meeting at
+    // about 1e-7 rad, their corners moved out by r = 0.1 about 1e-8 apart
+    let mut points: Vec<Vec3> = (0..8).map(|k| Vec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64)).collect();
+    points[7].x += 1e-7;
+    let poly = ConvexPolytope::from_points(&points);
+    let (radius, within) = (0.1, 1e-7);
+    assert!(rounded(&poly, radius, 1e-3, 0.0, 10_000_000).expect("unwelded").narrowest * radius < within);
+    let out = rounded(&poly, radius, 1e-3, within, 10_000_000).expect("welded");
+    assert!(out.welded > 0.0 && out.welded < within && out.chord <= 1e-3);
+    assert_closed_and_oriented(&out.triangles);
+    assert_bound_holds_both_ways(&poly, radius, &out);
+    for (i, p) in out.vertices.iter().enumerate() {
+        for q in &out.vertices[i + 1..] {
+            assert!((*p - *q).length() >= within, "points {p:?} and {q:?} closer than {within}");
+        }
+    }
+}
+
+#[test]
+fn a_faceted_cylinders_thin_rim_cones_take_few_triangles_within_the_bound() {
+    // a 96-gon prism (as a CAD cylinder is exported): each rim corner's cone is a thin
+    // three-sided one, its short arc (between two sides, 0.065 rad) in one piece; zipped
+    // along its two long arcs it takes 3 triangles, where a fan from its axis takes 8
+    let sides = 96;
+    let points: Vec<Vec3> = (0..2 * sides)
+        .map(|k| {
+            let a = 2.0 * PI * (k % sides) as f64 / sides as f64;
+            Vec3::new(a.cos(), a.sin(), if k < sides { 0.0 } else { 3.0 })
+        })
+        .collect();
+    let poly = ConvexPolytope::from_points(&points);
+    let out = rounded(&poly, 0.5, 0.05, 0.0, 10_000_000).expect("rounded");
+    assert_closed_and_oriented(&out.triangles);
+    assert_bound_holds_both_ways(&poly, 0.5, &out);
+    let rims = 2 * sides;
+    let flat_and_strips = 2 * (sides - 2) + 2 * sides + 2 * sides + rims * 2 * 2;
+    assert!(out.triangles.len() <= flat_and_strips + 3 * rims, "{} triangles", out.triangles.len());
+}
+
+#[test]
+fn a_finely_faceted_ball_at_a_coarse_tolerance_fans_its_narrow_cones() {
+    // 400 hull points on a lumpy sphere: every corner's cone is narrower than the step,
+    // so each is a fan of its facets' moved corners
+    let poly = lumpy_polytope(400);
+    let out = rounded(&poly, 0.3, 0.05, 0.0, 10_000_000).expect("rounded");
+    assert_closed_and_oriented(&out.triangles);
+    assert_bound_holds_both_ways(&poly, 0.3, &out);
+    assert!(out.vertices.len() <= 3 * poly.triangles.len(), "{} points for {} facets", out.vertices.len(), poly.triangles.len());
 }
