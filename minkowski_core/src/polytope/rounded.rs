@@ -27,7 +27,7 @@ use crate::math::Vec3;
 use std::collections::HashMap;
 
 /// Widest angle (radians) between neighbouring round points, whatever the tolerance.
-const MAX_STEP: f64 = std::f64::consts::FRAC_PI_4;
+const MAX_STEP: f64 = std::f64::consts::FRAC_PI_2;
 
 /// Most tries at a finer step when the measured bound exceeds the tolerance.
 const MAX_TRIES: usize = 8;
@@ -51,6 +51,9 @@ pub struct Rounded {
     /// How far welding points closer than asked moved the surface (part of `chord`).
     pub welded: f64,
 }
+
+/// A finished mesh: its points, its triangles and how far welding moved them.
+type Finished = (Vec<Vec3>, Vec<[u32; 3]>, f64);
 
 /// The feature a triangle's points are nearest to.
 #[derive(Clone, Copy, Debug)]
@@ -80,8 +83,8 @@ struct Node {
 /// [`CoreError::InvalidParameter`] for a radius or tolerance that is not positive and
 /// finite, or when the tolerance needs more than `max_triangles`;
 /// [`CoreError::Degenerate`] when `P`'s structure is not that of a convex polytope (a
-/// facet meeting a vertex twice, a normal cone wider than a hemisphere), a patch folds, or
-/// the weld opens the surface or turns a triangle over.
+/// facet meeting a vertex twice, a normal cone wider than a hemisphere), or the weld opens
+/// the surface or turns a triangle over.
 pub fn rounded(poly: &ConvexPolytope, radius: f64, tol: f64, weld_within: f64, max_triangles: usize) -> CoreResult<Rounded> {
     for (name, value) in [("radius", radius), ("tol", tol)] {
         #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must be refused
@@ -108,7 +111,10 @@ pub fn rounded(poly: &ConvexPolytope, radius: f64, tol: f64, weld_within: f64, m
         let mesh = Tessellation::build(poly, &structure, step)?;
         let (scale, chord) = mesh.balanced(radius);
         if chord <= budget {
-            let (vertices, triangles, welded) = mesh.into_welded(radius, scale, weld_within)?;
+            let Some((vertices, triangles, welded)) = mesh.into_welded(radius, scale, weld_within)? else {
+                step *= 0.5; // a patch folds over: finer rows fold less
+                continue;
+            };
             if chord + welded <= tol {
                 return Ok(Rounded { vertices, triangles, chord: chord + welded, scale, step, narrowest: structure.narrowest, welded });
             }
@@ -417,15 +423,14 @@ impl Tessellation {
 
     /// The points and triangles, each region turned to face out (away from its feature),
     /// the points closer than `within` welded: `(points, triangles, how far the weld moved
-    /// them)`.
-    fn into_welded(mut self, radius: f64, scale: f64, within: f64) -> CoreResult<(Vec<Vec3>, Vec<[u32; 3]>, f64)> {
+    /// them)`, or `None` when a region folds over (faces both ways).
+    fn into_welded(mut self, radius: f64, scale: f64, within: f64) -> CoreResult<Option<Finished>> {
         let vertices: Vec<Vec3> = (0..self.nodes.len() as u32).map(|i| self.position(i, radius, scale)).collect();
-        let folds = || CoreError::Degenerate { what: "rounded polytope".into(), detail: "a round patch folds over".into() };
         for region in self.regions.clone() {
             let facing: Vec<f64> = region.clone().map(|t| facing(self.centres[t], self.triangles[t].map(|i| vertices[i as usize]))).collect();
             let outward = facing.iter().all(|&f| f > 0.0);
             if !outward && !facing.iter().all(|&f| f < 0.0) {
-                return Err(folds());
+                return Ok(None);
             }
             if !outward {
                 for t in region {
@@ -439,7 +444,7 @@ impl Tessellation {
                 return Err(CoreError::Degenerate { what: "rounded polytope".into(), detail: "the weld turns a triangle over".into() });
             }
         }
-        Ok((welded.vertices, welded.triangles, welded.moved))
+        Ok(Some((welded.vertices, welded.triangles, welded.moved)))
     }
 }
 
