@@ -243,10 +243,7 @@ fn rounded_polytope<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, ra
         let poly = crate::polytope::ConvexPolytope::try_from_points(&points, "hull corners")?;
         crate::polytope::rounded(&poly, radius, tol, weld, max_triangles)
     })?;
-    let d = PyDict::new(py);
-    d.set_item("vertices", to_array2(out.vertices.iter().map(|v| v.to_array())).into_pyarray(py))?;
-    let flat: Vec<i64> = out.triangles.iter().flat_map(|f| f.iter().map(|&x| x as i64)).collect();
-    d.set_item("faces", Array2::from_shape_vec((out.triangles.len(), 3), flat).expect("m x 3").into_pyarray(py))?;
+    let d = mesh_dict(py, &out.vertices, &out.triangles)?;
     d.set_item("chord", out.chord)?;
     d.set_item("scale", out.scale)?;
     d.set_item("step", out.step)?;
@@ -255,12 +252,18 @@ fn rounded_polytope<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, ra
     Ok(d)
 }
 
-fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, PyDict>> {
+/// A dict with a mesh's `vertices` ((n, 3) float64) and `faces` ((m, 3) int64).
+fn mesh_dict<'py>(py: Python<'py>, vertices: &[Vec3], triangles: &[[u32; 3]]) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
+    d.set_item("vertices", to_array2(vertices.iter().map(|v| v.to_array())).into_pyarray(py))?;
+    let flat: Vec<i64> = triangles.iter().flat_map(|f| f.iter().map(|&x| x as i64)).collect();
+    d.set_item("faces", Array2::from_shape_vec((triangles.len(), 3), flat).expect("m x 3").into_pyarray(py))?;
+    Ok(d)
+}
+
+fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, PyDict>> {
     let s = &r.surface;
-    d.set_item("vertices", to_array2(s.vertices.iter().map(|v| v.to_array())).into_pyarray(py))?;
-    let flat: Vec<i64> = s.faces.iter().flat_map(|f| f.iter().map(|&x| x as i64)).collect();
-    d.set_item("faces", Array2::from_shape_vec((s.faces.len(), 3), flat).expect("m x 3").into_pyarray(py))?;
+    let d = mesh_dict(py, &s.vertices, &s.faces)?;
     d.set_item("h", r.h)?;
     d.set_item("error_bound", r.error_bound)?;
     d.set_item("refinements", r.refinements)?;
