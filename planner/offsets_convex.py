@@ -107,7 +107,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
             return None
         extra: dict[str, Any] = {}
         if radius < 0:
-            mesh, between = _eroded(hull, -radius, rounding)
+            mesh, between = _eroded(hull, -radius, rounding, eps)
             method, subdivisions, chord = "hull's facet planes moved inward", None, 0.0
         else:
             # growing is 1-Lipschitz: the grown H and H_t are no farther apart than H, H_t
@@ -263,17 +263,27 @@ def _gap(corners: np.ndarray, smaller: trimesh.Trimesh) -> float:
     return float(np.max(mesh_distance(smaller.vertices, smaller.faces, corners)))
 
 
-def _eroded(hull: _Hull, r: float, rounding: float) -> tuple[trimesh.Trimesh, float]:
+def _eroded(hull: _Hull, r: float, rounding: float, eps: float
+            ) -> tuple[trimesh.Trimesh, float]:
     """``(H eroded by r, a bound on its distance to H_t eroded by r)``; an empty mesh when
-    nothing is left. With the mesh's corners merged by ``m`` the bound is the gap measured
-    from its corners (inside ``H_t`` eroded: at least the true one) plus ``m`` for the
-    corners merged away, plus ``m`` for the mesh's own distance to ``H`` eroded."""
+    nothing is left. With the mesh's corners merged by ``m``: first the bound of
+    :func:`_gap_bound` about the eroded ``H``'s deepest point (``H_t`` eroded is the
+    eroded ``H``'s planes moved in by ``t``), its corners taken ``m`` farther, plus ``2 m``;
+    when that exceeds a quarter of ``eps``, the gap measured from the mesh's corners
+    (inside ``H_t`` eroded: at least the true one) plus ``m`` for the corners merged away,
+    plus ``m`` for the mesh's own distance to ``H`` eroded."""
     outer = _planes_hull(hull.normals, hull.offsets - r, rounding)
     if outer is None:
         return trimesh.Trimesh(), 0.0
-    mesh, _, merged = outer
+    mesh, centre, merged = outer
     if hull.depth == 0:
         return mesh, merged
+    depth = float(np.min(hull.offsets - r - hull.normals @ centre))
+    if depth > hull.depth:
+        farthest = float(np.linalg.norm(mesh.vertices - centre, axis=1).max()) + merged
+        cheap = hull.depth / depth * farthest + 2.0 * merged
+        if cheap <= eps / 4:
+            return mesh, cheap
     inner = _planes_hull(hull.normals, hull.offsets - r - hull.depth, rounding)
     if inner is None:  # H_t eroded is empty, H eroded is not: the whole of it is between
         return mesh, float(np.ptp(mesh.vertices, axis=0).max())
