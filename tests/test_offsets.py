@@ -21,6 +21,7 @@ from planner.errors import (
     InvalidParameterError,
     ResourceLimitError,
 )
+from planner.meshes.closest import mesh_distance
 from planner.offsets_convex import ROUNDED
 
 
@@ -131,7 +132,7 @@ def test_a_convex_offset_needs_no_grid_and_its_bound_holds_both_ways():
     assert 0.0 < grown.error_bound <= eps
     points = np.vstack([grown.mesh.vertices,
                         trimesh.sample.sample_surface(grown.mesh, 4000, seed=2)[0]])
-    _, distance, _ = trimesh.proximity.closest_point(solid, points)
+    distance = mesh_distance(solid.vertices, solid.faces, points)
     assert np.all(np.abs(distance - r) <= grown.error_bound + 1e-9)
     # the chords' sag split: about half of the bound out, half in
     assert distance.max() - r > 0.3 * grown.error_bound
@@ -228,10 +229,11 @@ def _nudged_cube() -> trimesh.Trimesh:
 
 
 def _assert_within_bound_both_ways(solid: trimesh.Trimesh, r: float, grown) -> None:
-    """Output points (corners and samples) within the bound of ``r`` from the solid."""
+    """Output points (corners and samples) within the bound of ``r`` from the solid (the
+    exact point-to-triangle distance)."""
     points = np.vstack([grown.mesh.vertices,
                         trimesh.sample.sample_surface(grown.mesh, 4000, seed=5)[0]])
-    _, distance, _ = trimesh.proximity.closest_point(solid, points)
+    distance = mesh_distance(solid.vertices, solid.faces, points)
     assert np.all(np.abs(distance - r) <= grown.error_bound + 1e-12)
 
 

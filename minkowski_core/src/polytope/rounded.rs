@@ -310,9 +310,9 @@ impl Tessellation {
     fn patch(&mut self, poly: &ConvexPolytope, shared: &mut Shared, v: u32, facets: &[u32], step: f64) -> CoreResult<()> {
         let base = poly.vertices[v as usize];
         let normals: Vec<Vec3> = facets.iter().map(|&f| poly.normals[f as usize]).collect();
-        let axis = normals.iter().fold(Vec3::ZERO, |s, n| s + *n).normalize_or_zero();
+        let axis = cone_axis(&normals);
         if axis == Vec3::ZERO || normals.iter().any(|n| n.dot(axis) <= 0.0) {
-            return Err(CoreError::Degenerate { what: "convex polytope".into(), detail: format!("vertex {v}'s normal cone is not within a hemisphere") });
+            return Err(CoreError::Degenerate { what: "convex polytope".into(), detail: format!("no axis found within 90 degrees of all of vertex {v}'s facet normals") });
         }
         let rows = normals.iter().map(|&n| pieces(angle(axis, n), step)).max().unwrap_or(1);
         let arcs: Vec<Vec<u32>> = (0..facets.len()).map(|j| self.arc_row(poly, shared, v, facets[j], facets[(j + 1) % facets.len()], step)).collect();
@@ -464,6 +464,22 @@ fn facing(centre: Centre, [p, q, w]: [Vec3; 3]) -> f64 {
 fn angle(a: Vec3, b: Vec3) -> f64 {
     // atan2 of the cross and dot products: accurate for small and large angles alike
     a.cross(b).length().atan2(a.dot(b))
+}
+
+/// Most iterations of the smallest enclosing ball of a cone's generators.
+const AXIS_ITERATIONS: usize = 200;
+
+/// A direction about centred in the cone of the unit `normals`: the centre of their
+/// smallest enclosing ball (Bădoiu–Clarkson iterations), normalised. For the exact centre
+/// `c`, every generator `n` has `n · c >= |c|^2 > 0` when the cone is pointed; the mean
+/// of the normals can lie more than 90 degrees from one of them (a sharp corner).
+fn cone_axis(normals: &[Vec3]) -> Vec3 {
+    let mut centre = normals[0];
+    for k in 1..AXIS_ITERATIONS {
+        let farthest = normals.iter().copied().max_by(|a, b| (*a - centre).length_squared().total_cmp(&(*b - centre).length_squared())).expect("normals");
+        centre += (farthest - centre) / (k as f64 + 1.0);
+    }
+    centre.normalize_or_zero()
 }
 
 /// How many pieces of at most `step` an arc of `angle` takes (at least one).

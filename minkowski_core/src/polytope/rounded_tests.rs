@@ -191,3 +191,14 @@ fn a_finely_faceted_ball_at_a_coarse_tolerance_fans_its_narrow_cones() {
     assert_bound_holds_both_ways(&poly, 0.3, &out);
     assert!(out.vertices.len() <= 3 * poly.triangles.len(), "{} points for {} facets", out.vertices.len(), poly.triangles.len());
 }
+
+#[test]
+fn sharp_corners_whose_normals_average_past_a_right_angle_are_tessellated() {
+    // a flat tetrahedron: at its sharp corners the mean of the facet normals lies more
+    // than 90 degrees from one of them; the cone's enclosing-ball centre does not
+    let points = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.3, 0.3, 0.1)];
+    let poly = ConvexPolytope::from_points(&points);
+    let out = rounded(&poly, 0.05, 1e-3, 0.0, 10_000_000).expect("rounded");
+    assert_closed_and_oriented(&out.triangles);
+    assert_bound_holds_both_ways(&poly, 0.05, &out);
+}
