@@ -112,7 +112,8 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
         else:
             # growing is 1-Lipschitz: the grown H and H_t are no farther apart than H, H_t
             between = _gap_bound(hull, *deepest)
-            if between > eps / 4:
+            measured = between > eps / 4
+            if measured:
                 between = min(between, _gap_exact(hull))
             rounded = _rounded(hull, radius, eps - between - rounding)
             if rounded is not None:
@@ -123,7 +124,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
                 if grown is None:
                     return None
                 mesh, chord, subdivisions = grown
-                if chord + between + rounding > eps:
+                if chord + between + rounding > eps and not measured:
                     between = min(between, _gap_exact(hull))
                 method = "hull of the vertices' tessellated balls"
     except QhullError:  # a hull too thin for qhull: the cell source decides
