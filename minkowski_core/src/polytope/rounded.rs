@@ -310,10 +310,9 @@ impl Tessellation {
     fn patch(&mut self, poly: &ConvexPolytope, shared: &mut Shared, v: u32, facets: &[u32], step: f64) -> CoreResult<()> {
         let base = poly.vertices[v as usize];
         let normals: Vec<Vec3> = facets.iter().map(|&f| poly.normals[f as usize]).collect();
-        let axis = cone_axis(&normals);
-        if axis == Vec3::ZERO || normals.iter().any(|n| n.dot(axis) <= 0.0) {
-            return Err(CoreError::Degenerate { what: "convex polytope".into(), detail: format!("no axis found within 90 degrees of all of vertex {v}'s facet normals") });
-        }
+        let Some(axis) = interior_axis(&normals) else {
+            return Err(CoreError::Degenerate { what: "convex polytope".into(), detail: format!("vertex {v}'s facet normals bound no cone with an inside") });
+        };
         let rows = normals.iter().map(|&n| pieces(angle(axis, n), step)).max().unwrap_or(1);
         let arcs: Vec<Vec<u32>> = (0..facets.len()).map(|j| self.arc_row(poly, shared, v, facets[j], facets[(j + 1) % facets.len()], step)).collect();
         let begin = self.triangles.len();
@@ -469,17 +468,51 @@ fn angle(a: Vec3, b: Vec3) -> f64 {
 /// Most iterations of the smallest enclosing ball of a cone's generators.
 const AXIS_ITERATIONS: usize = 200;
 
-/// A direction about centred in the cone of the unit `normals`: the centre of their
-/// smallest enclosing ball (Bădoiu–Clarkson iterations), normalised. For the exact centre
-/// `c`, every generator `n` has `n · c >= |c|^2 > 0` when the cone is pointed; the mean
-/// of the normals can lie more than 90 degrees from one of them (a sharp corner).
-fn cone_axis(normals: &[Vec3]) -> Vec3 {
+/// A direction well inside the cone of the unit `normals` (in cyclic order), near the
+/// centre of their smallest enclosing ball ([`enclosing_centre`]), which keeps the
+/// spokes short. That centre lies in the cone but on its side when two normals are its
+/// diameter (an obtuse corner), and an apex there makes a sector of no width: it is
+/// moved towards the area centroid of the cone's cap (fanned from it), which lies a third
+/// of the cap's width or more from every side, until it is at least half as deep as
+/// the centroid. `None` when no point is strictly inside every side (normals on one
+/// great circle).
+fn interior_axis(normals: &[Vec3]) -> Option<Vec3> {
+    let centre = enclosing_centre(normals);
+    let count = normals.len();
+    let mut weighted = Vec3::ZERO;
+    for j in 0..count {
+        let (a, b) = (normals[j], normals[(j + 1) % count]);
+        weighted += (centre + a + b) * (a - centre).cross(b - centre).length();
+    }
+    let centroid = weighted.normalize_or_zero();
+    // the facets run the same way round the vertex: the inside is on the same side of
+    // every arc's plane
+    let mut sides: Vec<Vec3> = (0..count).map(|j| normals[j].cross(normals[(j + 1) % count]).normalize_or_zero()).collect();
+    if sides.iter().map(|side| side.dot(centroid)).sum::<f64>() < 0.0 {
+        sides.iter_mut().for_each(|side| *side = -*side);
+    }
+    let depth = |x: Vec3| sides.iter().map(|side| side.dot(x)).fold(f64::INFINITY, f64::min);
+    let centre = centre.normalize_or_zero();
+    let (deep, shallow) = (depth(centroid), depth(centre));
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must be refused
+    if !(deep > 0.0) {
+        return None;
+    }
+    // depth is concave along the chord from the centre to the centroid
+    let t = if shallow >= 0.5 * deep { 0.0 } else { (0.5 * deep - shallow) / (deep - shallow) };
+    let axis = (centre * (1.0 - t) + centroid * t).normalize_or_zero();
+    (depth(axis) > 0.0).then_some(axis)
+}
+
+/// The centre of the smallest ball enclosing the unit `normals` (Bădoiu–Clarkson
+/// iterations): a convex combination of them, so inside their cone.
+fn enclosing_centre(normals: &[Vec3]) -> Vec3 {
     let mut centre = normals[0];
     for k in 1..AXIS_ITERATIONS {
         let farthest = normals.iter().copied().max_by(|a, b| (*a - centre).length_squared().total_cmp(&(*b - centre).length_squared())).expect("normals");
         centre += (farthest - centre) / (k as f64 + 1.0);
     }
-    centre.normalize_or_zero()
+    centre
 }
 
 /// How many pieces of at most `step` an arc of `angle` takes (at least one).

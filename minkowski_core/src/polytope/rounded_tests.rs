@@ -202,3 +202,40 @@ fn sharp_corners_whose_normals_average_past_a_right_angle_are_tessellated() {
     assert_closed_and_oriented(&out.triangles);
     assert_bound_holds_both_ways(&poly, 0.05, &out);
 }
+
+#[test]
+fn an_obtuse_cones_apex_is_moved_off_the_side_its_enclosing_ball_centre_lies_on() {
+    // two normals 0.3 rad apart and a third near their arc's middle: the smallest ball
+    // enclosing them is centred on that arc, an apex there makes a sector of no width
+    let (n0, n1) = (Vec3::new(-0.15_f64.sin(), 0.0, 0.15_f64.cos()), Vec3::new(0.15_f64.sin(), 0.0, 0.15_f64.cos()));
+    let n2 = Vec3::new(0.0, 0.02, 1.0).normalize();
+    let normals = [n0, n1, n2];
+    let side = n0.cross(n1).normalize();
+    let centre = enclosing_centre(&normals).normalize();
+    assert!(side.dot(centre).abs() < 1e-6, "the enclosing centre {centre} is on the side");
+    let axis = interior_axis(&normals).expect("an inside");
+    // the cap's width across that side is about 0.02 rad: the apex is well off it
+    assert!(side.dot(axis) * side.dot(n2) > 0.0 && side.dot(axis).abs() > 0.002, "apex {axis} too near the side");
+    for (j, k) in [(1, 2), (2, 0)] {
+        let other = normals[j].cross(normals[k]).normalize();
+        assert!(other.dot(axis) * other.dot(n0 + n1 + n2) > 0.0, "apex {axis} outside side {j}-{k}");
+    }
+}
+
+#[test]
+fn thin_slabs_obtuse_corners_are_tessellated_within_the_bound() {
+    // random points in a 1 x 1 x 0.05 slab: many corners' cones are obtuse, thin ones
+    let mut state: u64 = 777;
+    let mut next = || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..12 {
+        let points: Vec<Vec3> = (0..40).map(|_| Vec3::new(next(), next(), 0.05 * next())).collect();
+        let poly = ConvexPolytope::from_points(&points);
+        let out = rounded(&poly, 0.1, 1e-3, 0.0, 10_000_000).expect("rounded");
+        assert_closed_and_oriented(&out.triangles);
+        assert_bound_holds_both_ways(&poly, 0.1, &out);
+        assert!(out.triangles.len() < 10_000, "{} triangles: the step was halved for folds", out.triangles.len());
+    }
+}
