@@ -115,8 +115,9 @@ def cmd_offset(args) -> int:
     else:
         bound = f"error bound {result.error_bound:.4g}"
     made = f"; made a solid by: {changes_text(stats['changes'])}" if stats["changes"] else ""
+    how_made = f"{stats['method']}: {stats['convex']}" if "convex" in stats else stats["method"]
     sys.stdout.write(f"wrote {out}: {stats['triangles']} triangles, {bound} "
-                     f"({stats['method']}{of}), {stats['seconds']:.2f} s{made}\n")
+                     f"({how_made}{of}), {stats['seconds']:.2f} s{made}\n")
     return 0
 
 

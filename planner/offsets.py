@@ -32,7 +32,9 @@ An open mesh (a triangle soup) is offset as its triangles when asked (``kind``):
 thicker than ``2 r`` survives, a hair thinner vanishes), so the first stage's error has no
 bound through the second in general. ``stats["stage_bounds"]`` gives each stage's own
 bound; their sum bounds the result where no feature's thickness (opening) or gap
-(closing) lies within that sum of ``2 r``.
+(closing) lies within that sum of ``2 r``. A solid convex up to its file's rounding is its
+own closing (it lies in every half-space holding it): the closing returns it, its
+``error_bound`` the distance between it and its hull (:func:`.offsets_convex.convex_closing`).
 
 Entry points: :func:`offset`, :func:`opening`, :func:`closing` -> :class:`OffsetResult`.
 """
@@ -62,7 +64,7 @@ from .meshes.kinds import KINDS, Classified, classify
 from .meshes.solids import FACES_INSIDE
 from .minkowski import checked_eps, surface_stats
 from .offsets_ball import ball_offset
-from .offsets_convex import convex_offset
+from .offsets_convex import convex_closing, convex_offset
 from .operands import as_mesh
 from .progress import StatusLine
 
@@ -85,7 +87,8 @@ class OffsetResult:
             the distance between the two surfaces) and elsewhere except near a gap or
             neck whose width is within twice it of ``2 |r|``, where one may be bridged
             and the other not (:mod:`.offsets_ball`). ``inf`` for an opening or closing
-            (see the module documentation).
+            (see the module documentation), but a convex solid's closing (the solid: its
+            Hausdorff distance to the true closing).
         eps: the resolution asked for.
         stats: triangles, cells, seconds (per stage for an opening or closing).
     """
@@ -434,6 +437,10 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     if not part.solid:
         _refuse_surface_closing(name)
     what = "an opening" if first < 0 else "a closing"
+    if first > 0 and method in ("auto", "hull"):
+        itself = _convex_closing(part, radius, eps, name, t0)
+        if itself is not None:
+            return itself
     stages = functools.partial(_stages, part, radius, second, eps, max_cells,
                                (name, stage_name, what), progress, t0=t0)
     try:
@@ -450,6 +457,25 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
              "kind": "solid", "changes": one.stats["changes"],
              "seconds": one.stats["seconds"] + two.stats["seconds"]}
     return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
+
+
+def _convex_closing(part: Classified, radius: float, eps: float | None, name: str, t0: float
+                    ) -> OffsetResult | None:
+    """The closing of a solid convex up to ``eps`` (its default, an offset's by
+    ``radius``): the solid itself, with the Hausdorff distance to the true closing as its
+    bound (:func:`.offsets_convex.convex_closing`); ``None`` for any other solid."""
+    extent = np.ptp(np.asarray(part.mesh.bounds), axis=0)
+    _check_radius_scale(radius, float(np.linalg.norm(extent)), name)
+    step = _stage_eps(part.mesh, radius) if eps is None else \
+        checked_eps(eps, _result_diagonal(extent, radius))
+    found = convex_closing(part.mesh, step)
+    if found is None:
+        return None
+    bound, stats = found
+    log.info("%s is convex within %.3g: it is its own closing", name, bound)
+    stats = {**stats, "method": "hull", "kind": "solid", "changes": dict(part.changes),
+             "seconds": time.perf_counter() - t0}
+    return OffsetResult(part.mesh, radius, bound, step, stats)
 
 
 def _stages(part: Classified, radius: float, second: float, eps, max_cells,

@@ -57,9 +57,9 @@ import trimesh
 from .errors import InvalidMeshError, InvalidParameterError
 from .meshes.closest import mesh_distance
 
-__all__ = ["BALL_CONE_ANGLE", "BALL_INNER", "MAX_FACES", "MAX_POINTS", "ROUNDED", "convex_hull",
-           "convex_offset", "hull_mesh", "measured_ball", "representatives",
-           "rounding_allowance", "unit_ball"]
+__all__ = ["BALL_CONE_ANGLE", "BALL_INNER", "CLOSED", "MAX_FACES", "MAX_POINTS", "ROUNDED",
+           "convex_closing", "convex_hull", "convex_offset", "hull_mesh", "measured_ball",
+           "representatives", "rounding_allowance", "unit_ball"]
 
 log = logging.getLogger(__name__)
 
@@ -82,6 +82,9 @@ bytes per triangle while it builds them, so about 0.5 GB."""
 ROUNDED = "facets moved out, edges' cylinders and corners' spheres tessellated"
 """``stats["convex"]`` of a grown convex solid tessellated along its own structure."""
 
+CLOSED = "a convex solid is its own closing"
+"""``stats["convex"]`` of a closing the solid itself gives (:func:`convex_closing`)."""
+
 MERGE_REL = 1e-6
 """Grown hulls' points closer than this, relative to their size and distance from the
 origin, are one (a float32 file keeps about 7 digits)."""
@@ -97,14 +100,10 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
     t0 = time.perf_counter()
     rounding = rounding_allowance(solid, radius)
     try:
-        hull = _hull_planes(solid, eps)
-        if hull is None:
+        found = _between_hulls(solid, eps)
+        if found is None:
             return None
-        # a point inside H_t (H's planes moved in by the depth), so inside the solid by
-        # one winding number exactly when H_t is
-        deepest = _inner_point(hull, eps)
-        if deepest is None or deepest[1] <= hull.depth or not _inside_at(solid, deepest[0]):
-            return None
+        hull, deepest = found
         extra: dict[str, Any] = {}
         if radius < 0:
             mesh, between = _eroded(hull, -radius, rounding, eps)
@@ -141,6 +140,47 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
              "hull_depth": hull.depth, "ball_subdivisions": subdivisions, **extra,
              "seconds": time.perf_counter() - t0}
     return mesh, bound, stats
+
+
+def convex_closing(solid: trimesh.Trimesh, eps: float) -> tuple[float, dict[str, Any]] | None:
+    """``(bound, stats)`` when the closed solid is convex up to ``eps``: it is then its own
+    closing by any radius, within ``bound`` (Hausdorff); ``None`` otherwise. A closing
+    holds its input and lies inside every half-space that does (a half-space grown and
+    eroded by as much is itself, and both are monotone), so ``P ⊆ closing(P) ⊆ H``; with
+    ``H_t ⊂ P`` (the module documentation) every point of the closing lies within the
+    distance from ``H`` to ``H_t`` of ``P``."""
+    from scipy.spatial import QhullError  # noqa: PLC0415
+
+    t0 = time.perf_counter()
+    try:
+        found = _between_hulls(solid, eps)
+        if found is None:
+            return None
+        hull, deepest = found
+        between = _gap_bound(hull, *deepest)
+        if between > eps / 4:
+            between = min(between, _gap_exact(hull))
+    except QhullError:
+        return None
+    bound = between + rounding_allowance(solid, 0.0)
+    if bound > eps:
+        return None
+    return bound, {"triangles": len(solid.faces), "convex": CLOSED,
+                   "hull_depth": hull.depth, "seconds": time.perf_counter() - t0}
+
+
+def _between_hulls(solid: trimesh.Trimesh, eps: float
+                   ) -> tuple[_Hull, tuple[np.ndarray, float]] | None:
+    """The solid's hull ``H`` and a point inside ``H_t`` with its depth, when ``H_t ⊂ P ⊂
+    H`` with the depth ``t`` within ``eps`` (see the module documentation), else ``None``:
+    the point is inside the solid by one winding number exactly when ``H_t`` is."""
+    hull = _hull_planes(solid, eps)
+    if hull is None:
+        return None
+    deepest = _inner_point(hull, eps)
+    if deepest is None or deepest[1] <= hull.depth or not _inside_at(solid, deepest[0]):
+        return None
+    return hull, deepest
 
 
 def rounding_allowance(solid: trimesh.Trimesh, radius: float) -> float:

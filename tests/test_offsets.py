@@ -22,7 +22,7 @@ from planner.errors import (
     ResourceLimitError,
 )
 from planner.meshes.closest import mesh_distance
-from planner.offsets_convex import ROUNDED
+from planner.offsets_convex import CLOSED, ROUNDED
 
 
 def _steiner(mesh: trimesh.Trimesh, r: float) -> float:
@@ -497,7 +497,7 @@ def test_the_offset_command_writes_the_mesh_and_says_its_bound(tmp_path, capsys)
     line = capsys.readouterr().out.strip()
     assert line.startswith(f"wrote {grown}") and "error bound" in line
     assert trimesh.load(grown).is_watertight
-    assert "(hull)" in line  # a box: by its hull
+    assert f"(hull: {ROUNDED})" in line  # a box: by its hull
     assert main(["offset", str(part), "-r", "-0.1", "-o", str(tmp_path / "shrunk.stl"),
                  "--eps", "0.04", "--method", "ball"]) == 0
     line = capsys.readouterr().out.strip()
@@ -997,3 +997,50 @@ def test_a_cad_gears_creases_are_split_and_the_surface_stays_closed_within_its_b
     probes = np.vstack([out.vertices, trimesh.sample.sample_surface(out, 20000, seed=0)[0]])
     error = np.abs(surface_distance(gear, probes) - r)
     assert error.max() <= min(result.error_bound, 3e-4)
+
+
+def test_a_convex_solids_closing_is_itself_where_two_stages_agree(tmp_path, capsys):
+    """A convex solid is its own closing (it lies in every half-space holding it): the
+    closing returns it, bound by its rounding, where the two stages by the cells give a
+    surface within their bounds of it."""
+    box = trimesh.creation.box([1.0, 0.6, 0.4])
+    closed = planner.closing(box, 0.1)
+    assert closed.stats["convex"] == CLOSED and "stage_bounds" not in closed.stats
+    assert closed.error_bound < 1e-8
+    np.testing.assert_array_equal(np.sort(closed.mesh.vertices, axis=0),
+                                  np.sort(box.vertices, axis=0))
+    staged = planner.closing(box, 0.1, method="cells", eps=0.01)
+    reach = sum(staged.stats["stage_bounds"])
+    assert np.max(np.abs(mesh_distance(box.vertices, box.faces, staged.mesh.vertices))) <= reach
+    part, out = tmp_path / "box.stl", tmp_path / "closed.stl"
+    box.export(part)
+    assert main(["offset", str(part), "-r", "0.1", "--closing", "-o", str(out),
+                 "--no-progress"]) == 0
+    assert f"(hull: {CLOSED})" in capsys.readouterr().out
+    assert trimesh.load(out).volume == pytest.approx(box.volume, rel=1e-6)
+
+
+def test_a_solid_short_of_convex_is_closed_in_two_stages():
+    """The finned box is not convex: its closing fills the corners along the fin."""
+    closed = planner.closing(_finned(), 0.12, eps=0.05)
+    assert "convex" not in closed.stats and len(closed.stats["stage_bounds"]) == 2
+    assert closed.mesh.volume > _finned().volume
+
+
+@pytest.mark.assets
+def test_a_part_convex_up_to_its_files_rounding_closes_within_its_hulls_gap():
+    """The Factory round peg (float32 CAD, convex up to rounding) is its own closing
+    within the gap between it and its hull (measured here on the hull's facets): the two
+    stages took minutes at eps 2e-5."""
+    from conftest import asset
+
+    peg = planner.load_mesh(asset(
+        "assemblies/factory_round_peg_8mm/meshes/factory_round_peg_8mm_loose.obj"))
+    closed = planner.closing(peg, 0.0005, eps=2e-5)
+    assert closed.stats["convex"] == CLOSED and closed.error_bound <= 2e-5
+    assert len(closed.mesh.faces) == len(peg.faces)
+    hull = peg.convex_hull  # its points farthest from the peg: on facets over dents
+    on_hull = np.vstack([hull.triangles_center, trimesh.sample.sample_surface(hull, 20000,
+                                                                              seed=0)[0]])
+    gap = np.max(mesh_distance(peg.vertices, peg.faces, on_hull))
+    assert 0.0 < gap <= closed.error_bound
