@@ -220,14 +220,16 @@ impl CellSource for OffsetSource<'_> {
         if reach >= self.radius {
             return None;
         }
-        let (q, d) = self.mesh.nearest(x)?;
+        // `x` is within `reach` of a boundary point, which lies the radius from `∂P`
+        let (q, d) = self.mesh.nearest_within(x, (self.radius + reach) * (1.0 + BOUNDARY_POINT_TOL))?;
         if d <= 0.0 {
             return None;
         }
         let out = (x - q) / d;
         let p = q + out * self.radius;
         if d < self.radius {
-            let (_, at_p) = self.mesh.nearest(p)?;
+            // nothing nearer than `q` within the tolerance
+            let (_, at_p) = self.mesh.nearest_within(p, self.radius * (1.0 + 2.0 * BOUNDARY_POINT_TOL))?;
             if (at_p - self.radius).abs() > BOUNDARY_POINT_TOL * self.radius {
                 return None;
             }
