@@ -114,7 +114,8 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
             measured = between > eps / 4
             if measured:
                 between = min(between, _gap_exact(hull))
-            rounded = _rounded(hull, radius, eps - between - rounding)
+            # (less a few ulps of eps: the sum below must not round past it)
+            rounded = _rounded(hull, radius, eps - between - rounding - 8 * math.ulp(eps))
             if rounded is not None:
                 mesh, chord, extra = rounded
                 subdivisions, method = None, ROUNDED
@@ -411,9 +412,9 @@ def _grown(hull: _Hull, radius: float, eps: float
 
 def _rounded(hull: _Hull, radius: float, tol: float
              ) -> tuple[trimesh.Trimesh, float, dict[str, Any]] | None:
-    """``(mesh, chord, stats)``: ``H`` grown by ``radius`` and tessellated along its own
+    """``(mesh, bound, stats)``: ``H`` grown by ``radius`` and tessellated along its own
     facets, edges and corners by the core (:data:`ROUNDED`), its two-sided bound
-    ``chord`` within ``tol``. Points closer than :data:`MERGE_REL` of the size are welded
+    ``bound`` within ``tol``. Points closer than :data:`MERGE_REL` of the size are welded
     (a float32 file's nearly coplanar facets meet at angles of 1e-6, their moved corners
     that times ``r`` apart, which a reader would weld into edges of four triangles); the
     bound adds how far that moved them. ``None`` when the core refuses (more than
@@ -431,7 +432,7 @@ def _rounded(hull: _Hull, radius: float, tol: float
         log.debug("the rounded hull is not used: %s", error)
         return None
     mesh = trimesh.Trimesh(out["vertices"], out["faces"], process=False)
-    return mesh, float(out["chord"]), {"round_step": float(out["step"]),
+    return mesh, float(out["bound"]), {"round_step": float(out["step"]),
                                        "round_scale": float(out["scale"]),
                                        "round_welded": float(out["welded"])}
 

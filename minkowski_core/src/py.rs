@@ -234,7 +234,7 @@ fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f6
 /// The offset of the convex hull of `points` by `radius`, tessellated along the hull's
 /// own facets, edges and vertices with its two-sided bound within `tol`, points closer
 /// than `weld` welded ([`crate::polytope::rounded`]): a dict of `vertices`, `faces`,
-/// `chord` (the bound), `scale`, `step`, `narrowest` and `welded`.
+/// `bound` (two-sided, the weld included), `scale`, `step`, `narrowest` and `welded`.
 #[pyfunction]
 #[pyo3(signature = (points, radius, tol, weld=0.0, max_triangles=20_000_000))]
 fn rounded_polytope<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, radius: f64, tol: f64, weld: f64, max_triangles: usize) -> PyResult<Bound<'py, PyDict>> {
@@ -244,7 +244,7 @@ fn rounded_polytope<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, ra
         crate::polytope::rounded(&poly, radius, tol, weld, max_triangles)
     })?;
     let d = mesh_dict(py, &out.vertices, &out.triangles)?;
-    d.set_item("chord", out.chord)?;
+    d.set_item("bound", out.bound)?;
     d.set_item("scale", out.scale)?;
     d.set_item("step", out.step)?;
     d.set_item("narrowest", out.narrowest)?;

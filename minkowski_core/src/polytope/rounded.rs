@@ -39,8 +39,9 @@ pub struct Rounded {
     pub vertices: Vec<Vec3>,
     /// Output triangles (outward winding).
     pub triangles: Vec<[u32; 3]>,
-    /// Two-sided bound of `|dist(x, P) - r|` over the output (0 on the flat parts).
-    pub chord: f64,
+    /// Two-sided bound of `|dist(x, P) - r|` over the output (0 on the flat parts): the
+    /// chords' sag and the weld's move ([`Rounded::welded`]).
+    pub bound: f64,
     /// Radius factor `s` of the round points.
     pub scale: f64,
     /// Angular step (radians) between neighbouring round points.
@@ -48,7 +49,7 @@ pub struct Rounded {
     /// Least angle between the normals of two facets that meet (radians): their moved
     /// corners are `r` times that apart.
     pub narrowest: f64,
-    /// How far welding points closer than asked moved the surface (part of `chord`).
+    /// How far welding points closer than asked moved the surface (part of `bound`).
     pub welded: f64,
 }
 
@@ -116,7 +117,7 @@ pub fn rounded(poly: &ConvexPolytope, radius: f64, tol: f64, weld_within: f64, m
                 continue;
             };
             if chord + welded <= tol {
-                return Ok(Rounded { vertices, triangles, chord: chord + welded, scale, step, narrowest: structure.narrowest, welded });
+                return Ok(Rounded { vertices, triangles, bound: chord + welded, scale, step, narrowest: structure.narrowest, welded });
             }
             budget = tol - welded;
             if budget <= 0.0 {

@@ -66,7 +66,7 @@ fn assert_bound_holds_both_ways(poly: &ConvexPolytope, radius: f64, out: &Rounde
     let slack = 1e-12;
     for p in samples(&out.vertices, &out.triangles) {
         let d = poly.signed_distance(p);
-        assert!((d - radius).abs() <= out.chord + slack, "output point {p:?} at {d}, radius {radius} bound {}", out.chord);
+        assert!((d - radius).abs() <= out.bound + slack, "output point {p:?} at {d}, radius {radius} bound {}", out.bound);
     }
     let golden = PI * (3.0 - 5f64.sqrt());
     for k in 0..400 {
@@ -76,7 +76,7 @@ fn assert_bound_holds_both_ways(poly: &ConvexPolytope, radius: f64, out: &Rounde
         let support = poly.vertices.iter().copied().max_by(|a, b| a.dot(u).total_cmp(&b.dot(u))).expect("vertices");
         let exact = support + u * radius;
         let d = mesh_distance(&out.vertices, &out.triangles, exact);
-        assert!(d <= out.chord + slack, "exact boundary point {exact:?} is {d} from the output, bound {}", out.chord);
+        assert!(d <= out.bound + slack, "exact boundary point {exact:?} is {d} from the output, bound {}", out.bound);
     }
 }
 
@@ -86,7 +86,7 @@ fn a_grown_box_is_closed_flat_on_its_faces_and_within_its_bound() {
     let poly = box_polytope(size);
     for tol in [2e-2, 1e-3, 1e-4] {
         let out = rounded(&poly, radius, tol, 0.0, 10_000_000).expect("rounded");
-        assert!(out.chord <= tol && out.chord > 0.0, "chord {} for tol {tol}", out.chord);
+        assert!(out.bound <= tol && out.bound > 0.0, "chord {} for tol {tol}", out.bound);
         assert_closed_and_oriented(&out.triangles);
         assert_bound_holds_both_ways(&poly, radius, &out);
         // the six faces are the box's moved out by exactly r: 12 triangles on those planes
@@ -104,7 +104,7 @@ fn a_grown_box_is_closed_flat_on_its_faces_and_within_its_bound() {
             size.x * size.y * size.z + 2.0 * r * (size.x * size.y + size.y * size.z + size.z * size.x) + PI * r * r * (size.x + size.y + size.z) + 4.0 / 3.0 * PI * r * r * r
         };
         let v = volume(&out.vertices, &out.triangles);
-        assert!(steiner(radius - out.chord) <= v && v <= steiner(radius + out.chord), "volume {v}, tol {tol}");
+        assert!(steiner(radius - out.bound) <= v && v <= steiner(radius + out.bound), "volume {v}, tol {tol}");
     }
 }
 
@@ -112,7 +112,7 @@ fn a_grown_box_is_closed_flat_on_its_faces_and_within_its_bound() {
 fn a_grown_lumpy_polytope_is_closed_and_within_its_bound_both_ways() {
     let poly = lumpy_polytope(60);
     let out = rounded(&poly, 0.3, 2e-3, 0.0, 10_000_000).expect("rounded");
-    assert!(out.chord <= 2e-3);
+    assert!(out.bound <= 2e-3);
     assert_closed_and_oriented(&out.triangles);
     assert_bound_holds_both_ways(&poly, 0.3, &out);
 }
@@ -127,8 +127,8 @@ fn the_round_points_straddle_the_exact_offset() {
     let distances: Vec<f64> = samples(&out.vertices, &out.triangles).into_iter().map(|p| poly.signed_distance(p)).collect();
     let most = distances.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let least = distances.iter().copied().fold(f64::INFINITY, f64::min);
-    assert!(most - radius > 0.5 * out.chord, "outward {} of chord {}", most - radius, out.chord);
-    assert!(radius - least > 0.5 * out.chord, "inward {} of chord {}", radius - least, out.chord);
+    assert!(most - radius > 0.5 * out.bound, "outward {} of chord {}", most - radius, out.bound);
+    assert!(radius - least > 0.5 * out.bound, "inward {} of chord {}", radius - least, out.bound);
     assert!(out.scale > 1.0);
 }
 
@@ -150,7 +150,7 @@ fn facets_meeting_almost_flat_are_welded_and_the_move_is_in_the_bound() {
     let (radius, within) = (0.1, 1e-7);
     assert!(rounded(&poly, radius, 1e-3, 0.0, 10_000_000).expect("unwelded").narrowest * radius < within);
     let out = rounded(&poly, radius, 1e-3, within, 10_000_000).expect("welded");
-    assert!(out.welded > 0.0 && out.welded < within && out.chord <= 1e-3);
+    assert!(out.welded > 0.0 && out.welded < within && out.bound <= 1e-3);
     assert_closed_and_oriented(&out.triangles);
     assert_bound_holds_both_ways(&poly, radius, &out);
     for (i, p) in out.vertices.iter().enumerate() {
