@@ -1044,3 +1044,27 @@ def test_a_part_convex_up_to_its_files_rounding_closes_within_its_hulls_gap():
                                                                               seed=0)[0]])
     gap = np.max(mesh_distance(peg.vertices, peg.faces, on_hull))
     assert 0.0 < gap <= closed.error_bound
+
+
+def test_a_finely_faceted_cylinder_is_grown_from_fewer_corners_within_the_bound(monkeypatch):
+    """A 300-sided prism grown by 0.05 at eps 0.01: its sides are finer than the
+    tolerance, so the hull of fewer corners is grown, its gap in the bound (a third of the
+    triangles). Both ways against exact distances: output points to the prism, and the
+    exact offset's support points (the farthest corner along a direction, moved r along
+    it) to the output."""
+    from planner import offsets_convex
+
+    prism, r, eps = trimesh.creation.cylinder(radius=1.0, height=2.0, sections=300), 0.05, 0.01
+    grown = planner.offset(prism, r, eps=eps)
+    assert grown.stats["convex"] == ROUNDED and grown.error_bound <= eps
+    assert grown.stats["round_corners"] < len(prism.vertices) / 2
+    assert 0 < grown.stats["round_thinned"] < eps
+    _assert_within_bound_both_ways(prism, r, grown)
+    directions = trimesh.sample.sample_surface_sphere(4000, seed=6)
+    support = prism.vertices[np.argmax(prism.vertices @ directions.T, axis=0)] + r * directions
+    assert np.all(mesh_distance(grown.mesh.vertices, grown.mesh.faces, support)
+                  <= grown.error_bound + 1e-12)
+    monkeypatch.setattr(offsets_convex, "THIN_SHARE", 0.0)
+    every_corner = planner.offset(prism, r, eps=eps)
+    assert every_corner.stats["round_thinned"] == 0.0
+    assert len(grown.mesh.faces) < 0.5 * len(every_corner.mesh.faces)
