@@ -119,7 +119,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
                 between = min(between, _gap_exact(hull))
             # (less a few ulps of eps: the sums below must not round past it)
             left = eps - between - rounding - 8 * math.ulp(eps)
-            rounded = _rounded_from_fewest(hull.corners, radius, left)
+            rounded = _rounded_from_fewest(hull, radius, left)
             if rounded is not None:
                 mesh, chord, extra = rounded
                 subdivisions, method = None, ROUNDED
@@ -414,22 +414,31 @@ def _grown(hull: _Hull, radius: float, eps: float
     return None
 
 
-def _rounded_from_fewest(corners: np.ndarray, radius: float, tol: float
+def _rounded_from_fewest(hull: _Hull, radius: float, tol: float
                          ) -> tuple[trimesh.Trimesh, float, dict[str, Any]] | None:
-    """:func:`_rounded` of the hull of the ``corners``, or of fewer of them
+    """:func:`_rounded` of ``H``, or of the hull of fewer of its corners
     (:func:`_fewer_corners`, its gap taken from the tolerance and added to the bound),
     whichever has fewer triangles: the thinning saves the many sides' strips and corners
     but leaves the round parts less tolerance (the Factory peg at eps 2e-5: 12,844
-    triangles thinned, 7,260 not; at 4e-4: 692 thinned, 4,092 not)."""
-    every = _rounded(corners, radius, tol)
+    triangles thinned, 7,260 not; at 4e-4: 692 thinned, 4,092 not). ``H`` itself is not
+    tessellated when the thinned one has no more triangles than ``H``'s would at least
+    (its facets' triangles, moved out, twice over for the edges' strips, and about one
+    per corner)."""
+    corners = hull.corners
     fewer, gap = _fewer_corners(corners, THIN_SHARE * tol)
     thinned = _rounded(fewer, radius, tol - gap) if gap > 0 else None
-    if thinned is not None and (every is None or len(thinned[0].faces) < len(every[0].faces)):
+    if thinned is not None:
         mesh, bound, stats = thinned
-        return mesh, bound + gap, {**stats, "round_corners": len(fewer), "round_thinned": gap}
-    if every is None:
-        return None
-    return every[0], every[1], {**every[2], "round_corners": len(corners), "round_thinned": 0.0}
+        thinned = mesh, bound + gap, {**stats, "round_corners": len(fewer), "round_thinned": gap}
+        if len(mesh.faces) <= 2 * len(hull.triangles) + len(corners):
+            return thinned
+    every = _rounded(corners, radius, tol)
+    if every is not None:
+        every = every[0], every[1], {**every[2], "round_corners": len(corners),
+                                     "round_thinned": 0.0}
+    if thinned is None or (every is not None and len(every[0].faces) <= len(thinned[0].faces)):
+        return every
+    return thinned
 
 
 def _fewer_corners(corners: np.ndarray, budget: float) -> tuple[np.ndarray, float]:
@@ -449,7 +458,7 @@ def _fewer_corners(corners: np.ndarray, budget: float) -> tuple[np.ndarray, floa
         return corners, 0.0
     count = THIN_START
     for _ in range(THIN_TRIES):
-        if count >= len(corners):
+        if count > THIN_ENOUGH * len(corners):
             break
         kept = np.unique(np.argmax(corners @ _directions(count).T, axis=0))
         if len(kept) > THIN_ENOUGH * len(corners):
@@ -478,8 +487,9 @@ THIN_AIM = 1.2
 """A try whose gap is over the budget is followed by one with this much more than the
 square root of the gap's ratio to it times its directions."""
 
-THIN_ENOUGH = 0.9
-"""A thinning that keeps more than this share of the corners is not worth its gap."""
+THIN_ENOUGH = 0.7
+"""A thinning that keeps (or tries directions for) more than this share of the corners is
+not worth its gap."""
 
 
 def _directions(count: int) -> np.ndarray:
