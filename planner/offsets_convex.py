@@ -419,11 +419,11 @@ def _rounded_from_fewest(hull: _Hull, radius: float, tol: float
     """:func:`_rounded` of ``H``, or of the hull of fewer of its corners
     (:func:`_fewer_corners`, its gap taken from the tolerance and added to the bound),
     whichever has fewer triangles: the thinning saves the many sides' strips and corners
-    but leaves the round parts less tolerance (the Factory peg at eps 2e-5: 12,844
-    triangles thinned, 7,260 not; at 4e-4: 692 thinned, 4,092 not). ``H`` itself is not
-    tessellated when the thinned one has no more triangles than ``H``'s would at least
-    (its facets' triangles, moved out, twice over for the edges' strips, and about one
-    per corner)."""
+    but leaves the round parts less tolerance (the Factory peg at eps 4e-4: 692 triangles
+    thinned, 4,092 not; at 2e-5 thinned to 392 corners, 12,844 against 7,260). ``H``
+    itself is not tessellated when the thinned one has no more triangles than ``H``'s
+    would at least (its facets' triangles, moved out, twice over for the edges' strips,
+    and about one per corner)."""
     corners = hull.corners
     fewer, gap = _fewer_corners(corners, THIN_SHARE * tol)
     thinned = _rounded(fewer, radius, tol - gap) if gap > 0 else None
@@ -520,8 +520,7 @@ def _rounded(corners: np.ndarray, radius: float, tol: float
              ) -> tuple[trimesh.Trimesh, float, dict[str, Any]] | None:
     """``(mesh, bound, stats)``: the hull ``H`` of the ``corners`` grown by ``radius`` and
     tessellated along its own facets, edges and corners by the core (:data:`ROUNDED`), its
-    two-sided bound
-    ``bound`` within ``tol``. Points closer than :data:`MERGE_REL` of the size are welded
+    two-sided ``bound`` within ``tol``. Points closer than :data:`MERGE_REL` of the size are welded
     (a float32 file's nearly coplanar facets meet at angles of 1e-6, their moved corners
     that times ``r`` apart, which a reader would weld into edges of four triangles); the
     bound adds how far that moved them. ``None`` when the core refuses (more than

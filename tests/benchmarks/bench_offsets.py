@@ -127,7 +127,7 @@ def inputs(quick: bool, only: set[str] | None = None) -> list[dict]:
                       "libigl": [50, 100, 200, 300], "manifold": [1, 2, 3]})
         peg = classify(planner.load_mesh(PEG), name="peg", kind="solid").mesh
         cases.append({"name": "peg: Factory round peg (CAD, convex up to rounding)",
-                      "mesh": peg, "r": 0.001, "ours": [0.0004, 0.0001, 0.00002],
+                      "mesh": peg, "r": 0.001, "ours": [0.0004, 0.0001, 0.00005, 0.00002],
                       "libigl": [50, 100, 200, 300], "manifold": [1, 2, 3, 4]})
         gear = classify(planner.load_mesh(GEAR), name="gear", kind="solid").mesh
         cases.append({"name": "gear: IndustReal small gear (CAD, 20k triangles)",
