@@ -4,6 +4,7 @@ and the penetration depth of two (see :mod:`planner.offsets`, :mod:`planner.dept
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -109,7 +110,7 @@ def cmd_offset(args) -> int:
     write_mesh(result.mesh, out)
     stats = result.stats
     of = "" if stats["kind"] == "solid" else ", of its triangles"
-    if "stage_bounds" in stats:  # an opening or closing: each stage's bound
+    if "stage_bounds" in stats and math.isinf(result.error_bound):  # each stage's bound
         bound = ("error bounds {:.4g} then {:.4g} by stage (together where no feature's "
                  "thickness is within their sum of 2r)".format(*stats["stage_bounds"]))
     else:

@@ -35,6 +35,8 @@ bound; their sum bounds the result where no feature's thickness (opening) or gap
 (closing) lies within that sum of ``2 r``. A solid convex up to its file's rounding is its
 own closing (it lies in every half-space holding it): the closing returns it, its
 ``error_bound`` the distance between it and its hull (:func:`.offsets_convex.convex_closing`).
+Its opening takes the hull path both ways, and its ``error_bound`` is the stages' sum (the
+erosion is convex, and growing is 1-Lipschitz).
 
 Entry points: :func:`offset`, :func:`opening`, :func:`closing` -> :class:`OffsetResult`.
 """
@@ -88,7 +90,7 @@ class OffsetResult:
             neck whose width is within twice it of ``2 |r|``, where one may be bridged
             and the other not (:mod:`.offsets_ball`). ``inf`` for an opening or closing
             (see the module documentation), but a convex solid's closing (the solid: its
-            Hausdorff distance to the true closing).
+            Hausdorff distance to the true closing) and opening (the stages' sum).
         eps: the resolution asked for.
         stats: triangles, cells, seconds (per stage for an opening or closing).
     """
@@ -456,7 +458,17 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
              "stage_bounds": [one.error_bound, two.error_bound],
              "kind": "solid", "changes": one.stats["changes"],
              "seconds": one.stats["seconds"] + two.stats["seconds"]}
-    return OffsetResult(two.mesh, abs(first), math.inf, two.eps, stats)
+    return OffsetResult(two.mesh, abs(first), _composed_bound(first, one, two), two.eps, stats)
+
+
+def _composed_bound(first: float, one: OffsetResult, two: OffsetResult) -> float:
+    """An opening's bound when both stages took a convex solid's hull: the eroded hull is
+    within the first stage's bound of the true erosion (both convex), and growing is
+    1-Lipschitz in the Hausdorff distance, so the second stage's result is within the sum
+    of the true opening. ``inf`` otherwise (see the module documentation)."""
+    if first < 0 and one.stats["method"] == two.stats["method"] == "hull":
+        return one.error_bound + two.error_bound
+    return math.inf
 
 
 def _convex_closing(part: Classified, radius: float, eps: float | None, name: str, t0: float

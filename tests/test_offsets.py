@@ -1068,3 +1068,31 @@ def test_a_finely_faceted_cylinder_is_grown_from_fewer_corners_within_the_bound(
     every_corner = planner.offset(prism, r, eps=eps)
     assert every_corner.stats["round_thinned"] == 0.0
     assert len(grown.mesh.faces) < 0.5 * len(every_corner.mesh.faces)
+
+
+def test_a_convex_solids_opening_is_bound_by_its_stages_sum(tmp_path, capsys):
+    """A box opened by r is the box shrunk by r grown by r (its edges rounded): both
+    stages by the hull, so the bound is their sum, checked against the exact distance to
+    the shrunk box, both ways (the exact opening's support points to the output)."""
+    size, r = np.array([1.0, 0.6, 0.4]), 0.1
+    opened = planner.opening(trimesh.creation.box(size), r)
+    assert opened.stats["method"] == "hull then hull"
+    assert opened.error_bound == pytest.approx(sum(opened.stats["stage_bounds"]), rel=1e-12)
+    assert 0 < opened.error_bound < r
+    half = size / 2 - r  # the shrunk box, centred at the origin
+
+    def to_shrunk(points):
+        return np.linalg.norm(np.maximum(np.abs(points) - half, 0.0), axis=1)
+
+    points = np.vstack([opened.mesh.vertices,
+                        trimesh.sample.sample_surface(opened.mesh, 4000, seed=7)[0]])
+    assert np.all(np.abs(to_shrunk(points) - r) <= opened.error_bound)
+    directions = trimesh.sample.sample_surface_sphere(4000, seed=8)
+    support = np.sign(directions) * half + r * directions
+    assert np.all(mesh_distance(opened.mesh.vertices, opened.mesh.faces, support)
+                  <= opened.error_bound + 1e-12)
+    part, out = tmp_path / "box.stl", tmp_path / "opened.stl"
+    trimesh.creation.box(size).export(part)
+    assert main(["offset", str(part), "-r", str(r), "--opening", "-o", str(out),
+                 "--no-progress"]) == 0
+    assert f"error bound {opened.error_bound:.4g} (hull then hull)" in capsys.readouterr().out
