@@ -463,8 +463,8 @@ def _fewer_corners(corners: np.ndarray, budget: float) -> tuple[np.ndarray, floa
         kept = np.unique(np.argmax(corners @ _directions(count).T, axis=0))
         if len(kept) > THIN_ENOUGH * len(corners):
             break
-        try:
-            gap = _gap_to(corners, convex_hull(corners[kept]))
+        try:  # the kept corners are on their hull
+            gap = _gap_to(np.delete(corners, kept, axis=0), convex_hull(corners[kept]))
         except QhullError:
             break
         if gap <= budget:
