@@ -62,7 +62,7 @@ from .meshes.closest import closest_points_on_triangles, mesh_distance
 
 __all__ = ["BALL_CONE_ANGLE", "BALL_INNER", "CLOSED", "MAX_FACES", "MAX_POINTS", "ROUNDED",
            "convex_closing", "convex_hull", "convex_offset", "hull_mesh", "measured_ball",
-           "representatives", "rounding_allowance", "unit_ball"]
+           "merge_distance", "representatives", "rounding_allowance", "unit_ball"]
 
 log = logging.getLogger(__name__)
 
@@ -90,7 +90,12 @@ CLOSED = "a convex solid is its own closing"
 
 MERGE_REL = 1e-6
 """Grown hulls' points closer than this, relative to their size and distance from the
-origin, are one (a float32 file keeps about 7 digits)."""
+origin, are one (a float32 file keeps about 7 digits), unless that is more than
+:data:`MERGE_EPS_SHARE` of the tolerance (:func:`merge_distance`)."""
+
+MERGE_EPS_SHARE = 1.0 / 16.0
+"""The most of the tolerance a merge of close points may take: far from the origin (a
+0.2 sphere at x = 1000) 1e-6 of the distance would be more than the whole tolerance."""
 
 
 def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
@@ -116,7 +121,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
             between = _gap_bound(hull, *deepest)
             measured = between > eps / 4
             if measured:
-                between = min(between, _gap_exact(hull))
+                between = min(between, _gap_exact(hull, eps))
             # (less a few ulps of eps: the sums below must not round past it)
             left = eps - between - rounding - 8 * math.ulp(eps)
             rounded = _rounded_from_fewest(hull, radius, left)
@@ -129,7 +134,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
                     return None
                 mesh, chord, subdivisions = grown
                 if chord + between + rounding > eps and not measured:
-                    between = min(between, _gap_exact(hull))
+                    between = min(between, _gap_exact(hull, eps))
                 method = "hull of the vertices' tessellated balls"
     except QhullError:  # a hull too thin for qhull: the cell source decides
         return None
@@ -164,7 +169,7 @@ def convex_closing(solid: trimesh.Trimesh, eps: float) -> tuple[float, dict[str,
         hull, deepest = found
         between = _gap_bound(hull, *deepest)
         if between > eps / 4:
-            between = min(between, _gap_exact(hull))
+            between = min(between, _gap_exact(hull, eps))
     except QhullError:
         return None
     bound = between + rounding_allowance(solid, 0.0)
@@ -294,10 +299,10 @@ def _gap_bound(hull: _Hull, centre: np.ndarray, inradius: float) -> float:
     return hull.depth / inradius * float(np.linalg.norm(hull.corners - centre, axis=1).max())
 
 
-def _gap_exact(hull: _Hull) -> float:
+def _gap_exact(hull: _Hull, eps: float) -> float:
     """The distance from ``H`` to ``H_t`` (their Hausdorff distance) measured to ``H_t``'s
     mesh: at least that distance (the mesh's merged corners keep it inside ``H_t``)."""
-    inner = _planes_hull(hull.normals, hull.offsets - hull.depth)
+    inner = _planes_hull(hull.normals, hull.offsets - hull.depth, eps)
     return math.inf if inner is None else _gap(hull.corners, inner[0])
 
 
@@ -318,7 +323,7 @@ def _eroded(hull: _Hull, r: float, rounding: float, eps: float
     when that exceeds a quarter of ``eps``, the gap measured from the mesh's corners
     (inside ``H_t`` eroded: at least the true one) plus ``m`` for the corners merged away,
     plus ``m`` for the mesh's own distance to ``H`` eroded."""
-    outer = _planes_hull(hull.normals, hull.offsets - r, rounding)
+    outer = _planes_hull(hull.normals, hull.offsets - r, eps, rounding)
     if outer is None:
         return trimesh.Trimesh(), 0.0
     mesh, centre, merged = outer
@@ -330,13 +335,13 @@ def _eroded(hull: _Hull, r: float, rounding: float, eps: float
         cheap = hull.depth / depth * farthest + 2.0 * merged
         if cheap <= eps / 4:
             return mesh, cheap
-    inner = _planes_hull(hull.normals, hull.offsets - r - hull.depth, rounding)
+    inner = _planes_hull(hull.normals, hull.offsets - r - hull.depth, eps, rounding)
     if inner is None:  # H_t eroded is empty, H eroded is not: the whole of it is between
         return mesh, float(np.ptp(mesh.vertices, axis=0).max())
     return mesh, _gap(np.asarray(mesh.vertices), inner[0]) + 2.0 * merged
 
 
-def _planes_hull(normals: np.ndarray, offsets: np.ndarray, thinnest: float = 0.0
+def _planes_hull(normals: np.ndarray, offsets: np.ndarray, eps: float, thinnest: float = 0.0
                  ) -> tuple[trimesh.Trimesh, np.ndarray, float] | None:
     """``({x : n · x <= d}, its deepest point, how far its corners were merged)``: the
     hull of the half-spaces' corners (:func:`_merged_hull`), found about the deepest point;
@@ -348,17 +353,17 @@ def _planes_hull(normals: np.ndarray, offsets: np.ndarray, thinnest: float = 0.0
     if deepest is None or deepest[1] <= thinnest:
         return None
     corners = HalfspaceIntersection(np.column_stack([normals, -offsets]), deepest[0]).intersections
-    mesh, merged = _merged_hull(corners)
+    mesh, merged = _merged_hull(corners, eps)
     return mesh, deepest[0], merged
 
 
-def _merged_hull(points: np.ndarray) -> tuple[trimesh.Trimesh, float]:
+def _merged_hull(points: np.ndarray, eps: float) -> tuple[trimesh.Trimesh, float]:
     """``(the hull of the points, how far they moved)``: points closer than
-    :data:`MERGE_REL` of their size and distance from the origin are one first (a float32
-    file's nearly coplanar triangles give corners or planes a few 1e-10 apart, which a
-    reader's weld would join into edges of four triangles); that moves the hull by at most
-    that distance (none when none were merged)."""
-    merge = MERGE_REL * float(np.max(np.abs(points)) + np.ptp(points, axis=0).max())
+    :func:`merge_distance` are one first (a float32 file's nearly coplanar triangles give
+    corners or planes a few 1e-10 apart, which a reader's weld would join into edges of
+    four triangles); that moves the hull by at most that distance (none when none were
+    merged)."""
+    merge = merge_distance(points, 0.0, eps)
     kept = representatives(points, merge)
     return hull_mesh(convex_hull(points[kept])), merge if len(kept) < len(points) else 0.0
 
@@ -409,7 +414,7 @@ def _grown(hull: _Hull, radius: float, eps: float
             return None
         corner, direction = _extreme_pairs(hull, unit, ball_cone_angle(subdivisions))
         mesh, merged = _merged_hull(np.vstack([hull.corners[corner] + radius * unit[direction],
-                                               moved]))
+                                               moved]), eps)
         return mesh, chord + merged, subdivisions
     return None
 
@@ -531,7 +536,7 @@ def _rounded(corners: np.ndarray, radius: float, tol: float
     if tol <= 0:
         return None
     corners = np.ascontiguousarray(corners, dtype=np.float64)
-    merge = MERGE_REL * float(np.max(np.abs(corners)) + np.ptp(corners, axis=0).max() + radius)
+    merge = merge_distance(corners, radius, tol)
     try:
         out = rounded_polytope(corners, radius, tol, merge, MAX_ROUNDED_TRIANGLES)
     except (InvalidMeshError, InvalidParameterError) as error:
@@ -558,6 +563,13 @@ def _extreme_pairs(hull: _Hull, unit: np.ndarray, ball_angle: float
         | (hull.cone_angles >= np.pi / 2)[:, None]
     corner, direction = np.nonzero(keep)
     return corner, direction
+
+
+def merge_distance(points: np.ndarray, radius: float, eps: float) -> float:
+    """How close points are merged: :data:`MERGE_REL` of the points' size plus their
+    distance from the origin and ``radius``, at most :data:`MERGE_EPS_SHARE` of ``eps``."""
+    size = float(np.max(np.abs(points)) + np.ptp(points, axis=0).max() + radius)
+    return min(MERGE_REL * size, MERGE_EPS_SHARE * eps)
 
 
 def representatives(points: np.ndarray, radius: float) -> np.ndarray:

@@ -67,19 +67,19 @@ than an offset's bound on a part measured in metres)."""
 def write_mesh(mesh, path: Path) -> None:
     """Write ``mesh`` at ``path`` in the format its suffix names, atomically (text formats
     with :data:`TEXT_DIGITS` decimals); warn when vertices apart in float64 share a
-    position at float32 (STL and glTF store no more): a reader that joins vertices by
-    position then sees the surface pinched there."""
+    position at float32 (STL, glTF and PLY as trimesh writes it store no more): a reader
+    that joins vertices by position then sees the surface pinched there."""
     kind = path.suffix.lower().lstrip(".")
     options = {"digits": TEXT_DIGITS} if kind in ("obj", "off") else {}
     atomic_write(path, lambda tmp: mesh.export(tmp, file_type=kind, **options))
-    if kind in ("stl", "glb"):
+    if kind in ("stl", "glb", "ply"):
         vertices = np.asarray(mesh.vertices, dtype=np.float64)
         joined = len(np.unique(vertices, axis=0)) - len(np.unique(vertices.astype(np.float32),
                                                                    axis=0))
         if joined:
             logging.getLogger(__name__).warning(
                 "%s: %d vertices fall on others at the format's float32 precision: a reader "
-                "joining vertices by position sees the surface pinched there (.ply and .obj "
+                "joining vertices by position sees the surface pinched there (.obj and .off "
                 "keep every digit)", path, joined)
 
 

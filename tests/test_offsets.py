@@ -633,7 +633,7 @@ def test_auto_takes_the_cells_for_a_solid_of_small_triangles():
         assert result.mesh.is_watertight and result.error_bound <= 2 * result.eps
 
 
-def test_writing_stl_warns_when_vertices_fall_on_others_at_float32(tmp_path, caplog):
+def test_writing_stl_or_ply_warns_when_vertices_fall_on_others_at_float32(tmp_path, caplog):
     from planner.output import write_mesh
 
     box = trimesh.creation.box((1.0, 1.0, 1.0))
@@ -643,8 +643,12 @@ def test_writing_stl_warns_when_vertices_fall_on_others_at_float32(tmp_path, cap
                               np.vstack([box.faces, [[8, 1, 2]]]), process=False)
     write_mesh(pinched, tmp_path / "pinched.stl")
     assert "1 vertices fall on others at the format's float32 precision" in caplog.text
-    write_mesh(pinched, tmp_path / "pinched.ply")  # float64: no warning
+    write_mesh(pinched, tmp_path / "pinched.obj")  # every digit: no warning
     assert len(caplog.records) == 1
+    write_mesh(pinched, tmp_path / "pinched.ply")  # trimesh writes PLY as float32 too
+    assert len(caplog.records) == 2
+    read = trimesh.load(tmp_path / "pinched.ply", process=False).vertices
+    assert np.all(read[8] == read[0])  # the two 1e-12 apart fell on one float32 point
 
 
 def test_an_eps_past_the_finest_ball_is_left_to_the_cells():
@@ -1096,3 +1100,19 @@ def test_a_convex_solids_opening_is_bound_by_its_stages_sum(tmp_path, capsys):
     assert main(["offset", str(part), "-r", str(r), "--opening", "-o", str(out),
                  "--no-progress"]) == 0
     assert f"error bound {opened.error_bound:.4g} (hull then hull)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("r", [0.01, -0.01])
+def test_a_convex_part_far_from_the_origin_takes_the_hull_path_within_its_bound(r):
+    """A 0.1 sphere at x = 1000: points are merged within 1e-6 of the size and distance
+    from the origin only up to a share of eps (1e-6 of 1000 alone is ten times eps); the
+    result is where the same sphere at the origin's is, within the bound."""
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.1)
+    far = sphere.copy()
+    far.apply_translation([1000.0, 0.0, 0.0])
+    done = planner.offset(far, r, eps=1e-4, method="hull")
+    assert done.stats["convex"] and done.error_bound <= 1e-4
+    points = np.vstack([done.mesh.vertices,
+                        trimesh.sample.sample_surface(done.mesh, 3000, seed=9)[0]])
+    distance = mesh_distance(far.vertices, far.faces, points)
+    assert np.all(np.abs(distance - abs(r)) <= done.error_bound + 1e-9)
