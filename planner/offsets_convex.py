@@ -232,8 +232,6 @@ def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull | None:
     normals = np.unique(np.round(triangle_normals, 12), axis=0)  # coplanar triangles' repeats
     normals /= np.linalg.norm(normals, axis=1)[:, None]
     offsets = (vertices @ normals.T).max(axis=0)
-    if len(solid.faces) * len(normals) > 4 * MAX_FACES * 200:
-        return None
     depth = _depth(vertices, np.asarray(solid.faces), normals, offsets, eps)
     if depth > eps:
         return None
@@ -248,19 +246,29 @@ def _depth(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray,
            offsets: np.ndarray, eps: float) -> float:
     """A ``t`` such that every triangle has its corners within ``t`` below one of the
     planes: each triangle's depth below the plane nearest its own normal, all planes
-    searched for the least only where that is farther than ``eps`` (so ``t`` is the least
-    whenever it exceeds ``eps``, and the hull path's choice is the same)."""
+    searched for the least only where that is farther than ``eps`` (so ``t`` exceeds
+    ``eps`` only when the least does, and the hull path's choice is the same). By
+    :data:`DEPTH_ROWS` triangles at a time (a triangle per plane is a float); the search
+    stops at the first triangle deeper than ``eps`` below every plane."""
     corners = vertices[faces]                                       # (faces, 3, 3)
     own = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    nearest = np.argmax(own @ normals.T, axis=1)
+    nearest = np.concatenate([np.argmax(own[k:k + DEPTH_ROWS] @ normals.T, axis=1)
+                              for k in range(0, len(own), DEPTH_ROWS)])
     depths = (offsets[nearest][:, None]
               - np.einsum("fkj,fj->fk", corners, normals[nearest])).max(axis=1)
     far = np.flatnonzero(depths > eps)
-    if len(far):
+    for k in range(0, len(far), DEPTH_ROWS // 3):
         # per far triangle and plane, the deepest corner's depth; per triangle, its best
-        below = offsets[None, None, :] - corners[far] @ normals.T   # (far, 3, planes)
-        depths[far] = np.minimum(depths[far], below.max(axis=1).min(axis=1))
+        rows = far[k:k + DEPTH_ROWS // 3]
+        below = offsets[None, None, :] - corners[rows] @ normals.T  # (rows, 3, planes)
+        depths[rows] = np.minimum(depths[rows], below.max(axis=1).min(axis=1))
+        if depths[rows].max() > eps:
+            break
     return float(depths.max())
+
+
+DEPTH_ROWS = 3000
+"""Triangles :func:`_depth` measures against every plane at once."""
 
 
 def _normal_cones(corners_of: np.ndarray, triangle_normals: np.ndarray, count: int

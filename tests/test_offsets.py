@@ -1116,3 +1116,16 @@ def test_a_convex_part_far_from_the_origin_takes_the_hull_path_within_its_bound(
                         trimesh.sample.sample_surface(done.mesh, 3000, seed=9)[0]])
     distance = mesh_distance(far.vertices, far.faces, points)
     assert np.all(np.abs(distance - abs(r)) <= done.error_bound + 1e-9)
+
+
+def test_a_convex_part_with_thousands_of_facets_takes_the_hull_path():
+    """2,000 points on a unit sphere, their hull (about 4,000 facets, each its own plane):
+    the depth test measures triangles against planes in blocks, where a cap on their
+    product (4 M) sent it to the ball, whose surface had folded slivers."""
+    rng = np.random.default_rng(11)
+    points = rng.normal(size=(2000, 3))
+    hull = trimesh.convex.convex_hull(points / np.linalg.norm(points, axis=1)[:, None])
+    assert len(hull.faces) * len(hull.faces) > 4_000_000
+    grown = planner.offset(hull, 0.05, eps=0.01, method="hull")
+    assert grown.stats["convex"] == ROUNDED and grown.error_bound <= 0.01
+    _assert_within_bound_both_ways(hull, 0.05, grown)
