@@ -555,7 +555,7 @@ def _stage_eps(solid: trimesh.Trimesh, radius: float) -> float:
 def _result_diagonal(extent: np.ndarray, radius: float) -> float:
     """The diagonal of the box around a solid of box ``extent`` offset by ``radius``
     (grown: the box grows; eroded: taken as the solid's)."""
-    return float(np.linalg.norm(extent + 2.0 * max(radius, 0.0)))
+    return math.hypot(*(extent + 2.0 * max(radius, 0.0)))  # no overflow for a huge radius
 
 
 def _within_radius(run, solid: trimesh.Trimesh, radius: float, eps: float | None,

@@ -1129,3 +1129,16 @@ def test_a_convex_part_with_thousands_of_facets_takes_the_hull_path():
     grown = planner.offset(hull, 0.05, eps=0.01, method="hull")
     assert grown.stats["convex"] == ROUNDED and grown.error_bound <= 0.01
     _assert_within_bound_both_ways(hull, 0.05, grown)
+
+
+def test_a_huge_radius_is_refused_without_numpy_warnings():
+    """r = 1e300: the result's diagonal is measured without overflow, so the one-line
+    refusal comes alone (numpy's overflow warnings came first)."""
+    import warnings
+
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for how in (planner.offset, planner.closing):
+            with pytest.raises(InvalidParameterError, match=r"more than 1e\+06 times"):
+                how(box, 1e300)
