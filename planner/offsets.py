@@ -67,7 +67,7 @@ from .meshes.solids import FACES_INSIDE
 from .minkowski import checked_eps, surface_stats
 from .offsets_ball import ball_offset
 from .offsets_convex import convex_closing, convex_offset
-from .operands import as_mesh
+from .operands import REPAIR_OFFER, as_mesh
 from .progress import StatusLine
 
 log = logging.getLogger(__name__)
@@ -118,7 +118,7 @@ def _operand(obj, name: str, kind: str, repair: bool, radius: float) -> Classifi
     except InvalidMeshError as error:
         if kind != "solid":
             raise
-        ways = [] if repair else ["repair=True (minkplan: --repair) fills its holes where it can"]
+        ways = [] if repair else [REPAIR_OFFER]
         if radius > 0 and _usable_as_surface(mesh, name):
             ways.append("kind='surface' (--kind surface) grows its triangles as they are (as "
                         "FCL sees them)")

@@ -15,7 +15,7 @@ from .meshes import load_mesh
 from .meshes.kinds import classify
 from .problem import Part
 
-__all__ = ["as_mesh", "label", "solid_part"]
+__all__ = ["REPAIR_OFFER", "as_mesh", "label", "solid_part"]
 
 
 def as_mesh(obj, role: str) -> trimesh.Trimesh:
@@ -60,6 +60,7 @@ def solid_part(obj, role: str, *, repair: bool | None = None) -> Part:
                 repairs=solid.changes)
 
 
-REPAIR_OFFER = "repair=True (minkplan: --repair) fills its holes where it can"
+REPAIR_OFFER = ("repair=True (minkplan: --repair) drops faces it cannot use and fills the holes "
+                "where it can, saying what it changed")
 """What an open operand's refusal offers where the call takes ``repair`` (and its command
 ``--repair``)."""
