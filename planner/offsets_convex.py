@@ -58,7 +58,7 @@ import numpy as np
 import trimesh
 
 from .errors import InvalidMeshError, InvalidParameterError
-from .meshes.closest import closest_points_on_triangles, mesh_distance
+from .meshes.closest import closest_points_on_triangles
 
 __all__ = ["BALL_CONE_ANGLE", "BALL_INNER", "CLOSED", "MAX_FACES", "MAX_POINTS", "ROUNDED",
            "convex_closing", "convex_hull", "convex_offset", "hull_mesh", "measured_ball",
@@ -118,10 +118,7 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
             method, subdivisions, chord = "hull's facet planes moved inward", None, 0.0
         else:
             # growing is 1-Lipschitz: the grown H and H_t are no farther apart than H, H_t
-            between = _gap_bound(hull, *deepest)
-            measured = between > eps / 4
-            if measured:
-                between = min(between, _gap_exact(hull, eps))
+            between, measured = _hull_gap(hull, deepest, eps)
             # (less a few ulps of eps: the sums below must not round past it)
             left = eps - between - rounding - 8 * math.ulp(eps)
             rounded = _rounded_from_fewest(hull, radius, left)
@@ -167,9 +164,7 @@ def convex_closing(solid: trimesh.Trimesh, eps: float) -> tuple[float, dict[str,
         if found is None:
             return None
         hull, deepest = found
-        between = _gap_bound(hull, *deepest)
-        if between > eps / 4:
-            between = min(between, _gap_exact(hull, eps))
+        between, _ = _hull_gap(hull, deepest, eps)
     except QhullError:
         return None
     bound = between + rounding_allowance(solid, 0.0)
@@ -297,6 +292,17 @@ def _inside_at(solid: trimesh.Trimesh, point: np.ndarray) -> bool:
                                point.reshape(1, 3))[0]) == 1
 
 
+def _hull_gap(hull: _Hull, deepest: tuple[np.ndarray, float], eps: float
+              ) -> tuple[float, bool]:
+    """``(a bound on the distance from H to H_t, whether it was measured)``: the cheap
+    bound of :func:`_gap_bound` about the inner point ``deepest``, measured
+    (:func:`_gap_exact`) only when that is over a quarter of ``eps``."""
+    between = _gap_bound(hull, *deepest)
+    if between <= eps / 4:
+        return between, False
+    return min(between, _gap_exact(hull, eps)), True
+
+
 def _gap_bound(hull: _Hull, centre: np.ndarray, inradius: float) -> float:
     """An upper bound on the distance from ``H`` to ``H_t``: ``H_t`` holds ``H`` scaled
     about its deepest point ``c`` (depth ``ρ``) by ``1 - t/ρ`` (a plane ``ρ`` or more from
@@ -314,12 +320,21 @@ def _gap_exact(hull: _Hull, eps: float) -> float:
     return math.inf if inner is None else _gap(hull.corners, inner[0])
 
 
-def _gap(corners: np.ndarray, smaller: trimesh.Trimesh) -> float:
-    """The largest distance from the ``corners`` of a convex polytope to the convex
-    ``smaller`` inside it (their Hausdorff distance)."""
-    if len(corners) == 0:
+def _gap(points: np.ndarray, smaller: trimesh.Trimesh) -> float:
+    """The largest distance from the ``points`` (a convex polytope's corners) to the
+    convex mesh ``smaller`` inside it (their Hausdorff distance), exact to rounding: a
+    point outside a convex polytope is nearest a facet whose plane it lies in front of
+    (``p - q`` is a positive mix of the normals at ``q``, so it makes a positive dot
+    product with one of them), so only those facets are measured."""
+    normals = np.asarray(smaller.face_normals)
+    ahead = points @ normals.T - np.einsum("fj,fj->f", normals, smaller.triangles[:, 0])
+    point, facet = np.nonzero(ahead > 0)
+    if len(point) == 0:
         return 0.0
-    return float(np.max(mesh_distance(smaller.vertices, smaller.faces, corners)))
+    nearest = closest_points_on_triangles(smaller.triangles[facet], points[point])
+    distance = np.full(len(points), np.inf)
+    np.minimum.at(distance, point, np.linalg.norm(points[point] - nearest, axis=1))
+    return float(np.max(distance[np.isfinite(distance)]))
 
 
 def _eroded(hull: _Hull, r: float, rounding: float, eps: float
@@ -456,7 +471,7 @@ def _rounded_from_fewest(hull: _Hull, radius: float, tol: float
 
 def _fewer_corners(corners: np.ndarray, budget: float) -> tuple[np.ndarray, float]:
     """``(kept, gap)``: corners of ``H`` whose hull ``K`` lies within ``gap <= budget`` of
-    ``H`` (Hausdorff: :func:`_gap_to`), or all of them (gap 0) when no such thinning keeps
+    ``H`` (Hausdorff: :func:`_gap`), or all of them (gap 0) when no such thinning keeps
     markedly fewer. ``K ⊂ H``, and growing is 1-Lipschitz, so ``K``'s offset is within
     ``gap`` of ``H``'s: a faceted cylinder's many sides, each with its edge strip and
     corner patches, take far fewer triangles at a tolerance its facets are finer than.
@@ -477,7 +492,7 @@ def _fewer_corners(corners: np.ndarray, budget: float) -> tuple[np.ndarray, floa
         if len(kept) > THIN_ENOUGH * len(corners):
             break
         try:  # the kept corners are on their hull
-            gap = _gap_to(np.delete(corners, kept, axis=0), convex_hull(corners[kept]))
+            gap = _gap(np.delete(corners, kept, axis=0), hull_mesh(convex_hull(corners[kept])))
         except QhullError:
             break
         if gap <= budget:
@@ -512,21 +527,6 @@ def _directions(count: int) -> np.ndarray:
     phi = k * math.pi * (3.0 - math.sqrt(5.0))
     ring = np.sqrt(1.0 - z * z)
     return np.column_stack([ring * np.cos(phi), ring * np.sin(phi), z])
-
-
-def _gap_to(points: np.ndarray, hull) -> float:
-    """The largest distance from the ``points`` to the convex qhull ``hull``, exact to
-    rounding: a point outside a convex polytope is nearest a facet whose plane it lies in
-    front of (``p - q`` is a positive mix of the normals at ``q``, so it makes a positive
-    dot product with one of them), so only those facets are measured."""
-    ahead = points @ hull.equations[:, :3].T + hull.equations[:, 3]
-    point, facet = np.nonzero(ahead > 0)
-    if len(point) == 0:
-        return 0.0
-    nearest = closest_points_on_triangles(hull.points[hull.simplices[facet]], points[point])
-    distance = np.full(len(points), np.inf)
-    np.minimum.at(distance, point, np.linalg.norm(points[point] - nearest, axis=1))
-    return float(np.max(distance[np.isfinite(distance)]))
 
 
 def _rounded(corners: np.ndarray, radius: float, tol: float
