@@ -305,8 +305,7 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
         if not math.isfinite(bound):
             raise GeometryError(f"{name}: nothing was resolved of it offset by {radius:g} at "
                                 f"eps {step:g}; try a smaller eps")
-        raise EmptyResultError(f"{name}: nothing is left of it eroded by {-radius:g} (its "
-                               f"thickest part is thinner than {2 * -radius:g})")
+        raise EmptyResultError(_nothing_left(name, -radius, stats.get("sheet_left", 0.0)))
     stats["method"] = used
     stats["kind"] = "solid" if part.solid else "surface"
     stats["changes"] = dict(part.changes)
@@ -314,6 +313,17 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
     if part.changes:
         log.info("%s: made a solid by %s", name, changes_text(part.changes))
     return OffsetResult(surface, radius, bound, step, stats)
+
+
+def _nothing_left(name: str, depth: float, sheet: float) -> str:
+    """What an erosion by ``depth`` that leaves nothing says (``sheet``: the thickness of a
+    flat sheet left too thin to mesh, else 0)."""
+    if sheet > 0:
+        return (f"{name}: nothing is left of it eroded by {depth:g} but a flat sheet at most "
+                f"{sheet:.3g} thick, too thin to mesh (its thickest part is {2 * depth:g} "
+                f"within that)")
+    return (f"{name}: nothing is left of it eroded by {depth:g} (its thickest part is thinner "
+            f"than {2 * depth:g})")
 
 
 def changes_text(changes: dict[str, Any]) -> str:

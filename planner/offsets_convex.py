@@ -114,8 +114,9 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
         hull, deepest = found
         extra: dict[str, Any] = {}
         if radius < 0:
-            mesh, between = _eroded(hull, -radius, rounding, eps)
+            mesh, between, sheet = _eroded(hull, -radius, rounding, eps)
             method, subdivisions, chord = "hull's facet planes moved inward", None, 0.0
+            extra = {"sheet_left": sheet} if sheet else {}
         else:
             # growing is 1-Lipschitz: the grown H and H_t are no farther apart than H, H_t
             between, measured = _hull_gap(hull, deepest, eps)
@@ -338,30 +339,37 @@ def _gap(points: np.ndarray, smaller: trimesh.Trimesh) -> float:
 
 
 def _eroded(hull: _Hull, r: float, rounding: float, eps: float
-            ) -> tuple[trimesh.Trimesh, float]:
-    """``(H eroded by r, a bound on its distance to H_t eroded by r)``; an empty mesh when
-    nothing is left. With the mesh's corners merged by ``m``: first the bound of
-    :func:`_gap_bound` about the eroded ``H``'s deepest point (``H_t`` eroded is the
-    eroded ``H``'s planes moved in by ``t``), its corners taken ``m`` farther, plus ``2 m``;
-    when that exceeds a quarter of ``eps``, the gap measured from the mesh's corners
-    (inside ``H_t`` eroded: at least the true one) plus ``m`` for the corners merged away,
-    plus ``m`` for the mesh's own distance to ``H`` eroded."""
-    outer = _planes_hull(hull.normals, hull.offsets - r, eps, rounding)
-    if outer is None:
-        return trimesh.Trimesh(), 0.0
-    mesh, centre, merged = outer
+            ) -> tuple[trimesh.Trimesh, float, float]:
+    """``(H eroded by r, a bound on its distance to H_t eroded by r, the thickness of what
+    is left when that is too thin to mesh)``. Nothing is left when ``H`` eroded has no
+    point deeper than the rounding allowance; what is left is a sheet no thicker than twice
+    its deepest point's depth, too thin to mesh when that depth is within the distance
+    corners are merged by (:func:`merge_distance`: its two sides would be one): both give
+    an empty mesh (``P`` eroded lies inside ``H`` eroded). With the mesh's corners merged
+    by ``m``: first the bound of :func:`_gap_bound` about the eroded ``H``'s deepest point
+    (``H_t`` eroded is the eroded ``H``'s planes moved in by ``t``), its corners taken ``m``
+    farther, plus ``2 m``; when that exceeds a quarter of ``eps``, the gap measured from
+    the mesh's corners (inside ``H_t`` eroded: at least the true one) plus ``m`` for the
+    corners merged away, plus ``m`` for the mesh's own distance to ``H`` eroded."""
+    deepest = _deepest_point(hull.normals, hull.offsets - r)
+    if deepest is None or deepest[1] <= rounding:
+        return trimesh.Trimesh(), 0.0, 0.0
+    if deepest[1] <= merge_distance(hull.corners, 0.0, eps):
+        return trimesh.Trimesh(), deepest[1], 2.0 * deepest[1]
+    centre = deepest[0]
+    mesh, merged = _hull_about(hull.normals, hull.offsets - r, centre, eps)
     if hull.depth == 0:
-        return mesh, merged
+        return mesh, merged, 0.0
     depth = float(np.min(hull.offsets - r - hull.normals @ centre))
     if depth > hull.depth:
         farthest = float(np.linalg.norm(mesh.vertices - centre, axis=1).max()) + merged
         cheap = hull.depth / depth * farthest + 2.0 * merged
         if cheap <= eps / 4:
-            return mesh, cheap
+            return mesh, cheap, 0.0
     inner = _planes_hull(hull.normals, hull.offsets - r - hull.depth, eps, rounding)
     if inner is None:  # H_t eroded is empty, H eroded is not: the whole of it is between
-        return mesh, float(np.ptp(mesh.vertices, axis=0).max())
-    return mesh, _gap(np.asarray(mesh.vertices), inner[0]) + 2.0 * merged
+        return mesh, float(np.ptp(mesh.vertices, axis=0).max()), 0.0
+    return mesh, _gap(np.asarray(mesh.vertices), inner[0]) + 2.0 * merged, 0.0
 
 
 def _planes_hull(normals: np.ndarray, offsets: np.ndarray, eps: float, thinnest: float = 0.0
@@ -370,14 +378,21 @@ def _planes_hull(normals: np.ndarray, offsets: np.ndarray, eps: float, thinnest:
     hull of the half-spaces' corners (:func:`_merged_hull`), found about the deepest point;
     ``None`` when that point is no deeper than ``thinnest`` (nothing, or a sheet, is left)
     or the solver fails."""
-    from scipy.spatial import HalfspaceIntersection  # noqa: PLC0415
-
     deepest = _deepest_point(normals, offsets)
     if deepest is None or deepest[1] <= thinnest:
         return None
-    corners = HalfspaceIntersection(np.column_stack([normals, -offsets]), deepest[0]).intersections
-    mesh, merged = _merged_hull(corners, eps)
+    mesh, merged = _hull_about(normals, offsets, deepest[0], eps)
     return mesh, deepest[0], merged
+
+
+def _hull_about(normals: np.ndarray, offsets: np.ndarray, inside: np.ndarray, eps: float
+                ) -> tuple[trimesh.Trimesh, float]:
+    """``({x : n · x <= d}, how far its corners were merged)``: the hull of the
+    half-spaces' corners (:func:`_merged_hull`), found about a point ``inside`` it."""
+    from scipy.spatial import HalfspaceIntersection  # noqa: PLC0415
+
+    corners = HalfspaceIntersection(np.column_stack([normals, -offsets]), inside).intersections
+    return _merged_hull(corners, eps)
 
 
 def _merged_hull(points: np.ndarray, eps: float) -> tuple[trimesh.Trimesh, float]:

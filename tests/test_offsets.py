@@ -361,6 +361,25 @@ def test_an_opening_removes_a_fin_thinner_than_twice_the_radius():
     assert closed.mesh.bounds[1][0] >= 1.05 - sum(closed.stats["stage_bounds"])
 
 
+def test_eroding_a_float32_box_by_half_its_thickness_leaves_a_sheet_said_as_nothing(
+        tmp_path, caplog):
+    # a float32 file rounds 0.2 up by 3e-9: the erosion by 0.2 leaves a sheet 6e-9 thick,
+    # which the hull answers at once (before, the ball ran 25 s and warned of its bound)
+    trimesh.creation.box([1.0, 0.6, 0.4]).export(tmp_path / "box.stl")
+    box = trimesh.load(tmp_path / "box.stl")
+    thickness = float(np.ptp(box.vertices[:, 2]))
+    assert 0.4 < thickness < 0.4 + 1e-8
+    with pytest.raises(EmptyResultError, match="flat sheet at most") as empty:
+        planner.offset(box, -0.2)
+    sheet = float(str(empty.value).split("at most ")[1].split()[0])
+    assert sheet == pytest.approx(thickness - 0.4, rel=1e-3)
+    assert "bound" not in caplog.text
+    # a hair less leaves a thin box, meshed
+    thin = planner.offset(box, -0.19999)
+    assert thin.stats["method"] == "hull"
+    assert np.ptp(thin.mesh.vertices[:, 2]) == pytest.approx(thickness - 0.39998, abs=1e-9)
+
+
 def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors(caplog):
     box = trimesh.creation.box([1.0, 1.0, 1.0])
     with pytest.raises(InvalidParameterError, match="non-zero finite"):
