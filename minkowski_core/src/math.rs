@@ -48,7 +48,13 @@ impl Aabb {
     /// Distance from `p` to the closed box (0 inside).
     #[inline]
     pub fn distance_to_point(&self, p: Vec3) -> f64 {
-        (self.min - p).max(p - self.max).max(Vec3::ZERO).length()
+        self.distance_squared_to_point(p).sqrt()
+    }
+
+    /// The squared distance from `p` to the box (0 inside).
+    #[inline]
+    pub fn distance_squared_to_point(&self, p: Vec3) -> f64 {
+        (self.min - p).max(p - self.max).max(Vec3::ZERO).length_squared()
     }
 
     /// Whether `p` lies in the closed box.

@@ -169,7 +169,9 @@ impl CellSource for OffsetSource<'_> {
             if d - half > self.radius {
                 continue;
             }
-            if (0..8).all(|k| self.distance(t, corner(cell, k)) <= self.radius) {
+            // the distance is 1-Lipschitz (all corners within the radius when the centre is
+            // within it less the half-diagonal) and convex (none is when the centre is not)
+            if d + half <= self.radius || (d <= self.radius && (0..8).all(|k| self.distance(t, corner(cell, k)) <= self.radius)) {
                 out.clear(); // the cell lies in one neighbourhood
                 return if self.grow { Label::Full } else { Label::Empty };
             }
@@ -264,24 +266,26 @@ impl CellSource for OffsetSource<'_> {
         out.clear();
         // A record is skipped when its distance at the segment's midpoint shows that no
         // point of the segment is within the radius of it, or that every point is nearer
-        // an earlier record (distances change by at most the half length along it), so
-        // its interval lies in that record's: most of a cell's records are skipped so.
+        // the record nearest the midpoint (distances change by at most the half length
+        // along it), so its interval lies in that record's: most of a cell's records are
+        // skipped so. The distances at the midpoint first, then the intervals.
         let (mid, half_len) = ((a + b) * 0.5, 0.5 * (b - a).length());
-        let mut nearest = f64::INFINITY; // from the midpoint to an earlier record
+        let mut at_mid = Vec::with_capacity(cand.len());
         for t in triangles(cand) {
-            let at_mid = self.distance(t, mid);
-            if at_mid + half_len <= self.radius {
+            let d = self.distance(t, mid);
+            if d + half_len <= self.radius {
                 // one neighbourhood holds the whole segment: so does the union
-                out.clear();
                 out.push((0.0, 1.0));
                 return;
             }
-            let skip = at_mid - half_len > self.radius.min(nearest + half_len);
-            nearest = nearest.min(at_mid);
-            if skip {
+            at_mid.push((t, d));
+        }
+        let nearest = at_mid.iter().map(|&(_, d)| d).fold(f64::INFINITY, f64::min);
+        let reach = self.radius.min(nearest + half_len) + half_len;
+        for &(t, d) in &at_mid {
+            if d > reach {
                 continue;
             }
-
             match self.near_interval(t, a, b) {
                 Some((s0, s1)) if s0 <= 0.0 && s1 >= 1.0 => {
                     out.clear();

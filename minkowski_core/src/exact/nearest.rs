@@ -16,10 +16,12 @@ impl TriMesh {
     /// The point of the mesh's triangles nearest `p` and its distance, when that is below
     /// `limit` (every node farther than it is skipped from the start), else `None`.
     pub fn nearest_within(&self, p: Vec3, limit: f64) -> Option<(Vec3, f64)> {
+        // squared distances throughout (the limit's square a few ulps up: it must not cut
+        // off a triangle within the limit), one square root at the end
         let root = self.nodes.first()?;
-        let mut best = (Vec3::ZERO, limit);
+        let mut best = (Vec3::ZERO, limit * limit * (1.0 + 4.0 * f64::EPSILON));
         let mut stack = Vec::with_capacity(64);
-        stack.push((0u32, root.aabb.distance_to_point(p)));
+        stack.push((0u32, root.aabb.distance_squared_to_point(p)));
         while let Some((n, box_distance)) = stack.pop() {
             if box_distance >= best.1 {
                 continue;
@@ -28,14 +30,14 @@ impl TriMesh {
             if node.is_leaf() {
                 let [a, b, c] = self.tris[node.tri as usize].p;
                 let q = closest_on_triangle(p, a, b, c);
-                let d = (p - q).length();
+                let d = (p - q).length_squared();
                 if d < best.1 {
                     best = (q, d);
                 }
                 continue;
             }
             let (l, r) = (node.left, node.left + 1);
-            let (dl, dr) = (self.nodes[l as usize].aabb.distance_to_point(p), self.nodes[r as usize].aabb.distance_to_point(p));
+            let (dl, dr) = (self.nodes[l as usize].aabb.distance_squared_to_point(p), self.nodes[r as usize].aabb.distance_squared_to_point(p));
             // the nearer child is popped first
             if dl <= dr {
                 stack.push((r, dr));
@@ -45,7 +47,8 @@ impl TriMesh {
                 stack.push((r, dr));
             }
         }
-        (best.1 < limit).then_some(best)
+        let distance = best.1.sqrt();
+        (distance < limit).then_some((best.0, distance))
     }
 }
 
