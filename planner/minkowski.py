@@ -283,6 +283,22 @@ def mesh_arrays(mesh: trimesh.Trimesh, name: str) -> tuple[np.ndarray, np.ndarra
     return CheckedParts().arrays(Part(name, mesh, "mesh"))
 
 
+def _widened_by(surf: dict) -> str:
+    """Why the core's bound is above twice the grid's: cells where the lattice may have
+    missed boundary, else plane-resolved cells' deviation or vertices parted where sheets
+    touched (the larger)."""
+    missed = int(surf["complex_cells"]) + int(surf["silent_cells"])
+    if missed:
+        return (f"the lattice may miss boundary in {missed} cells after {surf['refinements']} "
+                f"refinements (a feature thinner than {float(surf['h']):.3g}: "
+                f"{int(surf['complex_cells'])} complex, {int(surf['silent_cells'])} silent ones "
+                f"no piece covers)")
+    deviation, apart = float(surf["planar_deviation"]), float(surf["sheets_apart"])
+    if deviation >= apart:
+        return f"the cells resolved by planes deviate from them by up to {deviation:.3g}"
+    return f"vertices parted where sheets touch moved by up to {apart:.3g}"
+
+
 def _surface_mesh(surf: dict, names: tuple[str, str],
                   warn_complex: bool) -> tuple[trimesh.Trimesh, dict, dict]:
     """The core's surface as a mesh, with the stats and stage seconds both sources report;
@@ -300,13 +316,8 @@ def _surface_mesh(surf: dict, names: tuple[str, str],
     # no grid (h 0: apart hulls, exact to their plane tolerance) misses nothing
     if warn_complex and grid_bound > 0 and float(surf["error_bound"]) > 2.0 * grid_bound * (
             1 + 1e-9):
-        log.warning(
-            "%s ⊕ %s: the lattice may miss boundary in %d cells after %d refinements (a "
-            "feature thinner than %.3g: %d complex, %d silent ones no piece covers), so the "
-            "bound is %.4g, not %.4g; use a smaller eps",
-            names[0], names[1], complex_cells + int(surf["silent_cells"]), surf["refinements"],
-            surf["h"], complex_cells, int(surf["silent_cells"]), surf["error_bound"], grid_bound,
-        )
+        log.warning("%s ⊕ %s: %s, so the bound is %.4g, not %.4g; use a smaller eps",
+                    names[0], names[1], _widened_by(surf), surf["error_bound"], grid_bound)
     per_level = surf["cells_per_level"]
     stats = {
         "cells": _cell_totals(per_level),

@@ -250,16 +250,19 @@ def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = 
 
 
 def _offset_unwarned(mesh, r: float, *, eps: float | None, max_cells: int | None, name: str,
-                     progress: bool | None, method: str, kind: str, repair: bool
-                     ) -> OffsetResult:
+                     progress: bool | None, method: str, kind: str, repair: bool,
+                     refuse_faulty_ball: bool = False) -> OffsetResult:
     """:func:`offset` without its warning of a bound not below the radius (an opening's
     or closing's stage, which refuses that instead); by default at an ``eps`` whose
-    bound is below it when one retry finds one."""
+    bound is below it when one retry finds one. ``refuse_faulty_ball``: a ball asked for
+    whose surface is no clean solid raises :class:`_BallFault` (else it is returned, with
+    a warning)."""
     t0 = time.perf_counter()
     radius, name, part = _prepared(mesh, r, method, name, kind, repair)
 
     def run(step: float | None) -> OffsetResult:
-        return _offset_part(part, radius, step, max_cells, name, progress, method, t0)
+        return _offset_part(part, radius, step, max_cells, name, progress, method, t0,
+                            refuse_faulty_ball=refuse_faulty_ball)
 
     if eps is None:
         return _within_radius(run, part.mesh, radius, None, f"{name} {_verb(radius)}",
@@ -283,8 +286,10 @@ def _check_method(method: str) -> None:
 
 
 def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: int | None,
-                 name: str, progress: bool | None, method: str, t0: float) -> OffsetResult:
-    """:func:`offset` of the classified ``part`` (``t0``: when the work began)."""
+                 name: str, progress: bool | None, method: str, t0: float, *,
+                 refuse_faulty_ball: bool = False) -> OffsetResult:
+    """:func:`offset` of the classified ``part`` (``t0``: when the work began;
+    ``refuse_faulty_ball`` as :func:`_offset_unwarned`'s)."""
     solid = part.mesh
     extent = np.ptp(np.asarray(solid.bounds), axis=0)
     _check_radius_scale(radius, float(np.linalg.norm(extent)), name)
@@ -297,7 +302,8 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
     with StatusLine(progress) as line:
         line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
         if part.solid:
-            done, used = _by_method(solid, radius, step, method, max_cells, name, progress)
+            done, used = _by_method(solid, radius, step, method, max_cells, name, progress,
+                                    refuse_faulty_ball)
         else:
             done, used = _cell_offset(solid, radius, step, max_cells, name, solid=False), "cells"
     surface, bound, stats = done
@@ -345,9 +351,11 @@ def _check_surface_offset(radius: float, method: str, name: str, reason: str) ->
 
 
 def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
-               max_cells: int | None, name: str, progress: bool | None):
+               max_cells: int | None, name: str, progress: bool | None,
+               refuse_faulty_ball: bool = False):
     """``((mesh, error_bound, stats), method used)`` of the solid's offset by ``method``
-    (``"auto"``: the first that applies, :data:`METHODS`)."""
+    (``"auto"``: the first that applies, :data:`METHODS`; ``refuse_faulty_ball`` as
+    :func:`_offset_unwarned`'s)."""
     if method in ("auto", "hull"):
         done = convex_offset(solid, radius, step)
         if done is not None:
@@ -368,6 +376,8 @@ def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
                 return done, "ball"
             what = f"{name} offset by {radius:g}: the ball's surface is no clean solid ({fault})"
             if method == "ball":
+                if refuse_faulty_ball:
+                    raise _BallFault(f"{what}, a fault of minkplan's")
                 log.warning("%s, a fault of minkplan's (method 'cells' gives one)", what)
                 return done, "ball"
             log.warning("%s, a fault of minkplan's; by the cells instead", what)
@@ -514,9 +524,11 @@ def _stages(part: Classified, radius: float, second: float, eps, max_cells,
     # opening inside its input, a closing around it), where mixing a grid and a ball
     # leaves each stage's error in full, on opposite sides
     then = _second_method(method, one.stats["method"])
+    # (the ball auto chose, faulty, has both stages done again by the cells: the cells
+    # after a ball leave each stage's error in full, on opposite sides)
     stage = functools.partial(_offset_unwarned, one.mesh, second, max_cells=max_cells,
                               name=f"{name} ({stage_name})", progress=progress, kind="solid",
-                              repair=False)
+                              repair=False, refuse_faulty_ball=method == "auto")
 
     def second_stage(step: float) -> OffsetResult:
         try:
@@ -528,6 +540,8 @@ def _stages(part: Classified, radius: float, second: float, eps, max_cells,
                 return stage(eps=step, method=method)  # the first's method does not apply
         except (InvalidMeshError, InvalidParameterError) as error:
             raise _stage_output_refused(error, one, f"{name} ({stage_name})", what) from error
+        except _BallFault as fault:
+            raise _StageOutputRefused(one.stats["method"], str(fault)) from fault
 
     two = _within_radius(second_stage, one.mesh, second, eps,
                          f"{what}'s second stage ({name} {_verb(second)})")
@@ -611,9 +625,15 @@ def _stage_output_refused(error: Exception, one: OffsetResult, stage: str, what:
         f"this input")
 
 
+class _BallFault(GeometryError):
+    """The ball's surface is no clean solid (a stage that refuses it: see
+    :func:`_offset_unwarned`)."""
+
+
 class _StageOutputRefused(GeometryError):
     """The second stage of an opening or closing refused the first stage's surface (made
-    by ``first_method``) as a solid: minkplan's fault, not the input's."""
+    by ``first_method``) as a solid, or made a ball surface that is no clean solid:
+    minkplan's fault, not the input's."""
 
     def __init__(self, first_method: str, message: str) -> None:
         super().__init__(message)

@@ -679,3 +679,16 @@ def test_an_exact_sum_written_to_stl_reads_back_closed():
     assert back.is_watertight and back.is_winding_consistent
     assert len(back.vertices) == len(summed.mesh.vertices)
     assert summed.stats["sheets_apart"] < 1e-3 * summed.error_bound  # moved by a hair
+
+
+def test_a_widened_bound_is_put_down_to_what_widened_it():
+    from planner.minkowski import _widened_by
+
+    surf = {"complex_cells": 3, "silent_cells": 2, "refinements": 1, "h": 0.01,
+            "planar_deviation": 0.0, "sheets_apart": 0.0}
+    assert "may miss boundary in 5 cells after 1 refinements" in _widened_by(surf)
+    # no cell missed: the warning said "in 0 cells after 0 refinements" before
+    surf.update(complex_cells=0, silent_cells=0, planar_deviation=0.03, sheets_apart=0.001)
+    assert _widened_by(surf) == "the cells resolved by planes deviate from them by up to 0.03"
+    surf.update(planar_deviation=0.0)
+    assert "parted where sheets touch moved by up to 0.001" in _widened_by(surf)

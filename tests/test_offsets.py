@@ -742,6 +742,8 @@ def test_an_opening_takes_one_method_for_both_stages_and_stays_inside():
     assert first == second
     solid = planner.meshes.validate_solid(base)
     assert opened.mesh.volume < solid.volume
+    # the ball's grown stage there overlaps itself: both stages are done by the cells
+    planner.meshes.validate_solid(opened.mesh, name="opened")
 
 
 def test_a_bound_not_below_the_radius_is_warned_of(caplog):
@@ -1161,3 +1163,30 @@ def test_a_huge_radius_is_refused_without_numpy_warnings():
         for how in (planner.offset, planner.closing):
             with pytest.raises(InvalidParameterError, match=r"more than 1e\+06 times"):
                 how(box, 1e300)
+
+
+def test_an_openings_second_ball_stage_that_is_no_clean_solid_goes_to_the_cells_under_auto(
+        monkeypatch, caplog):
+    """Under auto an opening grows by the ball when it eroded by the ball; a ball surface
+    that is no clean solid there has both stages done again by the cells (it was
+    returned, with a warning that 'cells' gives one; the cells after the ball leave each
+    stage's error in full, on opposite sides). Asked for, the ball is kept."""
+    from shapes import l_bracket
+
+    solid_fault = planner.offsets._solid_fault
+
+    def faulting_grown_stage(mesh, name):
+        return "a fault made up" if name.endswith("(eroded)") else solid_fault(mesh, name)
+
+    monkeypatch.setattr(planner.offsets, "_solid_fault", faulting_grown_stage)
+    with caplog.at_level("WARNING", logger="planner.offsets"):
+        opened = planner.opening(l_bracket(), 0.2, eps=0.05, name="bracket")
+    assert opened.stats["method"] == "cells then cells"
+    assert "(a fault made up), a fault of minkplan's; an opening again by the cells" \
+        in caplog.text
+    assert "gives one" not in caplog.text
+    assert opened.mesh.is_watertight
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="planner.offsets"):
+        by_ball = planner.opening(l_bracket(), 0.2, eps=0.05, name="bracket", method="ball")
+    assert by_ball.stats["method"] == "ball then ball" and "gives one" in caplog.text
