@@ -83,8 +83,10 @@ def crossing_windings(
     """Winding number in front of both faces of each crossing (int64 min: unknown)."""
 def solid_windings(
     vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64], name: str = "mesh"
-) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], CheckedMesh | None]:
-    """Both windings above, and the checked solid when none is negative or unknown."""
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], int, CheckedMesh | None]:
+    """Both windings above, how many crossings have the solid on both sides of both
+    faces (winding 2 or more behind both: shells that overlap), and the checked solid
+    when no winding is negative or unknown."""
 def closed_shell_sizes(
     vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
 ) -> list[int]:

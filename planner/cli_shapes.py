@@ -44,7 +44,7 @@ def _add_offset_parser(sub, common) -> None:
         help="grow or shrink a closed mesh by a radius (offset, erosion, opening, closing)",
         description="Write the offset {x : dist(x, P) <= r} of a closed mesh P (r > 0), its "
         "erosion (r < 0), or with --opening / --closing both in turn, with a two-sided "
-        "error bound. Exit 0; 1: nothing is left (every part of the solid thinner than 2|r|, "
+        "error bound. Exit 0; 1: nothing is left (every part of the solid no thicker than 2|r|, "
         "eroded or opened away; nothing written); 2: bad input.",
     )
     o.add_argument("mesh", help="closed mesh file")
@@ -87,7 +87,7 @@ def made_solid_text(changes: list[tuple[str, dict]]) -> str:
 def cmd_offset(args) -> int:
     out = Path(args.output)
     from planner.offsets import changes_text
-    from planner.output import unknown_mesh_format, unwritable, write_mesh
+    from planner.output import float32_move, unknown_mesh_format, unwritable, write_mesh
 
     problem = unwritable(out) or unknown_mesh_format(out)
     if problem:
@@ -115,10 +115,14 @@ def cmd_offset(args) -> int:
                  "thickness is within their sum of 2r)".format(*stats["stage_bounds"]))
     else:
         bound = f"error bound {result.error_bound:.4g}"
+    # the bound is the float64 mesh's: a float32 format moves it by its rounding too
+    moved = float32_move(result.mesh, out)
+    stored = (f"; {out.suffix} stores float32: the bound is {result.error_bound + moved:.4g} "
+              f"in the file" if moved > 0.01 * result.error_bound else "")
     made = f"; made a solid by: {changes_text(stats['changes'])}" if stats["changes"] else ""
     how_made = f"{stats['method']}: {stats['convex']}" if "convex" in stats else stats["method"]
     sys.stdout.write(f"wrote {out}: {stats['triangles']} triangles, {bound} "
-                     f"({how_made}{of}), {stats['seconds']:.2f} s{made}\n")
+                     f"({how_made}{of}), {stats['seconds']:.2f} s{made}{stored}\n")
     return 0
 
 
@@ -127,6 +131,7 @@ def cmd_depth(args) -> int:
     if missing:
         return _fail(missing)
     import planner
+    from planner.depth import SEPARATION_BY_TRIANGLES
 
     r = planner.penetration_depth(planner.load_mesh(args.a, name=args.a),
                                   planner.load_mesh(args.b, name=args.b),
@@ -150,6 +155,8 @@ def cmd_depth(args) -> int:
         what = (f"penetration depth in [{r.lower:.9g}, {r.upper:.9g}] along ({along})"
                 + ("" if r.converged else f" (wider than the tolerance: {why})"))
     made = made_solid_text([(args.a, r.stats["changes"]["a"]), (args.b, r.stats["changes"]["b"])])
-    sys.stdout.write(f"{args.a} into {args.b}: {what}; {checked}; {r.stats['cells']} cells, "
+    searched = ("boxes apart, no convolution" if r.stats["method"] == SEPARATION_BY_TRIANGLES
+                else f"{r.stats['cells']} cells")
+    sys.stdout.write(f"{args.a} into {args.b}: {what}; {checked}; {searched}, "
                      f"{r.stats['seconds']['total']:.3f} s{made}\n")
     return 0

@@ -66,7 +66,8 @@ class PenetrationDepth:
         tolerance: the interval width asked for (absolute).
         converged: ``upper - lower <= tolerance`` was reached within the cell budget.
         validated: FCL agrees: ``A`` moved by ``translation`` overlaps ``B`` by at most
-            ``tolerance`` (overlapping), or FCL's distance matches (separated).
+            ``tolerance`` (overlapping), or FCL's distance matches and ``A`` moved by
+            ``translation`` touches ``B`` within ``tolerance`` (separated).
         stats: cells classified, facets (of the reduced convolution, those the search
             could reach when the parts overlap), ``smallest_cells`` (cells of the smallest size
             the search could not resolve: when not converged, what held the lower bound
@@ -140,14 +141,17 @@ wider than a tenth of it says next to nothing (``1e3`` on 6 cm parts gave [0.000
 def _fcl_check(a: Part, b: Part, translation: np.ndarray, separated: bool, distance: float,
                tolerance: float) -> tuple[bool, float | None]:
     """Whether FCL agrees, and FCL's distance at the origin (overlapping: ``A`` moved by
-    ``translation`` is valid under the contact tolerance ``tolerance``)."""
+    ``translation`` is valid under the contact tolerance ``tolerance``; separated: the
+    distances match and ``A`` moved by it touches ``B`` within ``tolerance``)."""
     from .validation import FclChecker  # noqa: PLC0415
 
     checker = FclChecker(a.mesh, [b.mesh], contact_tolerance=tolerance)
     fcl_distance = checker.distance(np.zeros(3))
     if separated:
-        ok = abs(fcl_distance - distance) <= 1e-9 * max(distance, 1e-300) + 1e-12
-        return ok, fcl_distance
+        # its distance, and A moved by the translation touching B within the tolerance
+        agrees = abs(fcl_distance - distance) <= 1e-9 * max(distance, 1e-300) + 1e-12
+        touches = checker.distance(translation) <= tolerance and checker.is_valid(translation)
+        return agrees and touches, fcl_distance
     return checker.is_valid(translation), fcl_distance
 
 
@@ -232,12 +236,15 @@ def _search(source: Source, parts: tuple[Part, Part], width: float, cells: int,
     """The core's answer at the origin of ``B ⊕ (−A)`` and the facets it searched: those
     of the cube the search can reach first (:meth:`ExactSource.depth_pair`: two parts
     that overlap a little have few there), the whole reduced convolution when the
-    question reaches beyond them (parts apart, the separation farther than that cube), or
-    at once when the parts' boxes do not overlap (the origin lies outside the sum's box)."""
+    question reaches beyond them (parts apart, the separation farther than that cube); no
+    convolution when the parts' boxes lie apart (:func:`_separation`)."""
     part_a, part_b = parts
     origin = np.zeros(3)
     (a_lo, a_hi), (b_lo, b_hi) = part_a.mesh.bounds, part_b.mesh.bounds
     boxes_overlap = bool(np.all(b_lo - a_hi < 0.0) and np.all(b_hi - a_lo > 0.0))
+    if np.any(b_lo - a_hi > 0.0) or np.any(a_lo - b_hi > 0.0):  # apart, not touching
+        show("the least distance between the parts' triangles")
+        return _separation(part_a, part_b), 0
     if isinstance(source, ExactSource) and boxes_overlap:
         show("convolution facets near the origin")
         near = source.depth_pair(part_b, part_a, origin, width)
@@ -256,6 +263,36 @@ def _search(source: Source, parts: tuple[Part, Part], width: float, cells: int,
     return pair.native.depth(origin, width, max_cells=cells), int(pair.stats["facets"])
 
 
+def _separation(a: Part, b: Part) -> dict:
+    """The core's answer for two parts whose boxes lie apart, without the convolution
+    (parts far apart made one of several GiB): they are disjoint, so their separation is
+    the least distance between their triangles, FCL's (exact up to rounding over every
+    pair its BVHs do not rule out), and the translation that makes them touch takes
+    ``A``'s nearest point to ``B``'s."""
+    import fcl  # noqa: PLC0415
+
+    from .validation.fcl_checker import bvh_model  # noqa: PLC0415
+
+    t0 = time.perf_counter()
+    obj_a, obj_b = (fcl.CollisionObject(bvh_model(p.mesh.vertices, p.mesh.faces), fcl.Transform())
+                    for p in (a, b))
+    result = fcl.DistanceResult()
+    distance = float(fcl.distance(obj_a, obj_b, fcl.DistanceRequest(enable_nearest_points=True),
+                                  result))
+    on_a, on_b = (np.asarray(p, dtype=np.float64) for p in result.nearest_points)
+    return {"point": on_b - on_a, "inside": False, "lower": distance, "upper": distance,
+            "cells": 0, "facets_tried": 0, "smallest_cells": 0, "converged": True,
+            "seconds": time.perf_counter() - t0, "method": SEPARATION_BY_TRIANGLES}
+
+
+SEPARATION_BY_TRIANGLES = "the least distance between the triangles (their boxes lie apart)"
+"""``stats["method"]`` of a depth whose parts' boxes lie apart (:func:`_separation`); else
+:data:`BY_CONVOLUTION`."""
+
+BY_CONVOLUTION = "the exact convolution's facets and cells"
+"""``stats["method"]`` of a depth searched on the exact source."""
+
+
 def _result(found: dict, parts: tuple[Part, Part], facets: int, width: float, validate: bool,
             t0: float) -> PenetrationDepth:
     """The core's answer as a :class:`PenetrationDepth`, checked with FCL (``validate``)."""
@@ -271,6 +308,7 @@ def _result(found: dict, parts: tuple[Part, Part], facets: int, width: float, va
     stats = {"cells": int(found["cells"]), "facets": facets,
              "facets_tried": int(found["facets_tried"]),
              "smallest_cells": int(found["smallest_cells"]), "fcl_distance": fcl_distance,
+             "method": found.get("method", BY_CONVOLUTION),
              "changes": {"a": dict(parts[0].repairs), "b": dict(parts[1].repairs)},
              "seconds": {"search": float(found["seconds"]),
                          "total": time.perf_counter() - t0}}

@@ -63,7 +63,7 @@ from planner.errors import (
 )
 
 from .meshes.kinds import KINDS, Classified, classify
-from .meshes.solids import FACES_INSIDE
+from .meshes.solids import FACE_CROSSINGS, FACES_INSIDE
 from .minkowski import checked_eps, surface_stats
 from .offsets_ball import ball_offset
 from .offsets_convex import convex_closing, convex_offset
@@ -144,6 +144,8 @@ def _name_of(mesh, name: str) -> str:
 
 
 def _radius(r: float) -> float:
+    if isinstance(r, (str, bytes, bool)):  # float() would take "0.1" and True
+        raise InvalidParameterError(f"radius = {r!r}: must be a non-zero finite number")
     try:
         value = float(r)
     except (TypeError, ValueError):
@@ -176,22 +178,26 @@ def _check_radius_scale(radius: float, diagonal: float, name: str) -> None:
 
 
 def _check_boundary_is_every_triangle(solid: trimesh.Trimesh, name: str) -> None:
-    """Refuse to erode a solid some of whose triangles lie inside it (shells that touch
-    or overlap, as a part modelled as several bodies is): the erosion keeps away from its
-    boundary, which those triangles are not part of, and they are all it is given. The
-    count comes with the checked solid (:data:`~planner.meshes.solids.FACES_INSIDE`)."""
-    inner = solid.metadata.get(FACES_INSIDE)
-    if inner is None:  # checked elsewhere: count them here
-        from ._minkowski_core import front_windings  # noqa: PLC0415
+    """Refuse to erode a solid some of whose triangles lie inside it, wholly or in part
+    (shells that touch or overlap, as a part modelled as several bodies is): the erosion
+    keeps away from its boundary, which those triangles are not all part of, and they are
+    all it is given. The counts come with the checked solid
+    (:data:`~planner.meshes.solids.FACES_INSIDE`, :data:`~planner.meshes.solids.FACE_CROSSINGS`)."""
+    inner, crossings = solid.metadata.get(FACES_INSIDE), solid.metadata.get(FACE_CROSSINGS)
+    if inner is None or crossings is None:  # checked elsewhere: count them here
+        from ._minkowski_core import solid_windings  # noqa: PLC0415
 
-        inner = int((front_windings(np.asarray(solid.vertices, dtype=np.float64),
-                                    np.asarray(solid.faces, dtype=np.int64)) != 0).sum())
-    if inner:
+        fronts, _, crossings, _ = solid_windings(np.asarray(solid.vertices, dtype=np.float64),
+                                                 np.asarray(solid.faces, dtype=np.int64), name)
+        inner = int((fronts != 0).sum())
+    if inner or crossings:
+        where = (f"{inner} of its {len(solid.faces)} triangles face into the solid"
+                 if inner else f"its triangles cross each other inside it along {crossings} "
+                 f"segments")
         raise InvalidParameterError(
-            f"{name}: {inner} of its {len(solid.faces)} triangles face into the solid (shells "
-            f"that touch or overlap), so they are not all its boundary; an erosion needs "
-            f"its boundary alone: merge the shells into one first (a mesh union, e.g. "
-            f"manifold3d's)")
+            f"{name}: {where} (shells that touch or overlap), so they are not all its "
+            f"boundary; an erosion needs its boundary alone: merge the shells into one first "
+            f"(a mesh union, e.g. manifold3d's)")
 
 
 METHODS = ("auto", "hull", "ball", "cells")
@@ -328,8 +334,8 @@ def _nothing_left(name: str, depth: float, sheet: float) -> str:
         return (f"{name}: nothing is left of it eroded by {depth:g} but a flat sheet at most "
                 f"{sheet:.3g} thick, too thin to mesh (its thickest part is {2 * depth:g} "
                 f"within that)")
-    return (f"{name}: nothing is left of it eroded by {depth:g} (its thickest part is thinner "
-            f"than {2 * depth:g})")
+    return (f"{name}: nothing is left of it eroded by {depth:g} (its thickest part is no "
+            f"thicker than {2 * depth:g})")
 
 
 def changes_text(changes: dict[str, Any]) -> str:

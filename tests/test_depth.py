@@ -195,6 +195,40 @@ def test_separated_pairs_give_fcl_distance(pair):
     assert not FclChecker(a, [b]).collides(r.translation * (1 - 1e-6))
 
 
+def test_parts_whose_boxes_lie_apart_are_measured_without_the_convolution():
+    """Boxes apart: the separation is the least distance between the triangles, with no
+    convolution built (IndustReal's medium gear 0.2 m from the large one was refused: the
+    convolution needed 2.9 GiB). A unit cube and one turned 45 degrees about z, 3 along x:
+    its vertical edge lies 2.5 - sqrt(1/2) from the first's face."""
+    from planner.depth import SEPARATION_BY_TRIANGLES
+
+    a = shapes.box()
+    b = shapes.box(center=(3.0, 0.0, 0.0))
+    b.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 4, [0, 0, 1],
+                                                              [3.0, 0.0, 0.0]))
+    r = planner.penetration_depth(a, b)
+    assert r.stats["method"] == SEPARATION_BY_TRIANGLES and r.stats["facets"] == 0
+    assert r.separated and r.distance == pytest.approx(2.5 - np.sqrt(0.5), rel=1e-12)
+    np.testing.assert_allclose(r.translation, [r.distance, 0.0, 0.0], atol=1e-12)
+    assert r.validated
+    assert FclChecker(a, [b]).collides(r.translation * (1 + 1e-6))
+    assert not FclChecker(a, [b]).collides(r.translation * (1 - 1e-6))
+
+
+@pytest.mark.assets
+def test_real_gears_far_apart_give_their_separation():
+    from conftest import asset
+
+    gears = "assemblies/industreal_gears/meshes/industreal_gear_{}.obj"
+    medium = planner.load_mesh(asset(gears.format("medium")))
+    large = planner.load_mesh(asset(gears.format("large")))
+    medium.apply_translation([0.2, 0.0, 0.0])
+    r = planner.penetration_depth(medium, large)
+    assert r.separated and r.validated
+    assert r.distance == pytest.approx(FclChecker(medium, [large]).distance(np.zeros(3)),
+                                       rel=1e-9)
+
+
 @pytest.mark.parametrize("center", [(1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (1.0, 1.0, 1.0)])
 def test_touching_parts_have_zero_depth(center):
     # face, edge and corner contact: in contact (closed solids), not separated

@@ -386,6 +386,9 @@ def test_bad_radii_and_an_erosion_that_leaves_nothing_are_clear_errors(caplog):
         planner.offset(box, 0.0)
     with pytest.raises(InvalidParameterError, match="non-zero finite"):
         planner.offset(box, math.nan)
+    for not_a_number in ("0.1", True):
+        with pytest.raises(InvalidParameterError, match="non-zero finite"):
+            planner.offset(box, not_a_number)
     with pytest.raises(EmptyResultError, match="nothing is left"):
         planner.offset(box, -0.6, eps=0.05)
     with pytest.raises(EmptyResultError, match="nothing is left"):
@@ -1190,3 +1193,42 @@ def test_an_openings_second_ball_stage_that_is_no_clean_solid_goes_to_the_cells_
     with caplog.at_level("WARNING", logger="planner.offsets"):
         by_ball = planner.opening(l_bracket(), 0.2, eps=0.05, name="bracket", method="ball")
     assert by_ball.stats["method"] == "ball then ball" and "gives one" in caplog.text
+
+
+@pytest.mark.parametrize("method", ["cells", "ball", "auto"])
+def test_an_erosion_of_bars_crossing_each_other_is_refused(method):
+    """An L made of two bars in one file, overlapping at a corner: no triangle has the
+    solid in front of its samples, but the bars' faces cross, and parts of them lie
+    inside the other bar. The cells eroded them as if every triangle were boundary: three
+    boxes, 0.145 off, with a bound of 0.014 (and the ball said the complement was no
+    solid). Refused, naming the crossings."""
+    bars = trimesh.util.concatenate([
+        trimesh.creation.box([2.0, 0.5, 0.5], trimesh.transformations.translation_matrix(
+            [1.0, 0.25, 0.25])),
+        trimesh.creation.box([0.5, 2.0, 0.5], trimesh.transformations.translation_matrix(
+            [0.25, 1.0, 0.25]))])
+    with pytest.raises(InvalidParameterError, match="cross each other inside it along .* segments"):
+        planner.offset(bars, -0.1, eps=0.02, method=method)
+    # grown, the union is what is offset: allowed
+    assert planner.offset(bars, 0.1, eps=0.02, method="cells").mesh.is_watertight
+
+
+def test_a_float32_file_is_said_to_widen_the_bound_by_its_rounding(tmp_path, capsys):
+    """The bound is the float64 mesh's; an STL stores float32, which moves a box eroded
+    exactly (bound 2e-9) by 1e-7: the command says what the bound is in the file."""
+    import re
+
+    part = tmp_path / "box.obj"
+    trimesh.creation.box([1.0, 0.6, 0.4]).export(part)
+    out = tmp_path / "eroded.stl"
+    assert main(["offset", str(part), "-r", "-0.1", "-o", str(out), "--no-progress"]) == 0
+    said = capsys.readouterr().out
+    in_file = float(re.search(r"stores float32: the bound is ([\d.e+-]+) in the file",
+                              said).group(1))
+    written = trimesh.load(out)
+    exact = np.array([[-0.4, -0.2, -0.1], [0.4, 0.2, 0.1]])
+    moved = np.abs(written.bounds - exact).max()
+    assert 1e-9 < moved <= in_file
+    assert main(["offset", str(part), "-r", "-0.1", "-o", str(tmp_path / "e.obj"),
+                 "--no-progress"]) == 0
+    assert "stores float32" not in capsys.readouterr().out

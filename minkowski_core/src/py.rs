@@ -446,9 +446,10 @@ fn crossing_windings<'py>(py: Python<'py>, vertices: PyReadonlyArray2<'py, f64>,
 }
 
 /// The winding numbers of the closed mesh (vertices (n, 3), faces (m, 3)), as
-/// [`front_windings`] and [`crossing_windings`] give them, and its [`CheckedMesh`] as a
-/// solid when none is negative or untold (else `None`): one check where the three calls
-/// would make three. `name` names the mesh in errors. Parallel.
+/// [`front_windings`] and [`crossing_windings`] give them, how many crossings have the
+/// solid on both sides of both triangles (shells that overlap), and its [`CheckedMesh`]
+/// as a solid when no winding is negative or untold (else `None`): one check where the
+/// three calls would make three. `name` names the mesh in errors. Parallel.
 #[pyfunction]
 #[pyo3(signature = (vertices, faces, name="mesh"))]
 #[allow(clippy::type_complexity)]
@@ -457,12 +458,12 @@ fn solid_windings<'py>(
     vertices: PyReadonlyArray2<'py, f64>,
     faces: PyReadonlyArray2<'py, i64>,
     name: &str,
-) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, Option<CheckedMesh>)> {
+) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, usize, Option<CheckedMesh>)> {
     let (verts, tris) = arrays_of(&vertices, &faces, name)?;
     let windings = py.detach(|| TriMesh::checked_windings(verts, &tris, name))?;
     let told = |ws: Vec<Option<i64>>| ws.into_iter().map(|w| w.unwrap_or(i64::MIN)).collect::<Vec<i64>>().into_pyarray(py);
     let checked = windings.solid.ok().map(|mesh| CheckedMesh { inner: Arc::new(mesh) });
-    Ok((told(windings.fronts), told(windings.wedges), checked))
+    Ok((told(windings.fronts), told(windings.wedges), windings.crossings_inside, checked))
 }
 
 /// The winding numbers of `points` (k, 3) for the closed mesh (vertices (n, 3), faces

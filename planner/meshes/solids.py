@@ -128,7 +128,7 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
             f"opposite ways overlap); typically polygons triangulated wrongly by the "
             f"exporter{obj_hint(mesh)}"
         )
-    faces_inside, checked = _check_winding(vertices, faces, label)
+    faces_inside, crossings, checked = _check_winding(vertices, faces, label)
     if report["flipped_shells"]:  # said once the result is a solid
         log.info("%s: %d of %d closed shell(s) were inside out; flipped them", label,
                  report["flipped_shells"], report["shells"])
@@ -136,6 +136,7 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
     result.metadata.update(getattr(mesh, "metadata", {}) or {})
     result.metadata["name"] = name
     result.metadata[FACES_INSIDE] = faces_inside
+    result.metadata[FACE_CROSSINGS] = crossings
     remember(result, checked, solid=True)
     if report["merged_vertices"] or report["removed_faces"]:
         log.debug(
@@ -169,21 +170,29 @@ the solid in front of them too (winding number above 0 there: shells that touch 
 overlap), so are not part of its boundary."""
 
 
-def _check_winding(vertices: np.ndarray, faces: np.ndarray, label: str) -> tuple[int, Any]:
+FACE_CROSSINGS = "face_crossings"
+"""Key of a solid's ``metadata`` (from :func:`validate_solid`): along how many segments
+its faces cross each other with the solid on both sides of both (shells that overlap):
+there, too, parts of faces lie inside the solid, though no face need have it in front of
+its samples (an L made of two bars overlapping at its corner)."""
+
+
+def _check_winding(vertices: np.ndarray, faces: np.ndarray, label: str
+                   ) -> tuple[int, int, Any]:
     """Raise unless the closed, consistently wound surface bounds a solid: its exact
     winding number (the core's) is never negative, neither in front of a face nor where
     faces cross (see the module's conventions). Returns how many faces have the solid in
-    front of them too (:data:`FACES_INSIDE`), and the core's checked solid
-    (:mod:`.checked`)."""
+    front of them too (:data:`FACES_INSIDE`), along how many segments faces cross inside
+    it (:data:`FACE_CROSSINGS`), and the core's checked solid (:mod:`.checked`)."""
     from planner._minkowski_core import solid_windings  # noqa: PLC0415
 
     untold = np.iinfo(np.int64).min
-    fronts, wedges, checked = solid_windings(vertices, faces, label)
+    fronts, wedges, crossings_inside, checked = solid_windings(vertices, faces, label)
     inverted = int(((fronts < 0) & (fronts != untold)).sum())
     inverted_wedges = int(((wedges < 0) & (wedges != untold)).sum())
     unknown = int((fronts == untold).sum() + (wedges == untold).sum())
     if checked is not None and not (inverted or inverted_wedges or unknown):
-        return int((fronts != 0).sum()), checked
+        return int((fronts != 0).sum()), crossings_inside, checked
     told = np.concatenate([fronts[fronts != untold], wedges[wedges != untold]])
     detail = []
     if inverted or inverted_wedges:

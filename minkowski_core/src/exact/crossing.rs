@@ -77,21 +77,30 @@ impl TriMesh {
     /// The winding number in the wedge in front of both triangles of each crossing (near
     /// the middle of its segment), `None` where it could not be told.
     pub fn crossing_windings(&self, crossings: &[Crossing]) -> Vec<Option<i64>> {
+        crossings.par_iter().map(|c| self.wedge_winding(c, 1.0)).collect()
+    }
+
+    /// How many crossings have the solid twice over in the wedge behind both triangles
+    /// (winding number 2 or more, told): there each triangle has the solid on both of
+    /// its sides, so is not all boundary (shells that overlap).
+    pub fn crossings_inside(&self, crossings: &[Crossing]) -> usize {
+        crossings.par_iter().filter(|c| self.wedge_winding(c, -1.0).is_some_and(|w| w >= 2)).count()
+    }
+
+    /// The winding number near the middle of the crossing's segment, in the wedge in front
+    /// of both triangles when `side` is positive, behind both when negative; `None` where
+    /// it could not be told, 0 where the normals are nearly opposite (no wedge).
+    fn wedge_winding(&self, c: &Crossing, side: f64) -> Option<i64> {
         let scale = self.aabb.diagonal().max(1e-300);
-        crossings
-            .par_iter()
-            .map(|c| {
-                let (ns, nt) = (self.tris[c.tris[0] as usize].n, self.tris[c.tris[1] as usize].n);
-                let bisector = ns + nt;
-                if bisector.length() < 1e-3 {
-                    return Some(0); // nearly opposite normals: no wedge in front of both to speak of
-                }
-                let d = bisector.normalize();
-                let len = (c.seg[1] - c.seg[0]).length();
-                let lift = (1e-7 * scale).min(1e-3 * len);
-                [0.5, 0.3, 0.7].iter().find_map(|&f| self.winding(c.seg[0] + (c.seg[1] - c.seg[0]) * f + d * lift))
-            })
-            .collect()
+        let (ns, nt) = (self.tris[c.tris[0] as usize].n, self.tris[c.tris[1] as usize].n);
+        let bisector = ns + nt;
+        if bisector.length() < 1e-3 {
+            return Some(0);
+        }
+        let d = bisector.normalize() * side;
+        let len = (c.seg[1] - c.seg[0]).length();
+        let lift = (1e-7 * scale).min(1e-3 * len);
+        [0.5, 0.3, 0.7].iter().find_map(|&f| self.winding(c.seg[0] + (c.seg[1] - c.seg[0]) * f + d * lift))
     }
 }
 

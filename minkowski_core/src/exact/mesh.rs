@@ -106,6 +106,9 @@ pub struct Windings {
     pub fronts: Vec<Option<i64>>,
     /// Per crossing of two triangles.
     pub wedges: Vec<Option<i64>>,
+    /// How many crossings have the solid on both sides of both triangles
+    /// ([`TriMesh::crossings_inside`]).
+    pub crossings_inside: usize,
     /// The solid, or the error saying why the mesh is none.
     pub solid: CoreResult<TriMesh>,
 }
@@ -137,6 +140,7 @@ impl TriMesh {
         let fronts = mesh.front_windings();
         let crossings = mesh.crossings();
         let wedges = mesh.crossing_windings(&crossings);
+        let crossings_inside = mesh.crossings_inside(&crossings);
         let negative = |ws: &[Option<i64>]| ws.iter().filter(|w| w.is_some_and(|w| w < 0)).count();
         let unknown = |ws: &[Option<i64>]| ws.iter().filter(|w| w.is_none()).count();
         let (inverted, inverted_wedges) = (negative(&fronts), negative(&wedges));
@@ -155,7 +159,7 @@ impl TriMesh {
             mesh.solid = true;
             Ok(mesh)
         };
-        Ok(Windings { fronts, wedges, solid })
+        Ok(Windings { fronts, wedges, crossings_inside, solid })
     }
 
     /// Whether every edge of `faces` is used once in each direction.

@@ -197,3 +197,16 @@ fn a_cavity_joined_to_a_box_at_a_corner_stays_a_hole() {
         }
     }
 }
+
+#[test]
+fn crossings_inside_are_told_where_shells_overlap_and_not_on_one_shell() {
+    // an L of two bars overlapping at its corner: no face has the solid in front of its
+    // samples, but the bars' faces cross inside the other bar
+    let l = boxes_mesh(&[([0.0; 3], [2.0, 0.5, 0.5]), ([0.0; 3], [0.5, 2.0, 0.5])]);
+    let crossings = l.crossings();
+    assert!(!crossings.is_empty());
+    assert_eq!(l.crossings_inside(&crossings), crossings.len(), "every crossing is inside both bars");
+    assert!(l.crossing_windings(&crossings).iter().all(|&w| w == Some(0)), "outside both in front");
+    let one = box_mesh([0.0; 3], [1.0, 2.0, 3.0]);
+    assert_eq!(one.crossings_inside(&one.crossings()), 0);
+}
