@@ -48,9 +48,13 @@ LEAF_BYTES = 128
 91–105 B per leaf over 1.4M and 5.6M leaves, exact and decomposition sources: the leaf,
 its index entry and the build's transient lists)."""
 
-SURFACE_CELL_BYTES = 640
+SURFACE_CELL_BYTES = 1024
 """Peak bytes per octree leaf of a sum's or an offset's surface, with its records, lattice
-signs, edges and triangles (measured 591–611 B per leaf over 1.5M–6.7M leaves)."""
+signs, edges and triangles, as the cells' share of the limit: measured 591–611 B per leaf
+over 1.5M–6.7M leaves of curved surfaces, but 905 B (the whole peak over 4.4M leaves) to
+about 1,700 B (over some 8M) on an L of two 2 x 0.5 bars grown by 1 mm, whose cells its
+faces' planes resolve (their polygons kept per cell): at 640 B that run, allowed under a
+10 GiB limit, peaked at 13.9 GB. The cells take half the limit, so this keeps it whole."""
 
 DEPTH_CELL_BYTES = 256
 """Bytes per cell of a penetration-depth search (a box, its bounds and a queue entry)."""

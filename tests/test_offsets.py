@@ -1232,3 +1232,17 @@ def test_a_float32_file_is_said_to_widen_the_bound_by_its_rounding(tmp_path, cap
     assert main(["offset", str(part), "-r", "-0.1", "-o", str(tmp_path / "e.obj"),
                  "--no-progress"]) == 0
     assert "stores float32" not in capsys.readouterr().out
+
+
+def test_an_offset_whose_planar_cells_would_pass_the_memory_limit_is_refused():
+    """An L of two 2 x 0.5 bars grown by 1 mm at the default eps needs some 8M cells, each
+    holding its faces' plane polygons: allowed under a 10 GiB limit, it peaked at 13.9 GB
+    (the budget took 640 B a cell). Refused now, in one line naming the setting."""
+    from planner.errors import ResourceLimitError
+
+    bars = trimesh.creation.box([2.0, 0.5, 0.5], trimesh.transformations.translation_matrix(
+        [1.0, 0.25, 0.25])).union(trimesh.creation.box(
+            [0.5, 2.0, 0.5], trimesh.transformations.translation_matrix([0.25, 1.0, 0.25])),
+        engine="manifold")
+    with planner.memory_limit(10), pytest.raises(ResourceLimitError, match="memory-limit"):
+        planner.offset(bars, 0.001, method="cells")
