@@ -275,10 +275,10 @@ fn may_weld(p: Vec3, q: Vec3) -> bool {
 /// sheets of the surface closed over the same loop from either side (the fills of a
 /// crevice's holes) meet there without sharing a vertex, and a crossing held a hair off a
 /// lattice point ([`super::EDGE_CLAMP`]) lies that close to its neighbour on the next
-/// edge. Such a pair joined by an edge is made one (the edge collapsed, [`collapse_edge`])
-/// where the surface stays a closed manifold and no triangle turns over; the vertices of
-/// the other pairs each move into their own triangles as [`unzip_touching_sheets`] moves
-/// a copy. `s.sheets_apart` grows by the longest edge collapsed plus the longest move
+/// edge. Such a pair joined by an edge is made one (the edge collapsed, [`collapse_edge`],
+/// keeping either end) where the surface stays a closed manifold and no triangle turns
+/// over; the vertices of the other pairs each move into their own triangles as
+/// [`unzip_touching_sheets`] moves a copy. `s.sheets_apart` grows by the longest edge collapsed plus the longest move
 /// (a vertex may have been moved before, and a kept end may move after its collapse).
 /// Returns how many vertices were collapsed or moved clear of every other (a move held
 /// short by thin triangles about the vertex counts none).
@@ -298,9 +298,13 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
     let mut collapsed: FastSet<u32> = FastSet::default();
     let mut longest_collapse: f64 = 0.0;
     for &(u, v) in &pairs {
-        if !collapsed.contains(&u) && !collapsed.contains(&v) && collapse_edge(s, &mut star, &mut gone, u, v) {
+        if collapsed.contains(&u) || collapsed.contains(&v) {
+            continue;
+        }
+        // either end may be kept: which one turns no triangle over depends on the side
+        if let Some(gone_end) = [(u, v), (v, u)].into_iter().find_map(|(keep, drop)| collapse_edge(s, &mut star, &mut gone, keep, drop).then_some(drop)) {
             longest_collapse = longest_collapse.max((s.vertices[u as usize] - s.vertices[v as usize]).length());
-            collapsed.insert(v);
+            collapsed.insert(gone_end);
         }
     }
     let mut pairs = pairs;
