@@ -241,11 +241,11 @@ def _search(source: Source, parts: tuple[Part, Part], width: float, cells: int,
     part_a, part_b = parts
     origin = np.zeros(3)
     (a_lo, a_hi), (b_lo, b_hi) = part_a.mesh.bounds, part_b.mesh.bounds
-    boxes_overlap = bool(np.all(b_lo - a_hi < 0.0) and np.all(b_hi - a_lo > 0.0))
-    if np.any(b_lo - a_hi > 0.0) or np.any(a_lo - b_hi > 0.0):  # apart, not touching
+    gap = np.maximum(b_lo - a_hi, a_lo - b_hi)  # per axis: > 0 apart, < 0 overlapping
+    if np.any(gap > 0.0):  # apart, not touching
         show("the least distance between the parts' triangles")
         return _separation(part_a, part_b), 0
-    if isinstance(source, ExactSource) and boxes_overlap:
+    if isinstance(source, ExactSource) and np.all(gap < 0.0):
         show("convolution facets near the origin")
         near = source.depth_pair(part_b, part_a, origin, width)
         show(f"searching cells down to a {width:.3g} wide interval")
