@@ -463,7 +463,7 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
     t0 = time.perf_counter()
     radius, name, part = _prepared(mesh, first, method, name, kind, repair)
     if not part.solid:
-        _refuse_surface_closing(name)
+        _refuse_surface_closing(name, kind)
     what = "an opening" if first < 0 else "a closing"
     if first > 0 and method in ("auto", "hull"):
         itself = _convex_closing(part, radius, eps, name, t0)
@@ -654,12 +654,13 @@ def _eps_below(done: OffsetResult, radius: float) -> float:
     return done.eps * abs(radius) / done.error_bound
 
 
-def _refuse_surface_closing(name: str) -> None:
+def _refuse_surface_closing(name: str, kind: str) -> None:
     """An opening erodes first (a surface has no inside); a closing's grown triangles
     eroded by as much are the triangles again, of no thickness."""
+    taken = " (kind 'surface' asked for)" if kind == "surface" else ""
     raise InvalidParameterError(f"{name}: an opening or closing needs a closed solid, and it "
-                                f"is a surface (grown and eroded by as much, its triangles "
-                                f"are themselves again, of no thickness)")
+                                f"is taken for a surface{taken} (grown and eroded by as much, "
+                                f"its triangles are themselves again, of no thickness)")
 
 
 def _positive_radius(r: float, what: str) -> float:

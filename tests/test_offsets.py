@@ -838,6 +838,9 @@ def test_a_surface_has_no_erosion_and_a_solid_that_is_none_says_how_to_grow_it(c
     for how in (planner.closing, planner.opening):
         with pytest.raises(InvalidParameterError, match="or closing needs a closed solid"):
             how(soup, 0.1, eps=0.05, kind="surface")
+        # a closed box taken for its triangles: the message says it was asked to be
+        with pytest.raises(InvalidParameterError, match=r"\(kind 'surface' asked for\)"):
+            how(trimesh.creation.box(), 0.1, eps=0.05, kind="surface")
 
 
 def test_a_part_far_from_the_origin_reads_back_as_written(tmp_path):
