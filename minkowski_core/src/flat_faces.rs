@@ -1,11 +1,15 @@
-//! The convex flat faces of a mesh: edge-connected triangles on one plane, facing the same
-//! way, whose union is one convex polygon (a box's square faces, a prism's caps).
+//! The flat faces of a mesh: edge-connected triangles on one plane, facing the same way
+//! (a box's square faces, a prism's caps, a gear's toothed top).
 //!
-//! The column over such a face (the points whose projection on its plane lies in it) is a
+//! The column over a convex face (the points whose projection on its plane lies in it) is a
 //! convex prism bounded by the half-planes of the face's boundary edges, so a box lies in
-//! it exactly when its eight corners do — the test [`FlatFaces::over`] gives. The offset
-//! source uses it to see where a triangle's neighbourhood is the face's slab even over the
-//! diagonals between a face's triangles (see [`crate::offset`]).
+//! it exactly when its eight corners do — the test [`FlatFaces::over`] gives. Over a face
+//! that is not convex, a box lies in the column of some of its triangles exactly when its
+//! shadow holds a point over one of them and meets none of the walls over their union's
+//! boundary edges ([`FlatFaces::across`] tells those: no triangle of the face across them
+//! among the ones taken; [`wall_meets`] is the wall test, conservative). The offset source
+//! uses both to see where a triangle's neighbourhood is the face's slab even over the edges
+//! between a face's triangles (see [`crate::offset`]).
 //!
 //! Entry point: [`FlatFaces::new`].
 
@@ -23,29 +27,57 @@ const COPLANAR: f64 = 1e-12;
 /// quadratic); their triangles keep their own columns.
 const MAX_BOUNDARY: usize = 256;
 
-/// Per triangle, its convex face's boundary half-planes, if it has one.
+/// Per triangle, its flat face, and that face's boundary half-planes when it is convex.
 pub struct FlatFaces {
-    /// Per triangle: the index of its face in `edges`, or `u32::MAX`.
+    /// Per triangle: the index of its convex face in `edges`, or `u32::MAX`.
     face_of: Vec<u32>,
-    /// Per face: its boundary edges as `(m, q)`: inside is `(x − q) · m >= 0`.
+    /// Per convex face: its boundary edges as `(m, q)`: inside is `(x − q) · m >= 0`.
     edges: Vec<Vec<(Vec3, Vec3)>>,
+    /// Per triangle: its flat face of more than one triangle, or `u32::MAX`.
+    group: Vec<u32>,
+    /// Per triangle and edge `k` (from corner `k` to `k + 1`): the triangle of its flat face
+    /// across that edge, or `u32::MAX` on the face's boundary.
+    across: Vec<[u32; 3]>,
 }
 
 impl FlatFaces {
     /// The convex flat faces of `mesh` (triangles of non-convex or holed faces have none).
     pub fn new(mesh: &TriMesh) -> FlatFaces {
         let tol = COPLANAR * mesh.aabb.diagonal().max(f64::MIN_POSITIVE);
-        let groups = coplanar_groups(mesh, tol);
+        let (groups, mut across) = coplanar_groups(mesh, tol);
         let mut face_of = vec![u32::MAX; mesh.tris.len()];
+        let mut group = vec![u32::MAX; mesh.tris.len()];
         let mut edges = Vec::new();
-        for members in groups.into_iter().filter(|g| g.len() > 1) {
+        for (g, members) in groups.into_iter().filter(|g| g.len() > 1).enumerate() {
+            for &t in &members {
+                group[t] = g as u32;
+            }
             let Some(boundary) = convex_boundary(mesh, &members, tol) else { continue };
             for &t in &members {
                 face_of[t] = edges.len() as u32;
             }
             edges.push(boundary);
         }
-        FlatFaces { face_of, edges }
+        for (t, sides) in across.iter_mut().enumerate() {
+            for u in sides.iter_mut().filter(|u| **u != u32::MAX) {
+                if group[*u as usize] != group[t] {
+                    *u = u32::MAX; // (joined by a non-manifold edge only)
+                }
+            }
+        }
+        FlatFaces { face_of, edges, group, across }
+    }
+
+    /// The flat face of more than one triangle that triangle `t` is part of, when it is not
+    /// convex (a convex one's column is [`FlatFaces::over`]'s).
+    pub fn concave_group(&self, t: usize) -> Option<u32> {
+        (self.group[t] != u32::MAX && self.face_of[t] == u32::MAX).then_some(self.group[t])
+    }
+
+    /// The triangle of `t`'s flat face across its edge `k` (from corner `k` to `k + 1`).
+    pub fn across(&self, t: usize, k: usize) -> Option<u32> {
+        let u = self.across[t][k];
+        (u != u32::MAX).then_some(u)
     }
 
     /// Whether triangle `t` belongs to a convex face of more than one triangle.
@@ -64,10 +96,11 @@ impl FlatFaces {
 }
 
 /// The sets of edge-connected triangles on one plane facing one way (sliver triangles, with
-/// no normal, are on their own).
-fn coplanar_groups(mesh: &TriMesh, tol: f64) -> Vec<Vec<usize>> {
-    let mut by_edge: HashMap<(u32, u32), usize> = HashMap::new();
+/// no normal, are on their own), and per triangle and edge the triangle joined to it there.
+fn coplanar_groups(mesh: &TriMesh, tol: f64) -> (Vec<Vec<usize>>, Vec<[u32; 3]>) {
+    let mut by_edge: HashMap<(u32, u32), (usize, usize)> = HashMap::new();
     let mut uf = UnionFind::new(mesh.tris.len());
+    let mut across = vec![[u32::MAX; 3]; mesh.tris.len()];
     for (t, f) in mesh.faces.iter().enumerate() {
         if mesh.tris[t].n == Vec3::ZERO {
             continue;
@@ -75,14 +108,16 @@ fn coplanar_groups(mesh: &TriMesh, tol: f64) -> Vec<Vec<usize>> {
         for k in 0..3 {
             let (a, b) = (f[k], f[(k + 1) % 3]);
             // the neighbour across this edge uses it the other way round
-            if let Some(&u) = by_edge.get(&(b, a)) {
+            if let Some(&(u, j)) = by_edge.get(&(b, a)) {
                 let (nt, nu) = (mesh.tris[t].n, mesh.tris[u].n);
                 let height = (mesh.tris[u].p[0] - mesh.tris[t].p[0]).dot(nt).abs();
                 if 1.0 - nt.dot(nu) <= COPLANAR && height <= tol {
                     uf.union(t, u);
+                    across[t][k] = u as u32;
+                    across[u][j] = t as u32;
                 }
             }
-            by_edge.insert((a, b), t);
+            by_edge.insert((a, b), (t, k));
         }
     }
     let mut groups: HashMap<usize, Vec<usize>> = HashMap::new();
@@ -91,7 +126,28 @@ fn coplanar_groups(mesh: &TriMesh, tol: f64) -> Vec<Vec<usize>> {
     }
     let mut out: Vec<Vec<usize>> = groups.into_values().collect();
     out.sort_unstable_by_key(|g| g[0]);
-    out
+    (out, across)
+}
+
+/// Whether the box with corners `corners` may meet the wall over the edge `a → b` of a flat
+/// face (the points `a + s (b − a) + u n`, `s` in `[0, 1]`, `u` any, `n` the face's normal),
+/// `m` the edge's in-plane normal: the box reaches both sides of the wall's plane (or
+/// touches it) and overlaps the edge's extent along it. Conservative: `true` near the
+/// edge's ends when the box passes beside them.
+pub fn wall_meets(corners: &[Vec3; 8], a: Vec3, b: Vec3, m: Vec3) -> bool {
+    let len = (b - a).length();
+    if len == 0.0 {
+        return false;
+    }
+    let along = (b - a) / len;
+    let (mut across_lo, mut across_hi, mut along_lo, mut along_hi) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for &x in corners {
+        let w = x - a;
+        let (c, l) = (w.dot(m), w.dot(along));
+        (across_lo, across_hi) = (across_lo.min(c), across_hi.max(c));
+        (along_lo, along_hi) = (along_lo.min(l), along_hi.max(l));
+    }
+    across_lo <= 0.0 && across_hi >= 0.0 && along_hi >= 0.0 && along_lo <= len
 }
 
 /// The inward half-planes of the boundary edges of the triangles `members` (one plane),
@@ -139,6 +195,34 @@ mod tests {
         let faces = FlatFaces::new(&mesh(&v, &f));
         assert!((0..6).all(|t| !faces.has_face(t)));
         assert!(!faces.over(0, Vec3::new(1.5, 1.5, 0.0)));
+    }
+
+    #[test]
+    fn an_l_shaped_face_tells_the_triangles_across_its_inner_edges() {
+        // an L of three unit squares fanned from (0, 0): the fan's inner edges join its
+        // triangles, its outline has none across
+        let v = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 1.0, 0.0], [1.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 2.0, 0.0]];
+        let f = [[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]];
+        let faces = FlatFaces::new(&mesh(&v, &f));
+        assert!((0..4).all(|t| faces.concave_group(t) == Some(0)));
+        assert_eq!((faces.across(0, 2), faces.across(1, 0)), (Some(1), Some(0))); // over 0 → 2
+        assert_eq!((faces.across(0, 0), faces.across(1, 1), faces.across(3, 1)), (None, None, None));
+        // a convex face has no concave group
+        let square = FlatFaces::new(&mesh(&v[..4], &[[0, 1, 2], [0, 2, 3]]));
+        assert!(square.concave_group(0).is_none() && square.has_face(0));
+    }
+
+    #[test]
+    fn a_wall_is_met_by_boxes_across_it_within_its_edge() {
+        let corners = |c: Vec3, h: f64| -> [Vec3; 8] {
+            std::array::from_fn(|k| c + Vec3::new(if k & 1 == 0 { -h } else { h }, if k & 2 == 0 { -h } else { h }, if k & 4 == 0 { -h } else { h }))
+        };
+        // the wall over the edge (0, 0, 0) → (1, 0, 0), inside towards +y
+        let (a, b, m) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        assert!(wall_meets(&corners(Vec3::new(0.5, 0.0, 7.0), 0.1), a, b, m)); // high above it
+        assert!(!wall_meets(&corners(Vec3::new(0.5, 0.2, 0.0), 0.1), a, b, m)); // beside it
+        assert!(!wall_meets(&corners(Vec3::new(1.2, 0.0, 0.0), 0.1), a, b, m)); // past its end
+        assert!(wall_meets(&corners(Vec3::new(1.05, 0.0, 0.0), 0.1), a, b, m)); // over its end
     }
 
     #[test]

@@ -21,18 +21,20 @@
 //! them a stretch is wholly inside or outside `P`.
 //!
 //! Flat parts come out exact ([`CellSource::plane_cut`]): a cell whose every point projects
-//! into a record triangle, or into the convex flat face it is part of ([`FlatFaces`]: the
-//! cell lies in the column over it), meets the neighbourhoods of that face's triangles
-//! only in its slab `|n · (x − p)| <= r`, so when only one face of the slab
-//! crosses the cell, the offset's boundary there lies on that plane. A cell where every
-//! record is such a triangle is cut by those planes (at most three), as the exact source's
-//! flat facets are: the faces of a grown box, the faces, edges and corners of an eroded one.
+//! into a record triangle, into the convex flat face it is part of, or into the union of
+//! the records of its flat face that is not convex ([`FlatFaces`]: the cell lies in the
+//! column over them), meets the neighbourhoods of that face's triangles only in its slab
+//! `|n · (x − p)| <= r`, so when only one face of the slab crosses the cell, the offset's
+//! boundary there lies on that plane. A cell where every record is such a triangle is cut
+//! by those planes (at most [`MAX_PLANES`]), as the exact source's flat facets are: the
+//! faces of a grown box or of a gear's toothed top, the faces, edges and corners of an
+//! eroded box.
 
 use crate::exact::TriMesh;
-use crate::flat_faces::FlatFaces;
+use crate::flat_faces::{wall_meets, FlatFaces};
 use crate::math::{Aabb, Vec3};
 use crate::octree::{merge_sorted, CellSource, Label};
-use crate::surface::planar::Cut;
+use crate::surface::planar::{Cut, MAX_PLANES};
 use crate::surface::sag::BoundaryPoint;
 
 /// Record flag: the cell lies in the triangle's column and crosses one face of its slab
@@ -72,7 +74,7 @@ pub struct OffsetSource<'a> {
     mesh: &'a TriMesh,
     /// Per triangle, its face's planes ([`Face`]).
     faces: Vec<Face>,
-    /// The convex flat faces the triangles make up (their columns).
+    /// The flat faces the triangles make up (their columns).
     flat: FlatFaces,
     radius: f64,
     grow: bool,
@@ -112,15 +114,82 @@ impl<'a> OffsetSource<'a> {
         if face.n == Vec3::ZERO || !(0..8).all(|k| over(corner(cell, k))) {
             return Some(t);
         }
+        self.slab_flags(t, cell).map(|flags| t | flags)
+    }
+
+    /// The flags of the record of triangle `t` for `cell`, a cell in the column of its
+    /// triangles' union ([`Self::slab_record`], [`Self::slabs_over_faces`]): [`SLAB`] (and
+    /// the face) when the cell crosses one face of its slab, none when it crosses both or
+    /// one within rounding (not resolved by planes); `None` when the cell lies wholly
+    /// outside the slab (the neighbourhood misses it).
+    fn slab_flags(&self, t: u32, cell: &Aabb) -> Option<u32> {
+        let (n, q) = (self.faces[t as usize].n, self.mesh.tris[t as usize].p[0]);
         // the heights of the corners above the triangle's plane, and the faces they cross
-        let (lo, hi) = (0..8).map(|k| (corner(cell, k) - p[0]).dot(face.n)).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), z| (l.min(z), h.max(z)));
+        let (lo, hi) = (0..8).map(|k| (corner(cell, k) - q).dot(n)).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), z| (l.min(z), h.max(z)));
         let (front, behind) = (lo < self.radius && hi > self.radius, lo < -self.radius && hi > -self.radius);
         match (front, behind) {
-            (true, false) => Some(t | SLAB | SLAB_FRONT),
-            (false, true) => Some(t | SLAB),
+            (true, false) => Some(SLAB | SLAB_FRONT),
+            (false, true) => Some(SLAB),
             (false, false) if hi < -self.radius || lo > self.radius => None,
-            _ => Some(t), // both faces, or on one within rounding: not resolved by planes
+            _ => Some(0),
         }
+    }
+
+    /// The records of `cell` (triangle records only) that the cell leaves the column of
+    /// (its own triangle's and its convex face's) get [`SLAB`] when the cell lies in the
+    /// column of the records of their flat face together (a gear's toothed top, an L's
+    /// cap: see [`FlatFaces`]). Over those triangles the distance to each point of the
+    /// cell is its height above their plane, so their neighbourhoods there are the slab:
+    /// the face's other triangles' miss the cell, not being records. Tried only when every
+    /// other record has [`SLAB`] and the rest lie on at most [`MAX_PLANES`] such faces (the
+    /// cell is resolved by planes only then).
+    fn slabs_over_faces(&self, cell: &Aabb, recs: &mut Vec<u32>) {
+        let mut faces = [u32::MAX; MAX_PLANES];
+        let mut count = 0;
+        for &r in recs.iter().filter(|&&r| r & SLAB == 0) {
+            let Some(g) = self.flat.concave_group((r & INDEX) as usize) else { return };
+            if !faces[..count].contains(&g) {
+                if count == MAX_PLANES {
+                    return;
+                }
+                faces[count] = g;
+                count += 1;
+            }
+        }
+        let corners: [Vec3; 8] = std::array::from_fn(|k| corner(cell, k));
+        for &g in &faces[..count] {
+            let of_face = |r: u32| self.flat.concave_group((r & INDEX) as usize) == Some(g);
+            let mut members: Vec<u32> = recs.iter().filter(|&&r| of_face(r)).map(|&r| r & INDEX).collect();
+            members.sort_unstable();
+            if !self.column_holds(cell, &corners, &members) {
+                return;
+            }
+            recs.retain_mut(|r| {
+                if !of_face(*r) {
+                    return true;
+                }
+                let t = *r & INDEX;
+                self.slab_flags(t, cell).map(|flags| *r = t | flags).is_some()
+            });
+        }
+    }
+
+    /// Whether the box `cell` (with `corners`) lies in the column of the triangles
+    /// `members` (sorted) of one flat face: its centre lies over one of them and it meets
+    /// no wall over an edge of theirs with none of them across ([`wall_meets`]: its shadow
+    /// is convex, so it holds no point of their union's boundary and lies in the union).
+    fn column_holds(&self, cell: &Aabb, corners: &[Vec3; 8], members: &[u32]) -> bool {
+        let face = |t: u32| (&self.faces[t as usize], self.mesh.tris[t as usize].p);
+        if members.iter().any(|&t| face(t).0.n == Vec3::ZERO) || !members.iter().any(|&t| face(t).0.over(face(t).1, cell.center())) {
+            return false;
+        }
+        members.iter().all(|&t| {
+            let (f, p) = face(t);
+            (0..3).all(|k| {
+                let inner = self.flat.across(t as usize, k).is_some_and(|u| members.binary_search(&u).is_ok());
+                inner || !wall_meets(corners, p[k], p[(k + 1) % 3], f.m[k])
+            })
+        })
     }
 
     /// The part `[s0, s1]` of `a → b` within the radius of triangle `t`, if any. The ends'
@@ -180,6 +249,7 @@ impl CellSource for OffsetSource<'_> {
                 nearest = nearest.min(d);
             }
         }
+        self.slabs_over_faces(cell, out);
         // the parent's side, when it missed `∂P` (then so does this cell)
         let inherited = cand.iter().rev().find_map(|&r| side_of(r));
         let side = || inherited.unwrap_or_else(|| self.inside_far(centre));
@@ -244,7 +314,7 @@ impl CellSource for OffsetSource<'_> {
     }
 
     /// The slab faces of the records, when every record has [`SLAB`] and they lie on at
-    /// most three planes.
+    /// most [`MAX_PLANES`] planes.
     fn plane_cut(&self, own: &[u32]) -> Option<Cut> {
         let mut cut = Cut::new();
         for rec in triangles(own) {
@@ -503,6 +573,47 @@ mod tests {
         let x = Vec3::new(-0.08, -0.51, -0.51); // the old region code was 0.32 off here
         let edge = (closest_on_segment(x, a, b) - x).length();
         assert!((Face::new(s).distance(s, x) - edge).abs() < 1e-12);
+    }
+
+    /// The L of three unit squares (outline (0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2))
+    /// fanned from (0, 0) at height `z`, facing up.
+    fn l_cap(z: f64) -> TriMesh {
+        let v = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]].map(|[x, y]| Vec3::new(x, y, z));
+        TriMesh::surface(v.to_vec(), &[[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]], "L").expect("a surface")
+    }
+
+    #[test]
+    fn cells_over_the_seams_of_a_face_that_is_not_convex_are_cut_by_its_plane() {
+        let cap = l_cap(0.0);
+        let src = OffsetSource::new(&cap, 0.2);
+        let cube = |c: Vec3| Aabb::new(c - Vec3::splat(0.05), c + Vec3::splat(0.05));
+        let records = |cell: &Aabb| {
+            let mut out = Vec::new();
+            let label = src.classify(cell, &src.root_records(), false, &mut out);
+            (label, out)
+        };
+        // over the seam (0, 0) → (2, 1) between two triangles, crossing the slab's top: in
+        // neither triangle's column, but in the face's
+        let (label, recs) = records(&cube(Vec3::new(1.0, 0.5, 0.2)));
+        assert_eq!(label, Label::Mixed);
+        assert!(triangles(&recs).count() == 2 && triangles(&recs).all(|r| r & SLAB != 0 && r & SLAB_FRONT != 0), "{recs:?}");
+        let cut = src.plane_cut(&recs).expect("cut by the slab's top");
+        assert_eq!(cut.n, 1);
+        // over the reflex corner's edge (1, 1) → (1, 2), half of it outside the L: the
+        // face's column does not hold it (its neighbourhood rounds that edge)
+        let (_, recs) = records(&cube(Vec3::new(1.02, 1.5, 0.2)));
+        assert!(src.plane_cut(&recs).is_none(), "{recs:?}");
+        // the grown cap is as a cap grown with its seams' cells sampled: the same volume
+        let params = UnionParams { eps: 0.02, max_cells: 4_000_000, max_refinements: 0, simplify: false, planes: true };
+        let result = approximate_solid(&src, &src.aabb, &params).expect("a surface");
+        let volume = signed_volume(&result.surface.vertices, &result.surface.faces);
+        // the r-neighbourhood of a flat polygon: over height z its section is the polygon
+        // grown by ρ = sqrt(r² − z²) in its plane, of area A + L ρ + ρ² (5 π / 4 − 1) for
+        // the L (five right convex corners add quarter discs, the reflex one takes off the
+        // square where its edges' strips overlap); integrated over z in [−r, r]
+        let (r, pi) = (0.2, std::f64::consts::PI);
+        let exact = 2.0 * 3.0 * r + 8.0 * pi * r * r / 2.0 + (5.0 * pi / 4.0 - 1.0) * 4.0 * r.powi(3) / 3.0;
+        assert!((volume - exact).abs() < 0.01 * exact, "{volume} vs {exact}");
     }
 
     #[test]
