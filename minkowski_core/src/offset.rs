@@ -24,9 +24,10 @@
 //! into a record triangle, into the convex flat face it is part of, or into the union of
 //! the records of its flat face that is not convex ([`FlatFaces`]: the cell lies in the
 //! column over them), meets the neighbourhoods of that face's triangles only in its slab
-//! `|n · (x − p)| <= r`, so when only one face of the slab crosses the cell, the offset's
-//! boundary there lies on that plane. A cell where every record is such a triangle is cut
-//! by those planes (at most [`MAX_PLANES`]), as the exact source's flat facets are: the
+//! `|n · (x − p)| <= r`, so the offset's boundary there lies on the faces of the slab
+//! that cross the cell (both, in a cell wider than `2 r`). A cell where every record is
+//! such a triangle is cut by those planes (at most [`MAX_PLANES`]; pieces whose two sides
+//! agree are no boundary), as the exact source's flat facets are: the
 //! faces of a grown box or of a gear's toothed top, the faces, edges and corners of an
 //! eroded box.
 
@@ -38,16 +39,20 @@ use crate::surface::planar::{Cut, MAX_PLANES};
 use crate::surface::sag::BoundaryPoint;
 
 /// Record flag: the cell lies in the triangle's column and crosses one face of its slab
-/// only (the face [`SLAB_FRONT`] says); the triangle's neighbourhood there is that slab.
+/// (the face [`SLAB_FRONT`] says) or both ([`SLAB_BOTH`]); the triangle's neighbourhood
+/// there is that slab.
 const SLAB: u32 = 1 << 31;
 /// Record flag with [`SLAB`]: the face of the slab in front of the triangle (along its
 /// normal), else the one behind it.
 const SLAB_FRONT: u32 = 1 << 30;
+/// Record flag with [`SLAB`]: the cell crosses both faces of the slab (a cell wider than
+/// twice the radius over a large flat face).
+const SLAB_BOTH: u32 = 1 << 29;
 /// How far, relative to the radius, a boundary point found beyond the surface point it
 /// projects may lie off the boundary ([`OffsetSource::boundary_point`]): rounding only.
 const BOUNDARY_POINT_TOL: f64 = 1e-9;
 /// The triangle index of a record.
-const INDEX: u32 = SLAB_FRONT - 1;
+const INDEX: u32 = SLAB_BOTH - 1;
 /// Record of no triangle: the cell misses `∂P` and lies inside `P`. A cell that misses
 /// `∂P` keeps one of the two side records, so that its descendants (which miss it too)
 /// take their side from it instead of casting a ray each.
@@ -92,7 +97,7 @@ impl<'a> OffsetSource<'a> {
     pub fn new(mesh: &'a TriMesh, r: f64) -> Self {
         assert!(r.is_finite() && r != 0.0, "offset radius {r}");
         assert!(mesh.solid || r > 0.0, "the erosion of a surface");
-        assert!(mesh.tris.len() < SIDE_OUT as usize, "{} triangles: records address fewer than 2^30 - 2", mesh.tris.len());
+        assert!(mesh.tris.len() < SIDE_OUT as usize, "{} triangles: records address fewer than 2^29 - 2", mesh.tris.len());
         let grow = r > 0.0;
         let aabb = if grow { mesh.aabb.inflated(r * (1.0 + 1e-9)) } else { mesh.aabb };
         let faces = mesh.tris.iter().map(|t| Face::new(t.p)).collect();
@@ -106,7 +111,7 @@ impl<'a> OffsetSource<'a> {
     }
 
     /// The record of triangle `t` (no flags) for `cell`, near the cell: with [`SLAB`] (and
-    /// the face) when the cell lies in its column and crosses one face of its slab; `None`
+    /// the faces) when the cell lies in its column and crosses its slab's faces; `None`
     /// when the cell lies in its column wholly outside the slab (the neighbourhood misses it).
     fn slab_record(&self, t: u32, cell: &Aabb) -> Option<u32> {
         let (face, p) = (&self.faces[t as usize], self.mesh.tris[t as usize].p);
@@ -119,8 +124,8 @@ impl<'a> OffsetSource<'a> {
 
     /// The flags of the record of triangle `t` for `cell`, a cell in the column of its
     /// triangles' union ([`Self::slab_record`], [`Self::slabs_over_faces`]): [`SLAB`] (and
-    /// the face) when the cell crosses one face of its slab, none when it crosses both or
-    /// one within rounding (not resolved by planes); `None` when the cell lies wholly
+    /// the faces) when the cell crosses one face of its slab or both, none when it meets
+    /// one only within rounding (not resolved by planes); `None` when the cell lies wholly
     /// outside the slab (the neighbourhood misses it).
     fn slab_flags(&self, t: u32, cell: &Aabb) -> Option<u32> {
         let (n, q) = (self.faces[t as usize].n, self.mesh.tris[t as usize].p[0]);
@@ -130,6 +135,7 @@ impl<'a> OffsetSource<'a> {
         match (front, behind) {
             (true, false) => Some(SLAB | SLAB_FRONT),
             (false, true) => Some(SLAB),
+            (true, true) => Some(SLAB | SLAB_BOTH),
             (false, false) if hi < -self.radius || lo > self.radius => None,
             _ => Some(0),
         }
@@ -323,9 +329,13 @@ impl CellSource for OffsetSource<'_> {
             }
             let t = (rec & INDEX) as usize;
             let (n, p) = (self.faces[t].n, self.mesh.tris[t].p[0]);
-            let w = n.dot(p) + if rec & SLAB_FRONT != 0 { self.radius } else { -self.radius };
             let tol = 1e-12 * (p.abs().max_element() + self.radius);
-            if !cut.add(n, w, tol) {
+            let faces: &[f64] = match (rec & SLAB_BOTH != 0, rec & SLAB_FRONT != 0) {
+                (true, _) => &[self.radius, -self.radius],
+                (false, true) => &[self.radius],
+                (false, false) => &[-self.radius],
+            };
+            if !faces.iter().all(|&off| cut.add(n, n.dot(p) + off, tol)) {
                 return None;
             }
         }
@@ -613,6 +623,29 @@ mod tests {
         // square where its edges' strips overlap); integrated over z in [−r, r]
         let (r, pi) = (0.2, std::f64::consts::PI);
         let exact = 2.0 * 3.0 * r + 8.0 * pi * r * r / 2.0 + (5.0 * pi / 4.0 - 1.0) * 4.0 * r.powi(3) / 3.0;
+        assert!((volume - exact).abs() < 0.01 * exact, "{volume} vs {exact}");
+    }
+
+    #[test]
+    fn cells_wider_than_the_slab_over_a_sheet_are_cut_by_both_its_faces() {
+        // a unit square sheet (a surface) grown by 0.05: a cell 0.4 wide over its middle
+        // crosses both faces of the slab, which bound the offset there
+        let v = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vec3::new(x, y, 0.0));
+        let sheet = TriMesh::surface(v.to_vec(), &[[0, 1, 2], [0, 2, 3]], "sheet").expect("a surface");
+        let r = 0.05;
+        let src = OffsetSource::new(&sheet, r);
+        let cell = Aabb::new(Vec3::new(0.3, 0.3, -0.2), Vec3::new(0.7, 0.7, 0.2));
+        let mut recs = Vec::new();
+        assert_eq!(src.classify(&cell, &src.root_records(), false, &mut recs), Label::Mixed);
+        assert!(triangles(&recs).all(|r| r & SLAB != 0 && r & SLAB_BOTH != 0), "{recs:?}");
+        let cut = src.plane_cut(&recs).expect("cut by the slab's faces");
+        assert_eq!(cut.n, 2);
+        // the grown sheet, at a grid coarse for its thickness, has the Steiner volume
+        let params = UnionParams { eps: 0.02, max_cells: 4_000_000, max_refinements: 0, simplify: true, planes: true };
+        let result = approximate_solid(&src, &src.aabb, &params).expect("a surface");
+        let volume = signed_volume(&result.surface.vertices, &result.surface.faces);
+        let pi = std::f64::consts::PI;
+        let exact = 2.0 * r + pi * 4.0 * r * r / 2.0 + 4.0 / 3.0 * pi * r.powi(3);
         assert!((volume - exact).abs() < 0.01 * exact, "{volume} vs {exact}");
     }
 
