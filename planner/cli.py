@@ -125,7 +125,8 @@ def _parser() -> argparse.ArgumentParser:
     )
     m.add_argument("a", help="first mesh file (obstacle with --mirror-b)")
     m.add_argument("b", help="second mesh file (robot with --mirror-b)")
-    m.add_argument("-o", "--output", required=True, help="output mesh (.stl .obj .ply .off .glb)")
+    m.add_argument("-o", "--output", required=True,
+                   help="output mesh (.stl .obj .ply .off .glb; missing folders are created)")
     m.add_argument(
         "--eps",
         type=float,
@@ -246,11 +247,12 @@ def _fail(message: str) -> int:
 
 
 def _missing_mesh(label: str, path: str) -> str | None:
-    """Why the mesh file argument ``label`` cannot be read, if it cannot."""
+    """Why the mesh file argument ``label`` cannot be read, if it cannot (named as its
+    operand is named: ``"a (peg.obj)"``)."""
     if Path(path).is_dir():
-        return f"{label}: {path!r} is a directory, not a mesh file"
+        return f"{label} ({path}): a directory, not a mesh file"
     if not Path(path).is_file():
-        return f"{label}: file {path!r} not found"
+        return f"{label} ({path}): file not found"
     return None
 
 
@@ -276,8 +278,9 @@ def _cmd_minkowski(args) -> int:
     missing = _missing_mesh("a", args.a) or _missing_mesh("b", args.b)
     if missing:
         return _fail(missing)
-    from planner.output import unwritable, write_mesh
+    from planner.output import created_text, missing_folder, unwritable, write_mesh
 
+    created = missing_folder(out)
     targets = [("--output", out)] + ([("--stats", Path(args.stats))] if args.stats else [])
     for flag, target in targets:
         problem = unwritable(target)
@@ -332,7 +335,7 @@ def _cmd_minkowski(args) -> int:
         f"error bound {result.error_bound:.4g} "
         f"(grid {result.stats['grid_error_bound']:.4g} + decomposition "
         f"{result.stats['decomposition_excess']:.4g}), {result.stats['seconds']['total']:.2f} s"
-        f"{made}\n"
+        f"{made}{created_text(created)}\n"
     )
     return 0
 
@@ -345,7 +348,8 @@ def _operand_parts(args) -> tuple:
     from planner.operands import solid_part
 
     roles = ("obstacle", "robot") if args.mirror_b else ("a", "b")
-    return tuple(solid_part(planner.load_mesh(path, name=path), role, repair=args.repair)
+    return tuple(solid_part(planner.load_mesh(path, name=f"{role} ({path})"), role,
+                            repair=args.repair)
                  for path, role in zip((args.a, args.b), roles, strict=True))
 
 
@@ -685,7 +689,11 @@ def _main(argv: list[str] | None) -> int:
         if args.verbose == 1
         else logging.DEBUG
     )
-    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    from planner.progress import LogAround
+
+    handler = LogAround()  # (a log line clears the status line and draws it again)
+    handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+    logging.basicConfig(level=level, handlers=[handler])
     try:
         from planner.errors import MinkplanError
     except ImportError as exc:  # the native module is missing: a broken install

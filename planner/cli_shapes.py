@@ -50,7 +50,8 @@ def _add_offset_parser(sub, common) -> None:
     o.add_argument("mesh", help="closed mesh file")
     o.add_argument("-r", "--radius", type=float, required=True,
                    help="offset radius (negative: erode)")
-    o.add_argument("-o", "--output", required=True, help="output mesh (.stl .obj .ply .off .glb)")
+    o.add_argument("-o", "--output", required=True,
+                   help="output mesh (.stl .obj .ply .off .glb; missing folders are created)")
     o.add_argument("--eps", type=float, default=None,
                    help="resolution: the error bound is about this (default 0.5%% of the "
                    "result's diagonal)")
@@ -87,11 +88,19 @@ def made_solid_text(changes: list[tuple[str, dict]]) -> str:
 def cmd_offset(args) -> int:
     out = Path(args.output)
     from planner.offsets import changes_text
-    from planner.output import float32_move, unknown_mesh_format, unwritable, write_mesh
+    from planner.output import (
+        created_text,
+        float32_move,
+        missing_folder,
+        unknown_mesh_format,
+        unwritable,
+        write_mesh,
+    )
 
     problem = unwritable(out) or unknown_mesh_format(out)
     if problem:
         return _fail(f"--output {out}: {problem}")
+    created = missing_folder(out)
     missing = _missing_mesh("mesh", args.mesh)
     if missing:
         return _fail(missing)
@@ -122,7 +131,8 @@ def cmd_offset(args) -> int:
     made = f"; made a solid by: {changes_text(stats['changes'])}" if stats["changes"] else ""
     how_made = f"{stats['method']}: {stats['convex']}" if "convex" in stats else stats["method"]
     sys.stdout.write(f"wrote {out}: {stats['triangles']} triangles, {bound} "
-                     f"({how_made}{of}), {stats['seconds']:.2f} s{made}{stored}\n")
+                     f"({how_made}{of}), {stats['seconds']:.2f} s{made}{stored}"
+                     f"{created_text(created)}\n")
     return 0
 
 
@@ -133,8 +143,8 @@ def cmd_depth(args) -> int:
     import planner
     from planner.depth import SEPARATION_BY_TRIANGLES
 
-    r = planner.penetration_depth(planner.load_mesh(args.a, name=args.a),
-                                  planner.load_mesh(args.b, name=args.b),
+    r = planner.penetration_depth(planner.load_mesh(args.a, name=f"a ({args.a})"),
+                                  planner.load_mesh(args.b, name=f"b ({args.b})"),
                                   tolerance=args.tolerance,
                                   progress=False if args.no_progress else None,
                                   repair=args.repair)

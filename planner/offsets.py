@@ -320,11 +320,33 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
         raise EmptyResultError(_nothing_left(name, -radius, stats.get("sheet_left", 0.0)))
     stats["method"] = used
     stats["kind"] = "solid" if part.solid else "surface"
+    if not part.solid:
+        _say_if_hollow(surface, stats, name, radius)
     stats["changes"] = dict(part.changes)
     stats["seconds"] = time.perf_counter() - t0
     if part.changes:
         log.info("%s: made a solid by %s", name, changes_text(part.changes))
     return OffsetResult(surface, radius, bound, step, stats)
+
+
+def _say_if_hollow(surface: trimesh.Trimesh, stats: dict[str, Any], name: str,
+                   radius: float) -> None:
+    """Count the inner shells (cavities) of a surface's grown triangles in
+    ``stats["inner_shells"]`` and warn when there are any: a closed part taken as its
+    triangles grows into a hollow shell where it is thicker than ``2 r``."""
+    from .meshes.topology import components, face_graph  # noqa: PLC0415
+
+    faces = np.asarray(surface.faces)
+    count, labels = components(len(faces), face_graph(faces)[0])
+    corners = np.asarray(surface.vertices)[faces]
+    six_volumes = np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2]))
+    inner = int((np.bincount(labels, weights=six_volumes, minlength=count) < 0).sum())
+    stats["inner_shells"] = inner
+    if inner:
+        log.warning("%s grown by %g as a surface (its triangles): the result has %d inner "
+                    "shell(s), hollow where the part is thicker than %g; as a solid "
+                    "(kind 'solid', or --repair) it would be filled", name, radius, inner,
+                    2 * radius)
 
 
 def _nothing_left(name: str, depth: float, sheet: float) -> str:

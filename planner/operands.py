@@ -35,9 +35,10 @@ def as_mesh(obj, role: str) -> trimesh.Trimesh:
 
 
 def label(mesh: trimesh.Trimesh, role: str) -> str:
-    """How errors and logs name an operand: its role, and the file it came from if any."""
+    """How errors and logs name an operand: its role, and the file it came from if any
+    (``"a (peg.obj)"``, as the commands name the files they read)."""
     path = mesh.metadata.get("file_path")
-    return f"{role} {Path(path).name}" if path else role
+    return f"{role} ({Path(path).name})" if path else role
 
 
 def solid_part(obj, role: str, *, repair: bool | None = None) -> Part:

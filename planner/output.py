@@ -108,6 +108,23 @@ def unwritable(path: Path) -> str | None:
         return f"cannot be used ({exc.strerror or exc})"
 
 
+def missing_folder(path: Path) -> Path | None:
+    """The outermost folder that writing ``path`` would create (:func:`atomic_write` makes
+    missing folders), or ``None`` when its folder exists; said in what a command prints, so
+    a mistyped path does not make folders unnoticed."""
+    missing = None
+    for parent in Path(path).parents:
+        if parent.exists():
+            return missing
+        missing = parent
+    return missing
+
+
+def created_text(folder: Path | None) -> str:
+    """``"; created folder F"`` for a command's summary line, or ``""``."""
+    return f"; created folder {folder}" if folder is not None else ""
+
+
 def _unwritable(path: Path) -> str | None:
     if path.is_dir():
         return "is a directory"

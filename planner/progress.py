@@ -12,17 +12,21 @@ default (``enabled=None``), unless stderr is a terminal; ``--no-progress`` passe
 - :func:`bar` -- a counted bar (tqdm) with a rate and an ETA, for a batch's tasks (the
   one long loop that nothing else draws inside).
 
-Entry points: :func:`shown`, :class:`StatusLine`, :func:`bar`.
+Log records written to stderr while a line is shown go through :class:`LogAround`, which
+clears the line first and draws it again after, so a warning never runs on from it.
+
+Entry points: :func:`shown`, :class:`StatusLine`, :func:`bar`, :class:`LogAround`.
 """
 
 from __future__ import annotations
 
+import logging
 import sys
 import threading
 import time
 from typing import Any
 
-__all__ = ["StatusLine", "bar", "shown"]
+__all__ = ["LogAround", "StatusLine", "bar", "shown"]
 
 TICK_SECONDS = 0.5
 """How often the status line's seconds are refreshed."""
@@ -123,6 +127,25 @@ def _tick() -> None:
                 _ticker = None
                 return
             _open[-1]._write(again=False)
+
+
+class LogAround(logging.StreamHandler):
+    """A stderr log handler that writes each record on a line of its own: the status line
+    shown (if any) is cleared first and drawn again after it."""
+
+    def __init__(self) -> None:
+        super().__init__(sys.stderr)
+
+    def emit(self, record: logging.LogRecord) -> None:
+        global _written
+        with _lock:
+            shown_line = bool(_written)
+            if shown_line:
+                self.stream.write("\r\033[K")
+                _written = ""
+            super().emit(record)
+            if shown_line and _open:
+                _open[-1]._write()
 
 
 def bar(*, total: int, enabled: bool | None, unit: str, **options: Any) -> Any:

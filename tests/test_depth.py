@@ -290,7 +290,7 @@ def test_a_real_peg_pushed_into_its_cad_hole_is_read_as_the_assembly_reads_it():
     assert r.lower <= brute + 1e-12 and r.upper <= brute + r.tolerance + 1e-12
     assert 0.0009 < r.lower and r.upper < 0.001
     assert_separating(peg, hole, r)
-    with pytest.raises(InvalidMeshError, match="b factory_round_hole_8mm_subdiv_3x.obj"):
+    with pytest.raises(InvalidMeshError, match=r"b \(factory_round_hole_8mm_subdiv_3x\.obj\)"):
         broken = planner.load_mesh(hole_path)
         broken.faces = broken.faces[:-40]
         planner.penetration_depth(peg, broken)

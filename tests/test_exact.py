@@ -779,8 +779,17 @@ def test_cli_minkowski_open_mesh_exact_true(tmp_path, capsys):
     assert len(lines) == 1 and lines[0].startswith("minkplan: error: "), captured.err
     assert "Traceback" not in captured.err and "watertight" in lines[0]
     # names the operand: its role and its file
-    assert "'a lid.stl'" in lines[0], lines[0]
+    assert "'a (lid.stl)'" in lines[0], lines[0]
     assert not out.exists()
+
+
+def test_cli_minkowski_says_the_folder_it_made_for_its_output(tmp_path, capsys):
+    shapes.box((1.0, 1.0, 1.0)).export(tmp_path / "cube.stl")
+    out = tmp_path / "made" / "sum.stl"
+    code = main(["minkowski", str(tmp_path / "cube.stl"), str(tmp_path / "cube.stl"), "-o",
+                 str(out), "--no-progress"])
+    assert code == 0 and out.exists()
+    assert capsys.readouterr().out.strip().endswith(f"; created folder {tmp_path / 'made'}")
 
 
 def test_exact_sum_of_boxes_has_six_facets_and_is_their_box():
@@ -816,7 +825,7 @@ def test_cli_minkowski_bad_paths_and_options_are_one_line_errors(tmp_path, capsy
         assert not (tmp_path / "sum.stl").exists()
     code = main(["minkowski", str(tmp_path), str(cube), "-o", str(tmp_path / "s.stl")])
     lines = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(lines) == 1 and "is a directory, not a mesh file" in lines[0]
+    assert code == 2 and len(lines) == 1 and "a directory, not a mesh file" in lines[0]
 
 
 def test_a_facet_budget_stops_the_exact_source_with_a_clear_error():

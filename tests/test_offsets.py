@@ -6,6 +6,7 @@ point by point against the exact distance to the solid."""
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
@@ -520,6 +521,12 @@ def test_the_offset_command_writes_the_mesh_and_says_its_bound(tmp_path, capsys)
     assert line.startswith(f"wrote {grown}") and "error bound" in line
     assert trimesh.load(grown).is_watertight
     assert f"(hull: {ROUNDED})" in line  # a box: by its hull
+    assert "created folder" not in line
+    # folders the output needs are made, and the line says so (a mistyped path shows)
+    nested = tmp_path / "new" / "deeper" / "grown.obj"
+    assert main(["offset", str(part), "-r", "0.2", "-o", str(nested), "--eps", "0.04"]) == 0
+    assert capsys.readouterr().out.strip().endswith(f"; created folder {tmp_path / 'new'}")
+    assert nested.exists()
     assert main(["offset", str(part), "-r", "-0.1", "-o", str(tmp_path / "shrunk.stl"),
                  "--eps", "0.04", "--method", "ball"]) == 0
     line = capsys.readouterr().out.strip()
@@ -778,6 +785,7 @@ def test_a_lone_triangle_grows_into_its_parallel_body():
     result = planner.offset(triangle, r, eps=0.01, kind="surface")
     assert (result.stats["kind"], result.stats["method"]) == ("surface", "cells")
     assert result.mesh.is_watertight and result.mesh.is_winding_consistent
+    assert result.stats["inner_shells"] == 0  # no cavity: nothing said
     area, perimeter = float(triangle.area), float(np.sum(np.linalg.norm(
         triangle.vertices - np.roll(triangle.vertices, 1, axis=0), axis=1)))
     exact = 2 * area * r + 0.5 * math.pi * perimeter * r * r + 4 / 3 * math.pi * r ** 3
@@ -785,6 +793,20 @@ def test_a_lone_triangle_grows_into_its_parallel_body():
     points = trimesh.sample.sample_surface(result.mesh, 3000, seed=1)[0]
     distance = mesh_distance(triangle.vertices, triangle.faces, points)
     assert np.all(np.abs(distance - r) <= result.error_bound)
+
+
+def test_a_closed_part_grown_as_a_surface_is_said_to_be_hollow(caplog):
+    """A cube taken as its triangles and grown by less than half its side: the set within
+    r of its faces, with a cube-shaped cavity inside; said at warning level."""
+    with caplog.at_level(logging.WARNING, logger="planner.offsets"):
+        result = planner.offset(trimesh.creation.box(), 0.1, eps=0.05, kind="surface")
+    assert result.stats["inner_shells"] == 1
+    assert len(result.mesh.split(only_watertight=True)) == 2
+    assert "1 inner shell(s), hollow where the part is thicker than 0.2" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="planner.offsets"):
+        full = planner.offset(trimesh.creation.box(), 0.6, eps=0.1, kind="surface")
+    assert full.stats["inner_shells"] == 0 and "inner shell" not in caplog.text
 
 
 def test_an_open_surface_is_grown_as_the_set_within_r_of_its_triangles(tmp_path):
@@ -1238,16 +1260,18 @@ def test_a_float32_file_is_said_to_widen_the_bound_by_its_rounding(tmp_path, cap
 
 
 def test_an_offset_whose_planar_cells_would_pass_the_memory_limit_is_refused():
-    """An L of two 2 x 0.5 bars grown by 1 mm at the default eps needs some 8M cells, each
-    holding its faces' plane polygons: allowed under a 10 GiB limit, it peaked at 13.9 GB
-    (the budget took 640 B a cell). Refused now, in one line naming the setting."""
+    """An L of two 2 x 0.5 bars grown by 1 mm at the default eps needs some 5M cells, each
+    holding its faces' plane polygons (8M, and 13.9 GB under a 10 GiB limit when the budget
+    took 640 B a cell; cells over its faces' seams and wider than the slab are cut by
+    planes now, and it takes 6.8 GB there). Under 2 GiB: refused, in one line naming the
+    setting, before the cells' memory is spent."""
     from planner.errors import ResourceLimitError
 
     bars = trimesh.creation.box([2.0, 0.5, 0.5], trimesh.transformations.translation_matrix(
         [1.0, 0.25, 0.25])).union(trimesh.creation.box(
             [0.5, 2.0, 0.5], trimesh.transformations.translation_matrix([0.25, 1.0, 0.25])),
         engine="manifold")
-    with planner.memory_limit(10), pytest.raises(ResourceLimitError, match="memory-limit"):
+    with planner.memory_limit(2), pytest.raises(ResourceLimitError, match="memory-limit"):
         planner.offset(bars, 0.001, method="cells")
 
 

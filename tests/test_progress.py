@@ -23,7 +23,7 @@ PEG = ROOT / "scenarios" / "peg_in_hole"
 # (command after `minkplan`, a status line it shows); {out} is a fresh folder
 COMMANDS = {
     "minkowski": (["minkowski", str(PEG / "block.stl"), str(PEG / "peg.stl"), "-o",
-                   "{out}/sum.stl"], "peg.stl: convolution facets"),
+                   "{out}/sum.stl"], "b (peg.stl): convolution facets"),
     "offset": (["offset", str(PEG / "peg.stl"), "-r", "0.5", "--eps", "0.5", "-o",
                 "{out}/grown.stl"], "minkplan: growing"),
     "depth": (["depth", str(PEG / "block.stl"), str(PEG / "peg.stl")],
@@ -91,6 +91,26 @@ def test_lines_nest_and_the_outer_one_comes_back(capsys):
     err = capsys.readouterr().err
     assert err.split("\r\033[K") == ["", "outer step", "inner step", "outer step",
                                      "outer again", ""]
+
+
+def test_a_log_record_clears_the_line_and_the_line_comes_back(capsys):
+    import logging
+
+    log = logging.getLogger("minkplan.test_progress")
+    handler = progress.LogAround()  # (stderr as it is now: pytest's capture)
+    handler.setFormatter(logging.Formatter("%(levelname)s %(message)s"))
+    log.addHandler(handler)
+    try:
+        with StatusLine(True) as line:
+            line.show("growing the part")
+            log.warning("a fault")
+        log.warning("no line shown")
+    finally:
+        log.removeHandler(handler)
+    err = capsys.readouterr().err
+    # the record on a line of its own, the status line drawn again after it
+    assert err.split("\r\033[K") == ["", "growing the part", "WARNING a fault\n",
+                                      "growing the part", "WARNING no line shown\n"]
 
 
 def test_a_disabled_line_writes_nothing(capsys):
