@@ -280,12 +280,12 @@ def _cmd_minkowski(args) -> int:
         return _fail(missing)
     from planner.output import created_text, missing_folder, unwritable, write_mesh
 
-    created = missing_folder(out)
     targets = [("--output", out)] + ([("--stats", Path(args.stats))] if args.stats else [])
     for flag, target in targets:
         problem = unwritable(target)
         if problem:
             return _fail(f"{flag} {target}: {problem}")
+    created = missing_folder(out)
 
     import planner
 

@@ -465,7 +465,10 @@ def _cell_offset(mesh: trimesh.Trimesh, radius: float, step: float, max_cells: i
     try:
         raw = offset_surface(checked, radius, step, max_cells=cells)
     except ResourceLimitError as exc:
-        raise budget.explain(exc, f"{name} offset by {radius:g}",
+        # how much larger eps may be: below the radius, else the bound says nothing
+        knob = (f"eps (now {step:.3g}; below the radius {abs(radius):g}, or the result need "
+                f"not lie around the offset)")
+        raise budget.explain(exc, f"{name} offset by {radius:g}", knob=knob,
                              cells_given=budget.cells_setting(from_memory)) from exc
     surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
     return surface, float(raw["error_bound"]), {"triangles": len(surface.faces),

@@ -113,10 +113,13 @@ def missing_folder(path: Path) -> Path | None:
     missing folders), or ``None`` when its folder exists; said in what a command prints, so
     a mistyped path does not make folders unnoticed."""
     missing = None
-    for parent in Path(path).parents:
-        if parent.exists():
-            return missing
-        missing = parent
+    try:
+        for parent in Path(path).parents:
+            if parent.exists():
+                return missing
+            missing = parent
+    except OSError:  # a name over the file system's limit: :func:`unwritable` says so
+        return None
     return missing
 
 

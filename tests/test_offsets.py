@@ -1271,8 +1271,10 @@ def test_an_offset_whose_planar_cells_would_pass_the_memory_limit_is_refused():
         [1.0, 0.25, 0.25])).union(trimesh.creation.box(
             [0.5, 2.0, 0.5], trimesh.transformations.translation_matrix([0.25, 1.0, 0.25])),
         engine="manifold")
-    with planner.memory_limit(2), pytest.raises(ResourceLimitError, match="memory-limit"):
+    with planner.memory_limit(2), pytest.raises(ResourceLimitError, match="memory-limit") as e:
         planner.offset(bars, 0.001, method="cells")
+    # how far eps may go: the default is half the radius, and the bound must stay below it
+    assert "use a larger eps (now 0.0005; below the radius 0.001" in str(e.value)
 
 
 def test_a_millimetre_torus_grown_by_the_cells_reads_back_closed(tmp_path):

@@ -150,6 +150,25 @@ def t_junction_box() -> trimesh.Trimesh:
     return trimesh.Trimesh(np.array(v, float), np.array(f), process=False)
 
 
+@pytest.mark.parametrize("reversed_face", [0, 5])
+def test_a_face_wound_against_its_neighbours_is_turned_and_said(reversed_face):
+    """One face of a box reversed (the first, which the consistent winding keeps as it is,
+    or another): one face changed, not a shell turned inside out; a box exported inside
+    out is one shell flipped. Both are in the part's changes."""
+    from planner.meshes.kinds import classify
+
+    box = trimesh.creation.box()
+    faces = np.array(box.faces)
+    faces[reversed_face] = faces[reversed_face][::-1]
+    part = classify(trimesh.Trimesh(box.vertices, faces, process=False), name="box")
+    assert part.solid and part.changes == {"fixed_winding_faces": 1}
+    assert part.mesh.volume == pytest.approx(1.0)
+    inside_out = classify(trimesh.Trimesh(box.vertices, box.faces[:, ::-1], process=False),
+                          name="box")
+    assert inside_out.changes == {"flipped_shells": 1} and inside_out.mesh.volume > 0
+    assert classify(box, name="box").changes == {}
+
+
 def test_t_junctions_are_split_and_the_part_is_a_solid():
     from planner.meshes.kinds import classify
 

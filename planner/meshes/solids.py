@@ -132,9 +132,14 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
     if report["flipped_shells"]:  # said once the result is a solid
         log.info("%s: %d of %d closed shell(s) were inside out; flipped them", label,
                  report["flipped_shells"], report["shells"])
+    if report["fixed_winding_faces"]:
+        log.info("%s: %d face(s) were wound against their neighbours; turned them", label,
+                 report["fixed_winding_faces"])
     result = trimesh.Trimesh(vertices, faces, process=False)
     result.metadata.update(getattr(mesh, "metadata", {}) or {})
     result.metadata["name"] = name
+    result.metadata[TURNED] = {key: report[key] for key in ("fixed_winding_faces",
+                                                            "flipped_shells") if report[key]}
     result.metadata[FACES_INSIDE] = faces_inside
     result.metadata[FACE_CROSSINGS] = crossings
     remember(result, checked, solid=True)
@@ -168,6 +173,13 @@ FACES_INSIDE = "faces_inside"
 """Key of a solid's ``metadata`` (from :func:`validate_solid`): how many of its faces have
 the solid in front of them too (winding number above 0 there: shells that touch or
 overlap), so are not part of its boundary."""
+
+
+TURNED = "turned"
+"""Key of a solid's ``metadata`` (from :func:`validate_solid`): the faces it turned to make
+the winding consistent and the shells it flipped outward, as counts
+(``{"fixed_winding_faces": 1}``; empty when the input was oriented), which the callers
+report as changes made to make a solid."""
 
 
 FACE_CROSSINGS = "face_crossings"
@@ -247,7 +259,6 @@ def orient_shells(vertices, faces, label, scale, report):
     cavities). Updates ``report`` and returns the faces. Raises for non-orientable or
     flat shells."""
     faces, flipped, orientable = orient_consistently(faces)
-    report["fixed_winding_faces"] = report.get("fixed_winding_faces", 0) + int(flipped.sum())
     if not orientable:
         raise InvalidMeshError(
             f"{label}: surface is not orientable (inconsistent winding that cannot be "
@@ -258,6 +269,7 @@ def orient_shells(vertices, faces, label, scale, report):
     # a shell whose winding had to be fixed has no trustworthy orientation: it gets the
     # one its nesting depth implies
     unknown = {int(k) for k in np.unique(labels[flipped])}
+    known = np.array([k not in unknown for k in range(count)], dtype=bool)
     volumes = signed_volumes(vertices, faces, labels, count)
     flat = np.abs(volumes) <= tol.zero_volume_rel * scale**3
     if flat.any():
@@ -278,7 +290,6 @@ def orient_shells(vertices, faces, label, scale, report):
     elif negative.any() or unknown:
         depth = _nesting_depths(vertices, faces, labels, count, volumes, range(count))
         odd = np.array([depth[k] % 2 == 1 for k in range(count)])
-        known = np.array([k not in unknown for k in range(count)])
         contradicts = negative != odd
         if (contradicts | ~known).all() and (negative & ~odd & known).any():
             flip_shell = known.copy()
@@ -289,7 +300,11 @@ def orient_shells(vertices, faces, label, scale, report):
         mask = flip_shell[labels]
         faces = faces.copy()
         faces[mask] = faces[mask][:, ::-1]
-    report["flipped_shells"] = int(flip_shell.sum())
+    # what changed against the input: whole shells exported inside out, and faces of the
+    # other shells wound against their neighbours (those the shell's turn did not undo)
+    turned = (flipped ^ flip_shell[labels]) & ~known[labels]
+    report["fixed_winding_faces"] = report.get("fixed_winding_faces", 0) + int(turned.sum())
+    report["flipped_shells"] = int((flip_shell & known).sum())
     report["shells"] = int(count)
     report["cavities"] = int(
         (np.where(flip_shell, -volumes, volumes) < 0).sum()
