@@ -44,7 +44,8 @@ impl FlatFaces {
     /// The convex flat faces of `mesh` (triangles of non-convex or holed faces have none).
     pub fn new(mesh: &TriMesh) -> FlatFaces {
         let tol = COPLANAR * mesh.aabb.diagonal().max(f64::MIN_POSITIVE);
-        let (groups, mut across) = coplanar_groups(mesh, tol);
+        let faces = welded_faces(mesh);
+        let (groups, mut across) = coplanar_groups(mesh, &faces, tol);
         let mut face_of = vec![u32::MAX; mesh.tris.len()];
         let mut group = vec![u32::MAX; mesh.tris.len()];
         let mut edges = Vec::new();
@@ -52,7 +53,7 @@ impl FlatFaces {
             for &t in &members {
                 group[t] = g as u32;
             }
-            let Some(boundary) = convex_boundary(mesh, &members, tol) else { continue };
+            let Some(boundary) = convex_boundary(mesh, &faces, &members, tol) else { continue };
             for &t in &members {
                 face_of[t] = edges.len() as u32;
             }
@@ -95,13 +96,23 @@ impl FlatFaces {
     }
 }
 
-/// The sets of edge-connected triangles on one plane facing one way (sliver triangles, with
-/// no normal, are on their own), and per triangle and edge the triangle joined to it there.
-fn coplanar_groups(mesh: &TriMesh, tol: f64) -> (Vec<Vec<usize>>, Vec<[u32; 3]>) {
+/// The mesh's faces with vertices at one position made one (the first of them): a triangle
+/// soup, as OMPL.app ships its environments, repeats each vertex per triangle, and its
+/// faces are joined only where the positions are the same.
+fn welded_faces(mesh: &TriMesh) -> Vec<[u32; 3]> {
+    let mut first: HashMap<[u64; 3], u32> = HashMap::with_capacity(mesh.vertices.len());
+    let canon: Vec<u32> = mesh.vertices.iter().enumerate().map(|(i, v)| *first.entry(v.to_array().map(|c| (c + 0.0).to_bits())).or_insert(i as u32)).collect();
+    mesh.faces.iter().map(|f| f.map(|v| canon[v as usize])).collect()
+}
+
+/// The sets of edge-connected triangles (`faces`, welded) on one plane facing one way
+/// (sliver triangles, with no normal, are on their own), and per triangle and edge the
+/// triangle joined to it there.
+fn coplanar_groups(mesh: &TriMesh, faces: &[[u32; 3]], tol: f64) -> (Vec<Vec<usize>>, Vec<[u32; 3]>) {
     let mut by_edge: HashMap<(u32, u32), (usize, usize)> = HashMap::new();
     let mut uf = UnionFind::new(mesh.tris.len());
     let mut across = vec![[u32::MAX; 3]; mesh.tris.len()];
-    for (t, f) in mesh.faces.iter().enumerate() {
+    for (t, f) in faces.iter().enumerate() {
         if mesh.tris[t].n == Vec3::ZERO {
             continue;
         }
@@ -152,10 +163,10 @@ pub fn wall_meets(corners: &[Vec3; 8], a: Vec3, b: Vec3, m: Vec3) -> bool {
 
 /// The inward half-planes of the boundary edges of the triangles `members` (one plane),
 /// when their union is one convex polygon: every corner lies inside every boundary edge.
-fn convex_boundary(mesh: &TriMesh, members: &[usize], tol: f64) -> Option<Vec<(Vec3, Vec3)>> {
+fn convex_boundary(mesh: &TriMesh, faces: &[[u32; 3]], members: &[usize], tol: f64) -> Option<Vec<(Vec3, Vec3)>> {
     let mut used: HashMap<(u32, u32), (usize, usize)> = HashMap::new();
     for &t in members {
-        let f = mesh.faces[t];
+        let f = faces[t];
         for k in 0..3 {
             used.insert((f[k], f[(k + 1) % 3]), (t, k));
         }
@@ -223,6 +234,16 @@ mod tests {
         assert!(!wall_meets(&corners(Vec3::new(0.5, 0.2, 0.0), 0.1), a, b, m)); // beside it
         assert!(!wall_meets(&corners(Vec3::new(1.2, 0.0, 0.0), 0.1), a, b, m)); // past its end
         assert!(wall_meets(&corners(Vec3::new(1.05, 0.0, 0.0), 0.1), a, b, m)); // over its end
+    }
+
+    #[test]
+    fn a_soup_of_unshared_corners_makes_the_same_faces() {
+        // the square of two triangles, each with its own copies of the corners
+        let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let faces = FlatFaces::new(&mesh(&v, &[[0, 1, 2], [3, 4, 5]]));
+        assert!(faces.has_face(0) && faces.has_face(1));
+        assert!(faces.over(0, Vec3::new(0.5, 0.5, 3.0)));
+        assert_eq!((faces.across(0, 2), faces.across(1, 0)), (Some(1), Some(0)));
     }
 
     #[test]
