@@ -41,7 +41,8 @@ pub struct FlatFaces {
 }
 
 impl FlatFaces {
-    /// The convex flat faces of `mesh` (triangles of non-convex or holed faces have none).
+    /// The flat faces of `mesh` and, of the convex ones, their columns' half-planes
+    /// (triangles of non-convex or holed faces have none: [`FlatFaces::concave_group`]).
     pub fn new(mesh: &TriMesh) -> FlatFaces {
         let tol = COPLANAR * mesh.aabb.diagonal().max(f64::MIN_POSITIVE);
         let faces = welded_faces(mesh);
