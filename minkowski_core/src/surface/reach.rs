@@ -2,16 +2,21 @@
 //!
 //! A loose cell (unresolved, or silent and not cleared by its source) may hold boundary its
 //! samples do not show: a sliver or passage thinner than the cell. Every point `x` of a
-//! cell with centre `c` is within `|x - c| + |c - v|` of the surface for any surface vertex
-//! `v`, so half the cell's diagonal plus the distance from its centre to a near vertex
-//! bounds how far the boundary there is from the surface; next to a cell with a sign change
-//! the two cells' joint diagonal bounds it too. The vertex is found on a hash grid of the
-//! surface's vertices, ring by ring around the cell.
+//! cell with centre `c` is within `|x - c| + |c - v|` of the surface for any surface point
+//! `v`, so half the cell's diagonal plus the distance from its centre to a near surface
+//! point bounds how far the boundary there is from the surface; next to a cell with a sign
+//! change the two cells' joint diagonal bounds it too. The point is the nearest vertex,
+//! found on a hash grid of the surface's vertices ring by ring around the cell, or the
+//! nearest point of a triangle longer than the grid's bins (the exact polygons of large
+//! plane-resolved cells, whose corners lie far from the cells over their middle) when that
+//! is nearer.
 //!
 //! Entry point: [`loose_reach`].
 
 use super::Surface;
-use crate::math::Vec3;
+use crate::bvh::Bvh;
+use crate::math::{Aabb, Vec3};
+use crate::polytope::closest_on_triangle;
 use crate::util::FastMap;
 use rayon::prelude::*;
 
@@ -30,11 +35,13 @@ pub fn loose_reach(surface: &Surface, near_cap: f64) -> f64 {
     let points = used_vertices(surface);
     let bin = 2.0 * first.0.extent().max_element();
     let bins = bin_points(&points, bin);
+    let large = LargeFaces::new(surface, bin);
     surface
         .loose_at
         .par_iter()
         .map(|(cell, near)| {
-            let reach = 0.5 * cell.diagonal() + nearest(&bins, &points, cell.center(), bin);
+            let c = cell.center();
+            let reach = 0.5 * cell.diagonal() + large.nearer(surface, c, nearest(&bins, &points, c, bin));
             if *near {
                 reach.min(near_cap)
             } else {
@@ -42,6 +49,36 @@ pub fn loose_reach(surface: &Surface, near_cap: f64) -> f64 {
             }
         })
         .reduce(|| 0.0, f64::max)
+}
+
+/// The faces with an edge longer than a bin, and a BVH over their boxes.
+struct LargeFaces {
+    faces: Vec<[u32; 3]>,
+    bvh: Bvh,
+}
+
+impl LargeFaces {
+    fn new(surface: &Surface, bin: f64) -> LargeFaces {
+        let corners = |f: &[u32; 3]| f.map(|v| surface.vertices[v as usize]);
+        let long = |f: &&[u32; 3]| {
+            let [a, b, c] = corners(f);
+            (b - a).length().max((c - b).length()).max((a - c).length()) > bin
+        };
+        let faces: Vec<[u32; 3]> = surface.faces.iter().filter(long).copied().collect();
+        let boxes: Vec<Aabb> = faces.iter().map(|f| Aabb::from_points(&corners(f))).collect();
+        LargeFaces { bvh: Bvh::build(&boxes), faces }
+    }
+
+    /// The distance from `c` to the surface: `within`, a distance to a surface point,
+    /// unless one of the large faces comes nearer.
+    fn nearer(&self, surface: &Surface, c: Vec3, within: f64) -> f64 {
+        let mut best = within;
+        self.bvh.for_each_within(c, within, |i| {
+            let [a, b, d] = self.faces[i].map(|v| surface.vertices[v as usize]);
+            best = best.min((closest_on_triangle(c, a, b, d) - c).length());
+        });
+        best
+    }
 }
 
 /// The vertices the faces use (a dropped sliver may leave others behind).
@@ -116,6 +153,16 @@ mod tests {
         assert!((reach - (0.5 * 3f64.sqrt() + 2.5)).abs() < 1e-12, "{reach}");
         // next to a sign change the joint diagonal caps it
         assert_eq!(loose_reach(&surface_with(tri, vec![(cell, true)]), 1.0), 1.0);
+    }
+
+    #[test]
+    fn a_large_triangle_is_near_a_cell_over_its_middle_though_its_corners_are_far() {
+        // a plane-resolved polygon's triangle, 40 cells long, and a loose cell just above
+        // its middle: the surface is half a cell from its face, its corners some 20 cells
+        let tri = vec![Vec3::new(-20.0, -20.0, 0.0), Vec3::new(20.0, -20.0, 0.0), Vec3::new(0.0, 20.0, 0.0)];
+        let cell = Aabb::new(Vec3::new(-0.5, -0.5, 0.5), Vec3::new(0.5, 0.5, 1.5));
+        let reach = loose_reach(&surface_with(tri, vec![(cell, false)]), 1e9);
+        assert!((reach - (0.5 * 3f64.sqrt() + 1.0)).abs() < 1e-12, "{reach}");
     }
 
     #[test]
