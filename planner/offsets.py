@@ -334,13 +334,11 @@ def _say_if_hollow(surface: trimesh.Trimesh, stats: dict[str, Any], name: str,
     """Count the inner shells (cavities) of a surface's grown triangles in
     ``stats["inner_shells"]`` and warn when there are any: a closed part taken as its
     triangles grows into a hollow shell where it is thicker than ``2 r``."""
-    from .meshes.topology import components, face_graph  # noqa: PLC0415
+    from .meshes.topology import components, face_graph, signed_volumes  # noqa: PLC0415
 
     faces = np.asarray(surface.faces)
     count, labels = components(len(faces), face_graph(faces)[0])
-    corners = np.asarray(surface.vertices)[faces]
-    six_volumes = np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2]))
-    inner = int((np.bincount(labels, weights=six_volumes, minlength=count) < 0).sum())
+    inner = int((signed_volumes(np.asarray(surface.vertices), faces, labels, count) < 0).sum())
     stats["inner_shells"] = inner
     if inner:
         log.warning("%s grown by %g as a surface (its triangles): the result has %d inner "

@@ -112,15 +112,21 @@ def missing_folder(path: Path) -> Path | None:
     """The outermost folder that writing ``path`` would create (:func:`atomic_write` makes
     missing folders), or ``None`` when its folder exists; said in what a command prints, so
     a mistyped path does not make folders unnoticed."""
-    missing = None
     try:
-        for parent in Path(path).parents:
-            if parent.exists():
-                return missing
-            missing = parent
+        return _nearest_existing(Path(path))[1]
     except OSError:  # a name over the file system's limit: :func:`unwritable` says so
         return None
-    return missing
+
+
+def _nearest_existing(path: Path) -> tuple[Path | None, Path | None]:
+    """The nearest folder above ``path`` that exists, and the outermost one below it that
+    does not (``None`` when ``path``'s own folder exists)."""
+    missing = None
+    for parent in path.parents:
+        if parent.exists():
+            return parent, missing
+        missing = parent
+    return None, missing
 
 
 def created_text(folder: Path | None) -> str:
@@ -131,14 +137,12 @@ def created_text(folder: Path | None) -> str:
 def _unwritable(path: Path) -> str | None:
     if path.is_dir():
         return "is a directory"
-    missing = None  # the outermost folder that would have to be created
-    for parent in path.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                return f"{parent} is a file, not a folder"
-            return _unwritable_in(parent, missing)
-        missing = parent
-    return None
+    parent, missing = _nearest_existing(path)
+    if parent is None:
+        return None
+    if not parent.is_dir():
+        return f"{parent} is a file, not a folder"
+    return _unwritable_in(parent, missing)
 
 
 def _unwritable_in(folder: Path, missing: Path | None) -> str | None:

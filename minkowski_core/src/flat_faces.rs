@@ -15,6 +15,7 @@
 
 use std::collections::HashMap;
 
+use crate::exact::shells::weld;
 use crate::exact::TriMesh;
 use crate::math::Vec3;
 use crate::util::UnionFind;
@@ -97,13 +98,12 @@ impl FlatFaces {
     }
 }
 
-/// The mesh's faces with vertices at one position made one (the first of them): a triangle
+/// The mesh's faces with vertices at one position made one ([`weld`]): a triangle
 /// soup, as OMPL.app ships its environments, repeats each vertex per triangle, and its
 /// faces are joined only where the positions are the same.
 fn welded_faces(mesh: &TriMesh) -> Vec<[u32; 3]> {
-    let mut first: HashMap<[u64; 3], u32> = HashMap::with_capacity(mesh.vertices.len());
-    let canon: Vec<u32> = mesh.vertices.iter().enumerate().map(|(i, v)| *first.entry(v.to_array().map(|c| (c + 0.0).to_bits())).or_insert(i as u32)).collect();
-    mesh.faces.iter().map(|f| f.map(|v| canon[v as usize])).collect()
+    let id = weld(&mesh.vertices);
+    mesh.faces.iter().map(|f| f.map(|v| id[v as usize])).collect()
 }
 
 /// The sets of edge-connected triangles (`faces`, welded) on one plane facing one way

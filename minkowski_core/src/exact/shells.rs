@@ -354,7 +354,7 @@ pub fn closed_shells(vertices: &[Vec3], faces: &[[u32; 3]]) -> Vec<Vec<u32>> {
 }
 
 /// Each vertex's welded id: vertices of equal coordinates share one.
-fn weld(vertices: &[Vec3]) -> Vec<u32> {
+pub(crate) fn weld(vertices: &[Vec3]) -> Vec<u32> {
     let mut ids: HashMap<[u64; 3], u32> = HashMap::with_capacity(vertices.len());
     vertices
         .iter()
