@@ -7,16 +7,19 @@
 //! crease's valley by a good part of the grid's bound, while on smooth parts it lies far
 //! closer. So the error of a whole surface is set by its creases, a set of lines. Here each
 //! triangle whose vertices' normals turn enough for it to sag by more than `tol` is tested
-//! at its edges' midpoints and its centroid; an edge whose midpoint lies farther than `tol`
-//! from its boundary point is split (also the longest edge of a triangle whose centroid
-//! does), and the triangles around it are split with it, so the mesh stays closed,
-//! manifold and oriented the same way. The split point is on the crease when the edge's
-//! ends' normals turn by much ([`on_crease`]: where their tangent planes meet, moved to the
-//! boundary), else the midpoint's boundary point. A split that would fold a triangle over
-//! (its opposite vertex lies about where the crease does) is refused, and the edge is
-//! flipped to the diagonal between its opposite vertices instead when that sags less than
-//! half as much. Rounds repeat on the new triangles, at a cost in triangles that grows
-//! with the creases' length, not the surface's area.
+//! at its edges' midpoints and its centroid, and an edge whose ends' normals turn by much
+//! also where it passes over the crease ([`on_crease`]: where their tangent planes meet,
+//! moved to the boundary; a chord across a lopsided valley sags most there, not at its
+//! middle). An edge that sags by more than `tol` is split (also the longest edge of a
+//! triangle whose centroid does), and the triangles around it are split with it, so the
+//! mesh stays closed, manifold and oriented the same way. The split point is on the crease
+//! when there is one, else the midpoint's boundary point. A split that would fold a
+//! triangle over is refused: a half that faces away both from the triangle and from the
+//! boundary under it (a half on the far sheet of a crease sharper than a right angle turns
+//! from the chord by more than a right angle, yet faces as its sheet does: that one is
+//! kept). A refused edge is flipped to the diagonal between its opposite vertices instead
+//! when that sags less than half as much. Rounds repeat on the new triangles, at a cost in
+//! triangles that grows with the creases' length, not the surface's area.
 //!
 //! The bound the extraction stated still holds: every vertex it made is kept (the argument
 //! that every boundary point lies near one holds as before), and a point of a new triangle
@@ -130,11 +133,26 @@ fn normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     (b - a).cross(c - a)
 }
 
-/// Whether putting the point `m` on the edge `a`–`b` of the triangle `a b c` keeps both
-/// halves facing within a right angle of it (so the split folds nothing over).
-fn split_keeps_facing([a, b, c]: [Vec3; 3], m: Vec3) -> bool {
+/// Whether putting the boundary point `m` on the edge `a`–`b` of the triangle `a b c`
+/// folds nothing over: each half faces within a right angle of the triangle, or of the
+/// boundary under the half's centroid (`under`: the normal there, `None` where it cannot
+/// be found). The second is what a chord across a sharp crease needs: when `c` lies on the
+/// crease, the half on the far sheet turns from the chord by more than a right angle, yet
+/// faces as that sheet does.
+fn split_keeps_facing([a, b, c]: [Vec3; 3], m: Vec3, under: impl Fn([Vec3; 3]) -> Option<Vec3>) -> bool {
     let n = normal(a, b, c);
-    [normal(a, m, c), normal(m, b, c)].iter().all(|h| n.dot(*h) > 0.0)
+    [[a, m, c], [m, b, c]].into_iter().all(|[p, q, r]| {
+        let h = normal(p, q, r);
+        n.dot(h) > 0.0 || under([p, q, r]).is_some_and(|at| h.dot(at) > 0.0)
+    })
+}
+
+/// The boundary's normal under the centroid of the triangle `corners`, whose corners lie
+/// within `off` of the boundary.
+fn normal_under(boundary: &Boundary<'_>, corners: [Vec3; 3], off: f64) -> Option<Vec3> {
+    let c = (corners[0] + corners[1] + corners[2]) / 3.0;
+    let reach = corners.iter().map(|&p| (p - c).length()).fold(f64::INFINITY, f64::min) + off;
+    boundary(c, reach).map(|(_, n)| n)
 }
 
 /// The sag of the point `x`, within `reach` of a boundary point: how far its boundary
@@ -176,6 +194,14 @@ fn on_crease(v: &[Vec3], normals: &[Option<Vec3>], (i, j): (u32, u32), (boundary
     boundary(x, (x - a).length().min((x - b).length()) + off)
 }
 
+/// How far the point `p` lies from the edge `e` (its sag under the edge, for a point on the
+/// boundary under it).
+fn below_edge(v: &[Vec3], (i, j): (u32, u32), p: Vec3) -> f64 {
+    let (a, b) = (v[i as usize], v[j as usize]);
+    let s = ((p - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+    (p - (a + (b - a) * s)).length()
+}
+
 /// One round's tests on the triangles `cands` of `faces`: the point to split each edge at
 /// whose midpoint sags by more than `tol` (on the crease it crosses, else the midpoint's
 /// boundary point), also the longest edge of a triangle whose centroid does. Records the
@@ -201,9 +227,20 @@ fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cand
         .collect();
     stats.tested += edges.len() + cands.len();
     stats.sag_left = at_mid.iter().chain(&at_centre).flatten().map(|s| s.0).fold(0.0, f64::max);
+    // an edge across a crease sags most where it passes over the crease, not at its middle
+    let at_crease: Vec<Option<(f64, BoundaryPoint)>> = edges.par_iter().map(|&e| on_crease(v, normals, e, (boundary, off)).map(|p| (below_edge(v, e, p.0), p))).collect();
+    stats.sag_left = stats.sag_left.max(at_crease.iter().flatten().map(|s| s.0).fold(0.0, f64::max));
+    let sagging: Vec<((u32, u32), BoundaryPoint)> = edges
+        .iter()
+        .zip(at_mid.iter().zip(&at_crease))
+        .filter_map(|(&e, (mid, crease))| match (mid, crease) {
+            (_, Some(c)) if c.0 > tol || mid.is_some_and(|m| m.0 > tol) => Some((e, c.1)),
+            (Some(m), _) if m.0 > tol => Some((e, m.1)),
+            _ => None,
+        })
+        .collect();
     let mid_of: FastMap<(u32, u32), Option<(f64, BoundaryPoint)>> = edges.iter().copied().zip(at_mid).collect();
-    let sagging: Vec<((u32, u32), BoundaryPoint)> = mid_of.iter().filter_map(|(&e, s)| s.filter(|s| s.0 > tol).map(|s| (e, s.1))).collect();
-    let mut split: Splits = sagging.into_par_iter().map(|(e, at_mid)| (e, on_crease(v, normals, e, (boundary, off)).unwrap_or(at_mid))).collect();
+    let mut split: Splits = sagging.into_iter().collect();
     for (&fi, centre) in cands.iter().zip(&at_centre) {
         let sags = matches!(centre, Some(s) if s.0 > tol);
         let f = faces[fi];
@@ -220,7 +257,7 @@ fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cand
 /// Drop from `split` every edge next to a triangle whose covering radius is above `covers`,
 /// or would be in a half of it, or which its boundary point would fold
 /// ([`split_keeps_facing`]). Returns the edges dropped.
-fn keep_unfolded_splits(v: &[Vec3], faces: &[[u32; 3]], split: &mut FastMap<(u32, u32), BoundaryPoint>, covers: f64) -> Vec<(u32, u32)> {
+fn keep_unfolded_splits(v: &[Vec3], faces: &[[u32; 3]], split: &mut FastMap<(u32, u32), BoundaryPoint>, (boundary, off): (&Boundary<'_>, f64), covers: f64) -> Vec<(u32, u32)> {
     let mut refused = Vec::new();
     for &f in faces {
         let wide = longest_edge(v, f).0 / 3f64.sqrt() > covers;
@@ -228,7 +265,7 @@ fn keep_unfolded_splits(v: &[Vec3], faces: &[[u32; 3]], split: &mut FastMap<(u32
             let corners = [f[k], f[(k + 1) % 3], f[(k + 2) % 3]];
             let e = edge_key(corners[0], corners[1]);
             let Some(&m) = split.get(&e) else { continue };
-            let folds = !split_keeps_facing(corners.map(|i| v[i as usize]), m.0);
+            let folds = !split_keeps_facing(corners.map(|i| v[i as usize]), m.0, |half| normal_under(boundary, half, off));
             let p = corners.map(|i| v[i as usize]);
             let halves_wide = [[p[0], m.0, p[2]], [m.0, p[1], p[2]]].iter().any(|h| (0..3).any(|k| (h[k] - h[(k + 1) % 3]).length() / 3f64.sqrt() > covers));
             if folds || halves_wide || wide {
@@ -314,7 +351,7 @@ pub fn refine_sag(s: &mut Surface, boundary: &Boundary<'_>, (tol, covers): (f64,
     let mut cands: Vec<usize> = (0..s.faces.len()).filter(|&fi| may_sag(&s.vertices, &normals, s.faces[fi], (tol, covers))).collect();
     while !cands.is_empty() && stats.rounds < MAX_ROUNDS && s.faces.len() < budget && !crate::deadline::cancelled() {
         let mut split = edges_to_split(&s.vertices, &normals, &s.faces, &cands, (boundary, off), tol, &mut stats);
-        let refused = keep_unfolded_splits(&s.vertices, &s.faces, &mut split, covers);
+        let refused = keep_unfolded_splits(&s.vertices, &s.faces, &mut split, (boundary, off), covers);
         let flipped = flip_sagging(s, &refused, &split, (boundary, off), covers);
         if split.is_empty() && flipped.is_empty() {
             break;
@@ -364,7 +401,12 @@ mod tests {
     const SLOPE: f64 = 1.0;
 
     fn on_valley(p: Vec3) -> BoundaryPoint {
-        let sides = [Vec3::new(-SLOPE, 0.0, 1.0).normalize(), Vec3::new(SLOPE, 0.0, 1.0).normalize()];
+        on_valley_of(SLOPE, p)
+    }
+
+    /// [`on_valley`] for the valley `z = slope |x|`.
+    fn on_valley_of(slope: f64, p: Vec3) -> BoundaryPoint {
+        let sides = [Vec3::new(-slope, 0.0, 1.0).normalize(), Vec3::new(slope, 0.0, 1.0).normalize()];
         // the nearest point on each half-plane through the crease (x = 0, z = 0), clamped to it
         let on_half = |n: Vec3, sign: f64| {
             let q = p - n * p.dot(n);
@@ -447,6 +489,39 @@ mod tests {
         }));
         // the bound's share: no triangle made covers more than the ones it came from
         assert!(stats.covering <= 0.75, "{stats:?}");
+    }
+
+    #[test]
+    fn a_chord_across_a_crease_sharper_than_a_right_angle_is_split_at_the_crease() {
+        // the valley z = 2 |x| turns by 127 degrees; the triangle's corner c lies on the
+        // crease, level with a, so the half of the split on b's sheet turns from the chord
+        // by more than a right angle (the old test of facing refused it), yet faces up
+        let slope = 2.0;
+        let (a, c, b) = (Vec3::new(-1.0, 0.0, slope), Vec3::ZERO, Vec3::new(1.0, 1.0, slope));
+        let mut s = Surface { vertices: vec![a, c, b], faces: vec![[0, 1, 2]], ..Surface::default() };
+        assert!(normal(a, c, b).z > 0.0);
+        let sag = |s: &Surface| {
+            let [p, q, r] = s.faces[0].map(|i| s.vertices[i as usize]);
+            s.faces
+                .iter()
+                .map(|f| f.map(|i| s.vertices[i as usize]))
+                .flat_map(|[p, q, r]| [(p + q) * 0.5, (q + r) * 0.5, (r + p) * 0.5, (p + q + r) / 3.0])
+                .chain([p, q, r])
+                .map(|x| (on_valley_of(slope, x).0 - x).length())
+                .fold(0.0, f64::max)
+        };
+        let before = sag(&s);
+        let tol = 0.01;
+        assert!(before > 0.3, "the chord sags by {before}");
+        let stats = refine_sag(&mut s, &|p, _| Some(on_valley_of(slope, p)), (tol, 10.0), 0.0);
+        assert!(stats.splits > 0, "{stats:?}");
+        // the split point is the crease under the edge a-b: (0, 0.5, 0)
+        assert!(s.vertices.iter().any(|v| (*v - Vec3::new(0.0, 0.5, 0.0)).length() < 1e-12), "{:?}", s.vertices);
+        assert!(sag(&s) <= tol, "still sags by {} after {stats:?}", sag(&s));
+        assert!(s.faces.iter().all(|f| {
+            let [p, q, r] = f.map(|i| s.vertices[i as usize]);
+            normal(p, q, r).z > 0.0
+        }));
     }
 
     #[test]
