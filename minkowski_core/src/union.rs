@@ -311,12 +311,14 @@ pub fn approximate_solid<S: CellSource>(set: &S, region: &Aabb, params: &UnionPa
     }
     let mut r = best.expect("at least one round");
     r.triangles_extracted = r.surface.faces.len();
+    // the sag refinement first: merging coplanar triangles would make the chords across a
+    // straight crease (a strip of them in one plane) a few long triangles, too long to split
+    if set.has_boundary_points() {
+        refine_sag_of(&mut r, set);
+    }
     if params.simplify {
         let min_area = 1e-12 * r.h * r.h;
         simplify(&mut r, region.diagonal(), min_area);
-    }
-    if set.has_boundary_points() {
-        refine_sag_of(&mut r, set);
     }
     kept_apart(&mut r);
     Ok(r)
