@@ -203,9 +203,9 @@ fn below_edge(v: &[Vec3], (i, j): (u32, u32), p: Vec3) -> f64 {
 }
 
 /// One round's tests on the triangles `cands` of `faces`: the point to split each edge at
-/// whose midpoint sags by more than `tol` (on the crease it crosses, else the midpoint's
-/// boundary point), also the longest edge of a triangle whose centroid does. Records the
-/// largest sag seen.
+/// whose midpoint, or crease point ([`on_crease`]), sags by more than `tol` (the crease
+/// point when there is one, else the midpoint's boundary point), also the longest edge of
+/// a triangle whose centroid does. Records the largest sag seen.
 fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cands: &[usize], (boundary, off): (&Boundary<'_>, f64), tol: f64, stats: &mut SagStats) -> Splits {
     let mut edges: Vec<(u32, u32)> = cands.iter().flat_map(|&fi| (0..3).map(move |k| edge_key(faces[fi][k], faces[fi][(k + 1) % 3]))).collect();
     edges.sort_unstable();
