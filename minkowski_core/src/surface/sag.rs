@@ -225,12 +225,11 @@ fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cand
             sag_at(boundary, c, corners.iter().map(|&p| (p - c).length()).fold(f64::INFINITY, f64::min) + off)
         })
         .collect();
-    stats.tested += edges.len() + cands.len();
-    stats.sag_left = at_mid.iter().chain(&at_centre).flatten().map(|s| s.0).fold(0.0, f64::max);
     // an edge across a crease sags most where it passes over the crease, not at its middle
     let at_crease: Vec<Option<(f64, BoundaryPoint)>> = edges.par_iter().map(|&e| on_crease(v, normals, e, (boundary, off)).map(|p| (below_edge(v, e, p.0), p))).collect();
-    stats.sag_left = stats.sag_left.max(at_crease.iter().flatten().map(|s| s.0).fold(0.0, f64::max));
-    let sagging: Vec<((u32, u32), BoundaryPoint)> = edges
+    stats.tested += edges.len() + cands.len();
+    stats.sag_left = at_mid.iter().chain(&at_centre).chain(&at_crease).flatten().map(|s| s.0).fold(0.0, f64::max);
+    let mut split: Splits = edges
         .iter()
         .zip(at_mid.iter().zip(&at_crease))
         .filter_map(|(&e, (mid, crease))| match (mid, crease) {
@@ -240,7 +239,6 @@ fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cand
         })
         .collect();
     let mid_of: FastMap<(u32, u32), Option<(f64, BoundaryPoint)>> = edges.iter().copied().zip(at_mid).collect();
-    let mut split: Splits = sagging.into_iter().collect();
     for (&fi, centre) in cands.iter().zip(&at_centre) {
         let sags = matches!(centre, Some(s) if s.0 > tol);
         let f = faces[fi];
