@@ -51,6 +51,11 @@ const SLAB_BOTH: u32 = 1 << 29;
 /// How far, relative to the radius, a boundary point found beyond the surface point it
 /// projects may lie off the boundary ([`OffsetSource::boundary_point`]): rounding only.
 const BOUNDARY_POINT_TOL: f64 = 1e-9;
+/// How far along a segment, as a fraction of it, the ends of a record's interval on it
+/// must lie from one of its ends for that end's membership to be taken from the interval
+/// ([`OffsetSource::near_interval`]): the closed form and the distance may differ by
+/// rounding only nearer than that.
+const END_MARGIN: f64 = 1e-4;
 /// The triangle index of a record.
 const INDEX: u32 = SLAB_BOTH - 1;
 /// Record of no triangle: the cell misses `∂P` and lies inside `P`. A cell that misses
@@ -198,17 +203,25 @@ impl<'a> OffsetSource<'a> {
         })
     }
 
-    /// The part `[s0, s1]` of `a → b` within the radius of triangle `t`, if any. The ends'
-    /// memberships come from [`Self::distance`] (as every point query's do); the crossings
-    /// between them are the closed-form [`near_hull`] of the segment's line, clipped to it.
+    /// The part `[s0, s1]` of `a → b` within the radius of triangle `t`, if any: the
+    /// closed-form [`near_hull`] of the segment's line, clipped to it. An end that interval
+    /// holds or leaves by at least [`END_MARGIN`] of the segment is as it says (the
+    /// neighbourhood's boundary is that far off along the line); any other end, and both
+    /// when the line misses the neighbourhood, takes its membership from
+    /// [`Self::distance`], as every point query does, so that the two agree where rounding
+    /// could part them.
     fn near_interval(&self, t: u32, a: Vec3, b: Vec3) -> Option<(f64, f64)> {
-        let near_a = self.distance(t, a) <= self.radius;
-        let near_b = self.distance(t, b) <= self.radius;
+        let i = (t & INDEX) as usize;
+        let hull = near_hull(self.mesh.tris[i].p, &self.faces[i], self.radius, a, b - a);
+        let near = |s: f64, x: Vec3| match hull {
+            Some((lo, hi)) if lo < s - END_MARGIN && hi > s + END_MARGIN => true,
+            Some((lo, hi)) if lo > s + END_MARGIN || hi < s - END_MARGIN => false,
+            _ => self.distance(t, x) <= self.radius,
+        };
+        let (near_a, near_b) = (near(0.0, a), near(1.0, b));
         if near_a && near_b {
             return Some((0.0, 1.0));
         }
-        let face = &self.faces[(t & INDEX) as usize];
-        let hull = near_hull(self.mesh.tris[(t & INDEX) as usize].p, face, self.radius, a, b - a);
         match (near_a, near_b, hull) {
             (true, false, Some((_, hi))) => Some((0.0, hi.clamp(0.0, 1.0))),
             (true, false, None) => Some((0.0, 0.0)),
