@@ -330,9 +330,64 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
         s.vertices[v as usize] = place + into_fan(place, star[&v].iter().map(|&t| corners(t))) * step;
         longest_move = longest_move.max(step);
     }
-    s.sheets_apart += longest_collapse + longest_move;
-    let left = if moving.is_empty() { 0 } else { ends(&coinciding(s)).len() };
-    collapsed.len() + moving.len().saturating_sub(left)
+    let left = if moving.is_empty() { Vec::new() } else { coinciding(s) };
+    let (pushed, longest_push) = push_apart(s, &left);
+    s.sheets_apart += longest_collapse + longest_move + longest_push;
+    collapsed.len() + moving.len().saturating_sub(ends(&left).len()) + pushed
+}
+
+/// Part the pairs `left` that a reader may still weld after the collapses and the moves
+/// into the fans (a move held short by slivers about the vertex: a thin sheet's edge
+/// eroded to a few 1e-9): one vertex of each moves away from the other, along the line
+/// through them by twice the weld's reach on the axis that line runs most along, or else
+/// along one axis by twice the reach (the way their difference on it points), the first
+/// move that turns over no triangle about it and leaves none without area; the other
+/// vertex is tried when none of the first's does. Returns how many vertices moved and the
+/// longest move.
+fn push_apart(s: &mut Surface, left: &[(u32, u32)]) -> (usize, f64) {
+    if left.is_empty() {
+        return (0, 0.0);
+    }
+    let mut ends: Vec<u32> = left.iter().flat_map(|&(a, b)| [a, b]).collect();
+    ends.sort_unstable();
+    ends.dedup();
+    let star = stars(&s.faces, &ends);
+    let (mut pushed, mut longest): (usize, f64) = (0, 0.0);
+    for &(u, v) in left {
+        if !may_weld(s.vertices[u as usize], s.vertices[v as usize]) {
+            continue; // an earlier push parted them
+        }
+        'pair: for (moving, other) in [(v, u), (u, v)] {
+            let (p, q) = (s.vertices[moving as usize], s.vertices[other as usize]);
+            let away = (p - q).normalize_or_zero();
+            if away == Vec3::ZERO {
+                break;
+            }
+            let reach = 2.0 * weld_reach(p.abs().max_element().max(q.abs().max_element()));
+            let along_axes = (0..3).map(|k| (Vec3::AXES[k] * away[k].signum(), reach));
+            for (dir, step) in std::iter::once((away, reach / away.abs().max_element())).chain(along_axes) {
+                let to = p + dir * step;
+                if !turns_over(s, &star[&moving], moving, to) {
+                    s.vertices[moving as usize] = to;
+                    pushed += 1;
+                    longest = longest.max(step);
+                    break 'pair;
+                }
+            }
+        }
+    }
+    (pushed, longest)
+}
+
+/// Whether moving vertex `v` to `to` turns over a triangle of `tris` (its star) or
+/// leaves one with no area.
+fn turns_over(s: &Surface, tris: &[usize], v: u32, to: Vec3) -> bool {
+    let at = |c: u32, moved: bool| if moved && c == v { to } else { s.vertices[c as usize] };
+    let normal = |f: [u32; 3], moved: bool| (at(f[1], moved) - at(f[0], moved)).cross(at(f[2], moved) - at(f[0], moved));
+    tris.iter().any(|&t| {
+        let (old, new) = (normal(s.faces[t], false), normal(s.faces[t], true));
+        new.length_squared() == 0.0 || old.dot(new) <= 0.0
+    })
 }
 
 /// The pairs of used vertices a reader may weld ([`may_weld`]), each once, in order.
@@ -989,10 +1044,49 @@ mod tests {
 
         let tiny = |k: usize| o + Vec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, (k >> 2) as f64) * 2e-9;
         let mut s = Surface { vertices: vec![tiny(0), tiny(1), tiny(2), tiny(4)], faces: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], ..Default::default() };
-        // (its corners cannot move apart either: by a sixth of their heights at most)
-        assert_eq!(part_coincident_vertices(&mut s, 0.1), 0);
+        let volume =
+            |s: &Surface| s.faces.iter().map(|f| (s.vertices[f[0] as usize] - o).dot((s.vertices[f[1] as usize] - o).cross(s.vertices[f[2] as usize] - o)) / 6.0).sum::<f64>();
+        assert!(volume(&s) > 0.0);
+        // its corners cannot move into their fans by more than a sixth of their heights,
+        // so they are pushed apart along its edges instead, none turning a face over
+        let parted = part_coincident_vertices(&mut s, 0.1);
+        assert!(parted >= 3, "{parted}");
         assert_eq!(s.faces.len(), 4, "no collapse folds the tetrahedron");
         assert!(open_edges(&s.faces).is_empty() && pinched_vertices(&s.faces).is_empty());
+        assert!(coinciding(&s).is_empty(), "{:?}", s.vertices);
+        assert!(volume(&s) > 0.0, "still outward: {}", volume(&s));
+        let moved = (0..4).map(|k| (s.vertices[k] - [tiny(0), tiny(1), tiny(2), tiny(4)][k]).length()).fold(0.0, f64::max);
+        assert!(moved > 0.0 && moved <= s.sheets_apart, "{moved} {}", s.sheets_apart);
+    }
+
+    /// Two vertices a few 1e-9 apart among slivers (the apexes of a flat double cone, as a
+    /// thin sheet's eroded edge leaves them): the push moves one away from the other along
+    /// the line through them, by twice the weld's reach on its main axis, and turns no
+    /// triangle over.
+    #[test]
+    fn vertices_among_slivers_are_pushed_apart_along_the_line_through_them() {
+        let o = Vec3::new(0.005, -0.0003, 0.03);
+        let (u, v) = (o, o + Vec3::new(5e-10, 8.7e-9, 5e-10));
+        let far = |x: f64, y: f64, z: f64| o + Vec3::new(x, y, z) * 1e-5;
+        let vertices = vec![u, v, far(-1.0, 0.0, 0.0), far(1.0, 0.0, 0.0), far(0.0, 0.001, 1.0), far(0.0, -0.001, 1.0)];
+        // the double cone over the loop 2 → 4 → 3 → 5 with apexes u and v, both a hair
+        // off the loop's plane: every triangle is a sliver about them
+        let faces = vec![[0, 2, 4], [0, 4, 3], [0, 3, 5], [0, 5, 2], [1, 4, 2], [1, 3, 4], [1, 5, 3], [1, 2, 5]];
+        let mut s = Surface { vertices, faces, ..Default::default() };
+        assert!(open_edges(&s.faces).is_empty());
+        assert_eq!(coinciding(&s), vec![(0, 1)]);
+        let normal = |s: &Surface, f: [u32; 3]| (s.vertices[f[1] as usize] - s.vertices[f[0] as usize]).cross(s.vertices[f[2] as usize] - s.vertices[f[0] as usize]);
+        let before: Vec<Vec3> = s.faces.iter().map(|&f| normal(&s, f)).collect();
+        let (pushed, step) = push_apart(&mut s, &[(0, 1)]);
+        assert_eq!(pushed, 1);
+        assert!(coinciding(&s).is_empty(), "{:?} {:?}", s.vertices[0], s.vertices[1]);
+        let (u2, v2) = (s.vertices[0], s.vertices[1]);
+        assert!(u2 == u || v2 == v, "one of the two moves");
+        assert!(((v2 - u2).normalize() - (v - u).normalize()).length() < 1e-6, "along the line through them");
+        assert!(step > 0.0 && step <= 2.0 * 3f64.sqrt() * weld_reach(0.03), "{step}");
+        for (&f, n) in s.faces.iter().zip(&before) {
+            assert!(normal(&s, f).dot(*n) > 0.0, "a triangle turned over");
+        }
     }
 
     #[test]
