@@ -321,7 +321,7 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
     stats["method"] = used
     stats["kind"] = "solid" if part.solid else "surface"
     if not part.solid:
-        _say_if_hollow(surface, stats, name, radius)
+        _say_if_hollow(surface, stats, name, radius, part.reason)
     stats["changes"] = dict(part.changes)
     stats["seconds"] = time.perf_counter() - t0
     if part.changes:
@@ -330,10 +330,11 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
 
 
 def _say_if_hollow(surface: trimesh.Trimesh, stats: dict[str, Any], name: str,
-                   radius: float) -> None:
+                   radius: float, reason: str) -> None:
     """Count the inner shells (cavities) of a surface's grown triangles in
-    ``stats["inner_shells"]`` and warn when there are any: a closed part taken as its
-    triangles grows into a hollow shell where it is thicker than ``2 r``."""
+    ``stats["inner_shells"]`` and warn when there are any: a part taken as its triangles
+    (``reason``: why it is no solid) grows into a hollow shell where it is thicker than
+    ``2 r``."""
     from .meshes.topology import components, face_graph, signed_volumes  # noqa: PLC0415
 
     faces = np.asarray(surface.faces)
@@ -342,9 +343,9 @@ def _say_if_hollow(surface: trimesh.Trimesh, stats: dict[str, Any], name: str,
     stats["inner_shells"] = inner
     if inner:
         log.warning("%s grown by %g as a surface (its triangles): the result has %d inner "
-                    "shell(s), hollow where the part is thicker than %g; as a solid "
-                    "(kind 'solid', or --repair) it would be filled", name, radius, inner,
-                    2 * radius)
+                    "shell(s), hollow where the part is thicker than %g; it was taken as a "
+                    "surface (%s), and a solid is filled (--repair closes holes where it can)",
+                    name, radius, inner, 2 * radius, reason)
 
 
 def _nothing_left(name: str, depth: float, sheet: float) -> str:
