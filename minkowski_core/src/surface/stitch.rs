@@ -278,10 +278,11 @@ fn may_weld(p: Vec3, q: Vec3) -> bool {
 /// edge. Such a pair joined by an edge is made one (the edge collapsed, [`collapse_edge`],
 /// keeping either end) where the surface stays a closed manifold and no triangle turns
 /// over; the vertices of the other pairs each move into their own triangles as
-/// [`unzip_touching_sheets`] moves a copy. `s.sheets_apart` grows by the longest edge collapsed plus the longest move
-/// (a vertex may have been moved before, and a kept end may move after its collapse).
-/// Returns how many vertices were collapsed or moved clear of every other (a move held
-/// short by thin triangles about the vertex counts none).
+/// [`unzip_touching_sheets`] moves a copy, and a pair such moves leave within a weld (held
+/// short by thin triangles about them) is pushed apart ([`push_apart`]). `s.sheets_apart`
+/// grows by the longest edge collapsed plus the longest move plus the longest push (a
+/// vertex may have been moved before, and a kept end may move after its collapse).
+/// Returns how many vertices were collapsed or moved clear of every other.
 pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
     let pairs = coinciding(s);
     if pairs.is_empty() {
