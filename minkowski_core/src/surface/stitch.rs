@@ -617,20 +617,29 @@ fn split_t_junctions(s: &mut Surface, tol: f64) {
             faces.push(f);
             continue;
         }
-        // the triangle's ring with the split points in order, as a fan about its centroid
-        let mut ring = Vec::new();
-        for e in edges {
-            ring.push(e.0);
-            ring.extend(on.get(&e).into_iter().flatten());
-        }
-        let c = (s.vertices[f[0] as usize] + s.vertices[f[1] as usize] + s.vertices[f[2] as usize]) / 3.0;
-        let centre = s.vertices.len() as u32;
-        s.vertices.push(c);
-        for i in 0..ring.len() {
-            faces.push([centre, ring[i], ring[(i + 1) % ring.len()]]);
-        }
+        let points = |e: (u32, u32)| on.get(&e).map_or(&[][..], Vec::as_slice);
+        split_at_edge_points(f, [points(edges[0]), points(edges[1]), points(edges[2])], &mut faces);
     }
     s.faces = faces;
+}
+
+/// The triangle `f` with the points `on[k]` on its edge from corner `k` to corner `k + 1`
+/// (in order from corner `k`) split into triangles that have them as corners, with no new
+/// vertex: the edge with the most points is split at its middle one towards the opposite
+/// corner, and each half is split so in turn. Both halves keep the orientation and have
+/// area (the point lies inside its edge, the opposite corner off it). (A vertex at the
+/// centroid, as a fan would need, lies off the surface by the triangle's sag: across a
+/// crease, by a sixth of the cell.)
+fn split_at_edge_points(f: [u32; 3], on: [&[u32]; 3], out: &mut Vec<[u32; 3]>) {
+    let Some(k) = (0..3).filter(|&k| !on[k].is_empty()).max_by_key(|&k| on[k].len()) else {
+        out.push(f);
+        return;
+    };
+    let (a, b, c) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
+    let m = on[k].len() / 2;
+    let p = on[k][m];
+    split_at_edge_points([a, p, c], [&on[k][..m], &[], on[(k + 2) % 3]], out);
+    split_at_edge_points([p, b, c], [&on[k][m + 1..], on[(k + 1) % 3], &[]], out);
 }
 
 /// Per edge (by index in `edges`) the `points` that lie on it within `tol`, strictly
@@ -1058,6 +1067,34 @@ mod tests {
         assert!(volume(&s) > 0.0, "still outward: {}", volume(&s));
         let moved = (0..4).map(|k| (s.vertices[k] - [tiny(0), tiny(1), tiny(2), tiny(4)][k]).length()).fold(0.0, f64::max);
         assert!(moved > 0.0 && moved <= s.sheets_apart, "{moved} {}", s.sheets_apart);
+    }
+
+    /// A triangle with points on all three edges (two on one, one on each other) is split
+    /// into triangles with those points as corners and no new vertex: all face as it did,
+    /// none lacks area, they cover its area once, and their open edges are its edges'
+    /// pieces between the points, each once in its direction.
+    #[test]
+    fn a_triangle_is_split_at_points_on_its_edges_without_a_new_vertex() {
+        let mut v = vec![Vec3::ZERO, Vec3::new(4.0, 0.0, 0.0), Vec3::new(0.0, 3.0, 0.0)];
+        let mut on_edge = |a: usize, b: usize, t: f64| {
+            v.push(v[a] + (v[b] - v[a]) * t);
+            v.len() as u32 - 1
+        };
+        let (p, q) = (on_edge(0, 1, 0.25), on_edge(0, 1, 0.75));
+        let (r, w) = (on_edge(1, 2, 0.5), on_edge(2, 0, 0.4));
+        let mut out = Vec::new();
+        split_at_edge_points([0, 1, 2], [&[p, q], &[r], &[w]], &mut out);
+        assert_eq!(out.len(), 5, "one triangle more per point: {out:?}");
+        let normal = |f: &[u32; 3]| (v[f[1] as usize] - v[f[0] as usize]).cross(v[f[2] as usize] - v[f[0] as usize]);
+        assert!(out.iter().all(|f| normal(f).z > 1e-9), "{out:?}");
+        let area: f64 = out.iter().map(|f| 0.5 * normal(f).z).sum();
+        assert!((area - 6.0).abs() < 1e-12, "{area}");
+        assert!(out.iter().all(|f| f.iter().all(|&c| (c as usize) < v.len())));
+        let mut open = open_edges(&out);
+        open.sort_unstable();
+        let mut pieces = vec![(0, p), (p, q), (q, 1), (1, r), (r, 2), (2, w), (w, 0)];
+        pieces.sort_unstable();
+        assert_eq!(open, pieces);
     }
 
     /// Two vertices a few 1e-9 apart among slivers (the apexes of a flat double cone, as a
