@@ -333,7 +333,7 @@ def _say_if_hollow(surface: trimesh.Trimesh, stats: dict[str, Any], name: str,
                    radius: float, reason: str) -> None:
     """Count the inner shells (cavities) of a surface's grown triangles in
     ``stats["inner_shells"]`` and warn when there are any: a part taken as its triangles
-    (``reason``: why it is no solid) grows into a hollow shell where it is thicker than
+    (``reason``: why it was taken so) grows into a hollow shell where it is thicker than
     ``2 r``."""
     from .meshes.topology import components, face_graph, signed_volumes  # noqa: PLC0415
 

@@ -592,7 +592,8 @@ def test_an_eroded_bolt_thread_reads_back_closed_through_a_welding_reader(tmp_pa
     1e-9 thick, whose edges left two vertices 8.75e-9 apart among slivers (no collapse
     keeps the surface a manifold there, and a move into their fans was held to a sixth of
     the slivers' heights). trimesh's load welds within 1e-8, so the file read back with
-    three edges used four times; such vertices are now pushed apart along one line."""
+    three edges used four times; such vertices are now pushed apart (along the line
+    through them, or an axis)."""
     from conftest import asset
 
     source = asset("assemblies/factory_nut_bolt_m12/meshes/factory_bolt_m12_loose.obj")
