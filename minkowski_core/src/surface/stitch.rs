@@ -288,13 +288,7 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
     if pairs.is_empty() {
         return 0;
     }
-    let ends = |pairs: &[(u32, u32)]| -> Vec<u32> {
-        let mut v: Vec<u32> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
-        v.sort_unstable();
-        v.dedup();
-        v
-    };
-    let mut star = stars(&s.faces, &ends(&pairs));
+    let mut star = stars(&s.faces, &pair_ends(&pairs));
     let mut gone = vec![false; s.faces.len()];
     let mut collapsed: FastSet<u32> = FastSet::default();
     let mut longest_collapse: f64 = 0.0;
@@ -319,9 +313,9 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
         // numbered anew (in the same order)
         let remap = drop_unused_vertices(s);
         pairs = pairs.iter().map(|&(a, b)| (remap[a as usize], remap[b as usize])).filter(|&(a, b)| a != u32::MAX && b != u32::MAX).collect();
-        star = stars(&s.faces, &ends(&pairs));
+        star = stars(&s.faces, &pair_ends(&pairs));
     }
-    let moving = ends(&pairs);
+    let moving = pair_ends(&pairs);
     let before = s.vertices.clone();
     let mut longest_move: f64 = 0.0;
     for &v in &moving {
@@ -334,7 +328,15 @@ pub fn part_coincident_vertices(s: &mut Surface, h: f64) -> usize {
     let left = if moving.is_empty() { Vec::new() } else { coinciding(s) };
     let (pushed, longest_push) = push_apart(s, &left);
     s.sheets_apart += longest_collapse + longest_move + longest_push;
-    collapsed.len() + moving.len().saturating_sub(ends(&left).len()) + pushed
+    collapsed.len() + moving.len().saturating_sub(pair_ends(&left).len()) + pushed
+}
+
+/// The vertices of `pairs`, each once, in order.
+fn pair_ends(pairs: &[(u32, u32)]) -> Vec<u32> {
+    let mut v: Vec<u32> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
+    v.sort_unstable();
+    v.dedup();
+    v
 }
 
 /// Part the pairs `left` that a reader may still weld after the collapses and the moves
@@ -349,10 +351,7 @@ fn push_apart(s: &mut Surface, left: &[(u32, u32)]) -> (usize, f64) {
     if left.is_empty() {
         return (0, 0.0);
     }
-    let mut ends: Vec<u32> = left.iter().flat_map(|&(a, b)| [a, b]).collect();
-    ends.sort_unstable();
-    ends.dedup();
-    let star = stars(&s.faces, &ends);
+    let star = stars(&s.faces, &pair_ends(left));
     let (mut pushed, mut longest): (usize, f64) = (0, 0.0);
     for &(u, v) in left {
         if !may_weld(s.vertices[u as usize], s.vertices[v as usize]) {
@@ -451,16 +450,8 @@ fn collapse_edge(s: &mut Surface, star: &mut FastMap<u32, Vec<usize>>, gone: &mu
     if !link_edges(&su, u).is_disjoint(&link_edges(&sv, v)) {
         return false;
     }
-    let at = |c: u32| s.vertices[c as usize];
-    let normal = |f: [u32; 3]| (at(f[1]) - at(f[0])).cross(at(f[2]) - at(f[0]));
     let moved: Vec<usize> = sv.iter().copied().filter(|t| !shared.contains(t)).collect();
-    let turns = moved.iter().any(|&t| {
-        let f = s.faces[t];
-        let g = f.map(|c| if c == v { u } else { c });
-        let (old, new) = (normal(f), normal(g));
-        new.length_squared() == 0.0 || old.dot(new) <= 0.0
-    });
-    if turns {
+    if turns_over(s, &moved, v, s.vertices[u as usize]) {
         return false;
     }
     for &t in &moved {
