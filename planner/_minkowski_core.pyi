@@ -24,6 +24,7 @@ __all__ = [
     "set_record_budget",
     "set_time_limit",
     "solid_windings",
+    "tidy_solid_windings",
     "union_surface",
     "winding_numbers",
 ]
@@ -87,6 +88,15 @@ def solid_windings(
     """Both windings above, how many crossings have the solid on both sides of both
     faces (winding 2 or more behind both: shells that overlap), and the checked solid
     when no winding is negative or unknown."""
+def tidy_solid_windings(
+    vertices: npt.NDArray[np.float64],
+    faces: npt.NDArray[np.int64],
+    limits: tuple[float, float, float, float, float],
+    name: str = "mesh",
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], int, CheckedMesh] | None:
+    """``solid_windings`` of a mesh the cleaning would not change (``limits``: merge
+    distance, degenerate area, flat volume, fold angle, coplanar distance, in the mesh's
+    units) that is a solid; ``None`` otherwise."""
 def closed_shell_sizes(
     vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]
 ) -> list[int]:

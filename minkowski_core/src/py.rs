@@ -2,7 +2,8 @@
 //! [`CoreError`] to the exception classes of `planner.errors` in one place.
 
 use crate::error::CoreError;
-use crate::exact::{ExactSource, TriMesh};
+use crate::exact::tidy::{tidy_shells, TidyLimits};
+use crate::exact::{ExactSource, TriMesh, Windings};
 use crate::math::{Aabb, Vec3};
 use crate::minkowski::{pairwise_sums, PolytopeSet, SumKind};
 use crate::octree::Octree;
@@ -466,6 +467,36 @@ fn solid_windings<'py>(
     Ok((told(windings.fronts), told(windings.wedges), windings.crossings_inside, checked))
 }
 
+/// [`solid_windings`] for a mesh that is already tidy (see [`crate::exact::tidy`]): on
+/// which the cleaning before the winding check would change nothing, with `limits` the
+/// cleaning's tolerances in the mesh's units (merge distance, degenerate area, flat
+/// volume, fold angle, coplanar distance). `None` when the mesh is not tidy or no solid:
+/// the caller's full cleaning and checks then say why. Parallel.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, limits, name="mesh"))]
+#[allow(clippy::type_complexity)]
+fn tidy_solid_windings<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    limits: (f64, f64, f64, f64, f64),
+    name: &str,
+) -> PyResult<Option<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, usize, CheckedMesh)>> {
+    let (verts, tris) = arrays_of(&vertices, &faces, name)?;
+    let (merge, degenerate_area, zero_volume, fold_angle, coplanar) = limits;
+    let limits = TidyLimits { merge, degenerate_area, zero_volume, fold_angle, coplanar };
+    let found = py.detach(|| -> Option<Windings> {
+        let shells = tidy_shells(&verts, &tris, &limits).ok()?;
+        let windings = TriMesh::checked_windings(verts, &tris, name).ok()?;
+        let solid = windings.solid.as_ref().is_ok_and(|mesh| !mesh.faces_itself(&shells, &limits));
+        solid.then_some(windings)
+    });
+    let Some(windings) = found else { return Ok(None) };
+    let told = |ws: Vec<Option<i64>>| ws.into_iter().map(|w| w.unwrap_or(i64::MIN)).collect::<Vec<i64>>().into_pyarray(py);
+    let Ok(mesh) = windings.solid else { return Ok(None) };
+    Ok(Some((told(windings.fronts), told(windings.wedges), windings.crossings_inside, CheckedMesh { inner: Arc::new(mesh) })))
+}
+
 /// The winding numbers of `points` (k, 3) for the closed mesh (vertices (n, 3), faces
 /// (m, 3)): (k,) int64, the smallest int64 for points on the surface. Parallel.
 #[pyfunction]
@@ -687,6 +718,9 @@ fn budget_units(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 
 #[pymodule]
 fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // start the worker threads with the module, not inside the first call that asks for
+    // them (about a millisecond: as much as validating a box takes)
+    rayon::current_num_threads();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<Primitives>()?;
     m.add_function(wrap_pyfunction!(union_surface, m)?)?;
@@ -699,6 +733,7 @@ fn _minkowski_core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(budget_units, m)?)?;
     m.add_function(wrap_pyfunction!(front_windings, m)?)?;
     m.add_function(wrap_pyfunction!(solid_windings, m)?)?;
+    m.add_function(wrap_pyfunction!(tidy_solid_windings, m)?)?;
     m.add_function(wrap_pyfunction!(crossing_windings, m)?)?;
     m.add_function(wrap_pyfunction!(winding_numbers, m)?)?;
     m.add_function(wrap_pyfunction!(closed_shell_sizes, m)?)?;

@@ -32,11 +32,28 @@ impl TriMesh {
     pub fn crossings(&self) -> Vec<Crossing> {
         let verts = &self.faces;
         let scale = self.aabb.diagonal().max(1e-300);
+        self.near_pairs(0.0)
+            .into_par_iter()
+            .filter_map(|[s, t]| {
+                let (fs, ft) = (verts[s as usize], verts[t as usize]);
+                let shared = fs.iter().filter(|v| ft.contains(v)).count();
+                if shared >= 2 {
+                    return None; // neighbours along an edge
+                }
+                let seg = tri_tri_segment(&self.tris[s as usize], &self.tris[t as usize], scale)?;
+                ((seg[1] - seg[0]).length() > 1e-9 * scale).then_some(Crossing { tris: [s, t], seg })
+            })
+            .collect()
+    }
+
+    /// Every pair of distinct triangles (`s < t`) whose boxes lie within `pad` of each
+    /// other, by a traversal of pairs of BVH nodes.
+    pub(crate) fn near_pairs(&self, pad: f64) -> Vec<[u32; 2]> {
         let mut pairs: Vec<[u32; 2]> = Vec::new();
         let mut stack = vec![[0u32, 0u32]];
         while let Some([a, b]) = stack.pop() {
             let (na, nb) = (&self.nodes[a as usize], &self.nodes[b as usize]);
-            if !na.aabb.overlaps(&nb.aabb) {
+            if !na.aabb.inflated(pad).overlaps(&nb.aabb) {
                 continue;
             }
             match (na.is_leaf(), nb.is_leaf()) {
@@ -61,17 +78,6 @@ impl TriMesh {
             }
         }
         pairs
-            .into_par_iter()
-            .filter_map(|[s, t]| {
-                let (fs, ft) = (verts[s as usize], verts[t as usize]);
-                let shared = fs.iter().filter(|v| ft.contains(v)).count();
-                if shared >= 2 {
-                    return None; // neighbours along an edge
-                }
-                let seg = tri_tri_segment(&self.tris[s as usize], &self.tris[t as usize], scale)?;
-                ((seg[1] - seg[0]).length() > 1e-9 * scale).then_some(Crossing { tris: [s, t], seg })
-            })
-            .collect()
     }
 
     /// The winding number in the wedge in front of both triangles of each crossing (near

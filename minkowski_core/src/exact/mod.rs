@@ -52,6 +52,9 @@ pub mod shells;
 mod shells_tests;
 #[cfg(test)]
 mod surface_pair_tests;
+pub mod tidy;
+#[cfg(test)]
+mod tidy_tests;
 mod verify;
 pub mod winding;
 #[cfg(test)]

@@ -1,0 +1,204 @@
+//! Whether a closed mesh is already *tidy*: a solid on which the cleaning that
+//! `planner.meshes.validate_solid` does before its winding check would change nothing, so
+//! that the caller may skip it.
+//!
+//! Tidy means, with the limits the caller's tolerances give ([`TidyLimits`]): every vertex
+//! is used; no triangle repeats a corner, repeats another's corners, or has an area at or
+//! below the degenerate limit unless its shell has others above it (the cleaning keeps
+//! those: dropping them would open the shell); every directed edge is used once and its reverse once (so
+//! the winding is consistent and every edge manifold); every shell (the triangles connected
+//! over edges) encloses a positive volume above the flat limit, so none is inside out and
+//! none is a cavity; no two vertices lie within the merge distance; and no two triangles
+//! of one shell face opposite ways in nearly one plane ([`TriMesh::faces_itself`]). Each
+//! comparison is made a little looser than the cleaning's, so rounding can only send a
+//! mesh to the full cleaning, never past it.
+//!
+//! Entry points: [`tidy_shells`], then [`TriMesh::faces_itself`] on the built mesh.
+
+use super::mesh::TriMesh;
+use crate::math::Vec3;
+use crate::util::UnionFind;
+use std::collections::{HashMap, HashSet};
+
+/// Relative margin by which every limit is widened (see the module documentation).
+const SLACK: f64 = 1e-6;
+
+/// The cleaning's tolerances, in the mesh's units.
+#[derive(Clone, Copy, Debug)]
+pub struct TidyLimits {
+    /// Vertices at most this far apart would be merged.
+    pub merge: f64,
+    /// Triangles whose area is below this are degenerate.
+    pub degenerate_area: f64,
+    /// Shells whose volume is at most this in magnitude are flat.
+    pub zero_volume: f64,
+    /// Triangles of one shell whose normals are opposite within this angle (radians)...
+    pub fold_angle: f64,
+    /// ...and whose centroids lie within this distance of each other's planes are checked
+    /// for overlap by the cleaning.
+    pub coplanar: f64,
+}
+
+/// Each triangle's shell (the components over shared edges, numbered from 0) when the
+/// mesh passes every test of tidiness but [`TriMesh::faces_itself`]; else the first reason
+/// it is not tidy.
+///
+/// # Errors
+/// A short reason (for logs) when the mesh is not tidy.
+pub fn tidy_shells(vertices: &[Vec3], faces: &[[u32; 3]], limits: &TidyLimits) -> Result<Vec<u32>, &'static str> {
+    let clear = check_faces(vertices, faces, limits)?;
+    check_edges(faces)?;
+    let shells = shells_over_edges(faces);
+    check_volumes(vertices, faces, &shells, limits)?;
+    check_degenerate_kept(&clear, &shells)?;
+    check_vertex_gaps(vertices, limits.merge)?;
+    Ok(shells)
+}
+
+/// Every vertex used, no corner repeated, no triangle repeated; whether each triangle's
+/// area is clearly above the degenerate limit.
+fn check_faces(vertices: &[Vec3], faces: &[[u32; 3]], limits: &TidyLimits) -> Result<Vec<bool>, &'static str> {
+    let mut used = vec![false; vertices.len()];
+    let mut seen: HashSet<[u32; 3]> = HashSet::with_capacity(faces.len());
+    let mut clear = Vec::with_capacity(faces.len());
+    for f in faces {
+        if f[0] == f[1] || f[1] == f[2] || f[2] == f[0] {
+            return Err("a triangle repeats a corner");
+        }
+        let mut sorted = *f;
+        sorted.sort_unstable();
+        if !seen.insert(sorted) {
+            return Err("a triangle repeats another's corners");
+        }
+        let [a, b, c] = f.map(|i| vertices[i as usize]);
+        clear.push(0.5 * (b - a).cross(c - a).length() > limits.degenerate_area * (1.0 + SLACK));
+        f.iter().for_each(|&i| used[i as usize] = true);
+    }
+    if used.contains(&false) {
+        return Err("a vertex is not used");
+    }
+    Ok(clear)
+}
+
+/// Every directed edge used once and its reverse once.
+fn check_edges(faces: &[[u32; 3]]) -> Result<(), &'static str> {
+    let mut directed: HashSet<(u32, u32)> = HashSet::with_capacity(3 * faces.len());
+    for f in faces {
+        for k in 0..3 {
+            if !directed.insert((f[k], f[(k + 1) % 3])) {
+                return Err("a directed edge is used twice");
+            }
+        }
+    }
+    if directed.iter().any(|&(a, b)| !directed.contains(&(b, a))) {
+        return Err("an edge is not used once in each direction");
+    }
+    Ok(())
+}
+
+/// The components of triangles over shared edges, numbered in order of their first
+/// triangle (every edge is shared by exactly two: [`check_edges`]).
+fn shells_over_edges(faces: &[[u32; 3]]) -> Vec<u32> {
+    let mut first_user: HashMap<(u32, u32), usize> = HashMap::with_capacity(3 * faces.len());
+    let mut sets = UnionFind::new(faces.len());
+    for (i, f) in faces.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            match first_user.remove(&(a.min(b), a.max(b))) {
+                Some(j) => {
+                    sets.union(i, j);
+                }
+                None => {
+                    first_user.insert((a.min(b), a.max(b)), i);
+                }
+            }
+        }
+    }
+    let mut number: HashMap<usize, u32> = HashMap::new();
+    (0..faces.len())
+        .map(|i| {
+            let root = sets.find(i);
+            let next = number.len() as u32;
+            *number.entry(root).or_insert(next)
+        })
+        .collect()
+}
+
+/// Every shell encloses a positive volume above the flat limit.
+fn check_volumes(vertices: &[Vec3], faces: &[[u32; 3]], shells: &[u32], limits: &TidyLimits) -> Result<(), &'static str> {
+    let centre = vertices.iter().fold(Vec3::ZERO, |s, &v| s + v) / vertices.len() as f64;
+    let count = shells.iter().max().map_or(0, |&k| k as usize + 1);
+    let mut six_volumes = vec![0.0; count];
+    for (f, &k) in faces.iter().zip(shells) {
+        let [a, b, c] = f.map(|i| vertices[i as usize] - centre);
+        six_volumes[k as usize] += a.dot(b.cross(c));
+    }
+    if six_volumes.iter().any(|&v| v / 6.0 <= limits.zero_volume * (1.0 + SLACK)) {
+        return Err("a shell is flat or inside out");
+    }
+    Ok(())
+}
+
+/// Every shell has a triangle clearly above the degenerate limit. The cleaning drops
+/// degenerate triangles only where the surface stays closed without them; a shell's
+/// edges are each shared by two of its triangles ([`check_edges`]) and it is connected,
+/// so with a triangle of each kind some edge joins the two and dropping the degenerate
+/// ones would open it: the cleaning keeps them.
+fn check_degenerate_kept(clear: &[bool], shells: &[u32]) -> Result<(), &'static str> {
+    let count = shells.iter().max().map_or(0, |&k| k as usize + 1);
+    let mut has_clear = vec![false; count];
+    clear.iter().zip(shells).filter(|(&c, _)| c).for_each(|(_, &k)| has_clear[k as usize] = true);
+    if has_clear.contains(&false) {
+        return Err("a shell is all degenerate triangles");
+    }
+    Ok(())
+}
+
+/// No two vertices within the merge distance (a grid of cells that wide).
+fn check_vertex_gaps(vertices: &[Vec3], merge: f64) -> Result<(), &'static str> {
+    let reach = merge * (1.0 + SLACK);
+    let cell_of = |p: Vec3| (p / reach).floor();
+    if reach.is_nan() || reach <= 0.0 || vertices.iter().any(|&p| cell_of(p).abs().max_element() > 1e15) {
+        return Err("the merge distance is below the coordinates' rounding");
+    }
+    let key = |c: Vec3| [c.x as i64, c.y as i64, c.z as i64];
+    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(vertices.len());
+    for (i, &p) in vertices.iter().enumerate() {
+        grid.entry(key(cell_of(p))).or_default().push(i as u32);
+    }
+    for (i, &p) in vertices.iter().enumerate() {
+        let [x, y, z] = key(cell_of(p));
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let near = grid.get(&[x + dx, y + dy, z + dz]).into_iter().flatten();
+                    if near.filter(|&&j| j as usize != i).any(|&j| (vertices[j as usize] - p).length() <= reach) {
+                        return Err("two vertices lie within the merge distance");
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+impl TriMesh {
+    /// Whether two triangles of one shell (`shells`, from [`tidy_shells`]) face opposite
+    /// ways within the fold angle with each one's centroid within the coplanar distance
+    /// of the other's plane: the pairs among which the cleaning looks for a surface that
+    /// overlaps itself. Pairs whose boxes lie apart by more than the coplanar distance
+    /// plus the tilt over the largest triangle cannot overlap and are not looked at.
+    pub fn faces_itself(&self, shells: &[u32], limits: &TidyLimits) -> bool {
+        let widest = self.tris.iter().map(|t| (t.e[0].length()).max(t.e[1].length()).max(t.e[2].length())).fold(0.0, f64::max);
+        let near = limits.coplanar * (1.0 + SLACK) + 1e-12 * self.aabb.diagonal();
+        let opposite = -(limits.fold_angle.cos()) + 1e-9;
+        let pad = near + limits.fold_angle * widest * (1.0 + SLACK);
+        let centroid = |i: usize| (self.tris[i].p[0] + self.tris[i].p[1] + self.tris[i].p[2]) / 3.0;
+        self.near_pairs(pad).into_iter().any(|[s, t]| {
+            let (s, t) = (s as usize, t as usize);
+            let (ns, nt) = (self.tris[s].n, self.tris[t].n);
+            let gap = centroid(t) - centroid(s);
+            shells[s] == shells[t] && ns.dot(nt) < opposite && (ns.dot(gap).abs() <= near || nt.dot(gap).abs() <= near)
+        })
+    }
+}
