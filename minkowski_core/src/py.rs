@@ -2,8 +2,8 @@
 //! [`CoreError`] to the exception classes of `planner.errors` in one place.
 
 use crate::error::CoreError;
-use crate::exact::tidy::{tidy_shells, TidyLimits};
-use crate::exact::{ExactSource, TriMesh, Windings};
+use crate::exact::tidy::{tidy_windings, TidyLimits};
+use crate::exact::{ExactSource, TriMesh};
 use crate::math::{Aabb, Vec3};
 use crate::minkowski::{pairwise_sums, PolytopeSet, SumKind};
 use crate::octree::Octree;
@@ -485,12 +485,7 @@ fn tidy_solid_windings<'py>(
     let (verts, tris) = arrays_of(&vertices, &faces, name)?;
     let (merge, degenerate_area, zero_volume, fold_angle, coplanar) = limits;
     let limits = TidyLimits { merge, degenerate_area, zero_volume, fold_angle, coplanar };
-    let found = py.detach(|| -> Option<Windings> {
-        let shells = tidy_shells(&verts, &tris, &limits).ok()?;
-        let windings = TriMesh::checked_windings(verts, &tris, name).ok()?;
-        let solid = windings.solid.as_ref().is_ok_and(|mesh| !mesh.faces_itself(&shells, &limits));
-        solid.then_some(windings)
-    });
+    let found = py.detach(|| tidy_windings(verts, &tris, &limits, name));
     let Some(windings) = found else { return Ok(None) };
     let told = |ws: Vec<Option<i64>>| ws.into_iter().map(|w| w.unwrap_or(i64::MIN)).collect::<Vec<i64>>().into_pyarray(py);
     let Ok(mesh) = windings.solid else { return Ok(None) };

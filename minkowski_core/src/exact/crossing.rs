@@ -16,6 +16,9 @@ use super::mesh::{Tri, TriMesh};
 use crate::math::Vec3;
 use rayon::prelude::*;
 
+/// Pairs of subtrees [`TriMesh::overlapping_pairs`] walks in parallel.
+const PAIR_TASKS: usize = 64;
+
 /// A crossing: the two triangles and the segment where they meet.
 #[derive(Clone, Copy, Debug)]
 pub struct Crossing {
@@ -32,7 +35,7 @@ impl TriMesh {
     pub fn crossings(&self) -> Vec<Crossing> {
         let verts = &self.faces;
         let scale = self.aabb.diagonal().max(1e-300);
-        self.near_pairs(0.0)
+        self.overlapping_pairs()
             .into_par_iter()
             .filter_map(|[s, t]| {
                 let (fs, ft) = (verts[s as usize], verts[t as usize]);
@@ -46,38 +49,62 @@ impl TriMesh {
             .collect()
     }
 
-    /// Every pair of distinct triangles (`s < t`) whose boxes lie within `pad` of each
-    /// other, by a traversal of pairs of BVH nodes.
-    pub(crate) fn near_pairs(&self, pad: f64) -> Vec<[u32; 2]> {
-        let mut pairs: Vec<[u32; 2]> = Vec::new();
-        let mut stack = vec![[0u32, 0u32]];
-        while let Some([a, b]) = stack.pop() {
-            let (na, nb) = (&self.nodes[a as usize], &self.nodes[b as usize]);
-            if !na.aabb.inflated(pad).overlaps(&nb.aabb) {
-                continue;
+    /// Every pair of distinct triangles (`s < t`) whose boxes overlap, by a traversal of
+    /// pairs of BVH nodes: breadth first to [`PAIR_TASKS`] pairs
+    /// of subtrees, then each of those depth first, in parallel (the same pairs in the same
+    /// order on any number of threads).
+    fn overlapping_pairs(&self) -> Vec<[u32; 2]> {
+        let mut found = Vec::new();
+        let mut tasks = vec![[0u32, 0u32]];
+        while !tasks.is_empty() && tasks.len() < PAIR_TASKS {
+            let mut next = Vec::with_capacity(3 * tasks.len());
+            for task in tasks {
+                self.expand_pair(task, &mut found, &mut next);
             }
-            match (na.is_leaf(), nb.is_leaf()) {
-                (true, true) => {
-                    if a != b {
-                        pairs.push([na.tri.min(nb.tri), na.tri.max(nb.tri)]);
-                    }
+            tasks = next;
+        }
+        let walked: Vec<Vec<[u32; 2]>> = tasks
+            .par_iter()
+            .map(|&task| {
+                let (mut out, mut stack) = (Vec::new(), vec![task]);
+                while let Some(pair) = stack.pop() {
+                    self.expand_pair(pair, &mut out, &mut stack);
                 }
-                _ if a == b => {
-                    let l = na.left;
-                    stack.extend([[l, l], [l, l + 1], [l + 1, l + 1]]);
+                out
+            })
+            .collect();
+        found.extend(walked.into_iter().flatten());
+        found
+    }
+
+    /// One step of [`TriMesh::overlapping_pairs`]: a pair of nodes whose boxes overlap
+    /// gives its triangle pair (two leaves) to `found`, else its pairs of children to
+    /// `next`.
+    fn expand_pair(&self, [a, b]: [u32; 2], found: &mut Vec<[u32; 2]>, next: &mut Vec<[u32; 2]>) {
+        let (na, nb) = (&self.nodes[a as usize], &self.nodes[b as usize]);
+        if !na.aabb.overlaps(&nb.aabb) {
+            return;
+        }
+        match (na.is_leaf(), nb.is_leaf()) {
+            (true, true) => {
+                if a != b {
+                    found.push([na.tri.min(nb.tri), na.tri.max(nb.tri)]);
                 }
-                (false, true) => stack.extend([[na.left, b], [na.left + 1, b]]),
-                (true, false) => stack.extend([[a, nb.left], [a, nb.left + 1]]),
-                (false, false) => {
-                    if na.size() >= nb.size() {
-                        stack.extend([[na.left, b], [na.left + 1, b]]);
-                    } else {
-                        stack.extend([[a, nb.left], [a, nb.left + 1]]);
-                    }
+            }
+            _ if a == b => {
+                let l = na.left;
+                next.extend([[l, l], [l, l + 1], [l + 1, l + 1]]);
+            }
+            (false, true) => next.extend([[na.left, b], [na.left + 1, b]]),
+            (true, false) => next.extend([[a, nb.left], [a, nb.left + 1]]),
+            (false, false) => {
+                if na.size() >= nb.size() {
+                    next.extend([[na.left, b], [na.left + 1, b]]);
+                } else {
+                    next.extend([[a, nb.left], [a, nb.left + 1]]);
                 }
             }
         }
-        pairs
     }
 
     /// The winding number in the wedge in front of both triangles of each crossing (near

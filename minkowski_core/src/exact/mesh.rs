@@ -2,6 +2,7 @@
 //! nodes of two meshes can be refined lazily, one level at a time). A closed one (a
 //! candidate solid) also has the exact winding number of [`super::winding`].
 
+use super::crossing::Crossing;
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
 use crate::util::UnionFind;
@@ -136,11 +137,18 @@ impl TriMesh {
     pub fn checked_windings(vertices: Vec<Vec3>, faces: &[[u32; 3]], what: &str) -> CoreResult<Windings> {
         check_arrays(&vertices, faces, what)?;
         TriMesh::check_closed(faces, what)?;
-        let mut mesh = TriMesh { closed: true, ..TriMesh::surface(vertices, faces, what)? };
-        let fronts = mesh.front_windings();
+        let mesh = TriMesh { closed: true, ..TriMesh::surface(vertices, faces, what)? };
         let crossings = mesh.crossings();
-        let wedges = mesh.crossing_windings(&crossings);
-        let crossings_inside = mesh.crossings_inside(&crossings);
+        Ok(mesh.windings_with(&crossings, what))
+    }
+
+    /// [`TriMesh::checked_windings`] of this closed mesh, its `crossings` found.
+    pub(crate) fn windings_with(self, crossings: &[Crossing], what: &str) -> Windings {
+        debug_assert!(self.closed, "the winding number of an open mesh");
+        let mut mesh = self;
+        let fronts = mesh.front_windings();
+        let wedges = mesh.crossing_windings(crossings);
+        let crossings_inside = mesh.crossings_inside(crossings);
         let negative = |ws: &[Option<i64>]| ws.iter().filter(|w| w.is_some_and(|w| w < 0)).count();
         let unknown = |ws: &[Option<i64>]| ws.iter().filter(|w| w.is_none()).count();
         let (inverted, inverted_wedges) = (negative(&fronts), negative(&wedges));
@@ -159,7 +167,7 @@ impl TriMesh {
             mesh.solid = true;
             Ok(mesh)
         };
-        Ok(Windings { fronts, wedges, crossings_inside, solid })
+        Windings { fronts, wedges, crossings_inside, solid }
     }
 
     /// Whether every edge of `faces` is used once in each direction.

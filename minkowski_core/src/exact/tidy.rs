@@ -13,11 +13,12 @@
 //! comparison is made a little looser than the cleaning's, so rounding can only send a
 //! mesh to the full cleaning, never past it.
 //!
-//! Entry points: [`tidy_shells`], then [`TriMesh::faces_itself`] on the built mesh.
+//! Entry point: [`tidy_windings`].
 
-use super::mesh::TriMesh;
+use super::mesh::{TriMesh, Windings};
 use crate::math::Vec3;
 use crate::util::UnionFind;
+use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 
 /// Relative margin by which every limit is widened (see the module documentation).
@@ -182,23 +183,71 @@ fn check_vertex_gaps(vertices: &[Vec3], merge: f64) -> Result<(), &'static str> 
     Ok(())
 }
 
+/// The windings of a tidy mesh ([`TriMesh::checked_windings`]'s) when it is a solid,
+/// `None` when it is not tidy or no solid (the caller's full cleaning and checks then say
+/// why).
+pub fn tidy_windings(vertices: Vec<Vec3>, faces: &[[u32; 3]], limits: &TidyLimits, what: &str) -> Option<Windings> {
+    let shells = tidy_shells(&vertices, faces, limits).ok()?;
+    let mesh = TriMesh { closed: true, ..TriMesh::surface(vertices, faces, what).ok()? };
+    if mesh.faces_itself(&shells, limits) {
+        return None;
+    }
+    let crossings = mesh.crossings();
+    let windings = mesh.windings_with(&crossings, what);
+    windings.solid.is_ok().then_some(windings)
+}
+
+/// A generic direction that sorts normals into those pointing up and down along it
+/// ([`TriMesh::faces_itself`]).
+const SIGN_DIRECTION: [f64; 3] = [0.577_350_269_189_625_8, 0.618_033_988_749_894_8, 0.532_088_886_237_956_1];
+
+/// Pairs [`TriMesh::faces_itself`] compares per triangle, beyond which it gives up and
+/// answers yes (the full cleaning then looks).
+const FACING_PAIRS_PER_TRIANGLE: usize = 16;
+
 impl TriMesh {
     /// Whether two triangles of one shell (`shells`, from [`tidy_shells`]) face opposite
-    /// ways within the fold angle with each one's centroid within the coplanar distance
-    /// of the other's plane: the pairs among which the cleaning looks for a surface that
-    /// overlaps itself. Pairs whose boxes lie apart by more than the coplanar distance
-    /// plus the tilt over the largest triangle cannot overlap and are not looked at.
+    /// ways within the fold angle with one's centroid within the coplanar distance of the
+    /// other's plane: the pairs among which the cleaning looks for a surface that overlaps
+    /// itself (`planner.meshes.solids._self_overlaps`). Also yes when there are too many
+    /// pairs to compare.
+    ///
+    /// A normal `n` pointing up along [`SIGN_DIRECTION`] `g` (or within the fold angle of
+    /// across it) is listed with its plane's offset `n · c` (`c` the centroid, from the
+    /// box's centre), one pointing down (or nearly across) with `-n · c`. Of two opposite
+    /// normals one is listed up and the other down, and their two offsets differ by at most
+    /// the coplanar distance plus the fold angle times `|c|`: each triangle listed down is
+    /// compared with those listed up within that of its offset (a binary search).
     pub fn faces_itself(&self, shells: &[u32], limits: &TidyLimits) -> bool {
-        let widest = self.tris.iter().map(|t| (t.e[0].length()).max(t.e[1].length()).max(t.e[2].length())).fold(0.0, f64::max);
         let near = limits.coplanar * (1.0 + SLACK) + 1e-12 * self.aabb.diagonal();
         let opposite = -(limits.fold_angle.cos()) + 1e-9;
-        let pad = near + limits.fold_angle * widest * (1.0 + SLACK);
-        let centroid = |i: usize| (self.tris[i].p[0] + self.tris[i].p[1] + self.tris[i].p[2]) / 3.0;
-        self.near_pairs(pad).into_iter().any(|[s, t]| {
-            let (s, t) = (s as usize, t as usize);
-            let (ns, nt) = (self.tris[s].n, self.tris[t].n);
-            let gap = centroid(t) - centroid(s);
-            shells[s] == shells[t] && ns.dot(nt) < opposite && (ns.dot(gap).abs() <= near || nt.dot(gap).abs() <= near)
-        })
+        let band = limits.fold_angle * (1.0 + SLACK);
+        let reach = near + band * self.aabb.diagonal();
+        let g = Vec3::from_array(SIGN_DIRECTION).normalize();
+        let centre = self.aabb.center();
+        let centroid = |i: usize| (self.tris[i].p[0] + self.tris[i].p[1] + self.tris[i].p[2]) / 3.0 - centre;
+        let mut up: Vec<(f64, u32)> = Vec::new();
+        let mut down: Vec<(f64, u32)> = Vec::new();
+        for (i, t) in self.tris.iter().enumerate().filter(|(_, t)| t.n != Vec3::ZERO) {
+            let (along, offset) = (t.n.dot(g), t.n.dot(centroid(i)));
+            if along >= -band {
+                up.push((offset, i as u32));
+            }
+            if along <= band {
+                down.push((-offset, i as u32));
+            }
+        }
+        up.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let window = |offset: f64| up.partition_point(|e| e.0 < offset - reach)..up.partition_point(|e| e.0 <= offset + reach);
+        let pairs: usize = down.iter().map(|&(offset, _)| window(offset).len()).sum();
+        if pairs > FACING_PAIRS_PER_TRIANGLE * self.tris.len() {
+            return true;
+        }
+        let facing = |i: usize, j: usize| {
+            let (ni, nj) = (self.tris[i].n, self.tris[j].n);
+            let gap = centroid(j) - centroid(i);
+            i != j && shells[i] == shells[j] && ni.dot(nj) < opposite && (ni.dot(gap).abs() <= near || nj.dot(gap).abs() <= near)
+        };
+        down.par_iter().any(|&(offset, j)| up[window(offset)].iter().any(|&(_, i)| facing(i as usize, j as usize)))
     }
 }

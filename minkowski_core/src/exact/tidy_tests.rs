@@ -1,11 +1,15 @@
 //! Tests of the tidiness check that lets a clean solid skip the cleaning.
 
 use super::exact_tests::push_box;
-use super::tidy::{tidy_shells, TidyLimits};
+use super::tidy::{tidy_shells, tidy_windings, TidyLimits};
 use super::*;
 
 /// The cleaning's tolerances for a part of size about 1 (`planner.tolerances`' defaults).
 const LIMITS: TidyLimits = TidyLimits { merge: 1e-9, degenerate_area: 1e-12, zero_volume: 1e-12, fold_angle: 1e-3, coplanar: 1e-5 };
+
+fn faces_itself(mesh: &TriMesh, shells: &[u32], limits: &TidyLimits) -> bool {
+    mesh.faces_itself(shells, limits)
+}
 
 fn boxes(list: &[([f64; 3], [f64; 3])]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let (mut v, mut f) = (Vec::new(), Vec::new());
@@ -27,7 +31,7 @@ fn a_clean_box_and_two_apart_are_tidy_with_their_shells_numbered() {
     let shells = tidy_shells(&v, &f, &LIMITS).unwrap();
     assert_eq!(shells, [vec![0; 12], vec![1; 12]].concat());
     let mesh = TriMesh::new(v, &f, "boxes").unwrap();
-    assert!(!mesh.faces_itself(&shells, &LIMITS));
+    assert!(!faces_itself(&mesh, &shells, &LIMITS));
 }
 
 #[test]
@@ -90,21 +94,52 @@ fn degenerate_triangles_are_tidy_only_in_a_shell_that_has_others() {
     let shells = tidy_shells(&v, &f, &LIMITS).unwrap();
     assert_eq!(shells, vec![0; 14]);
     let mesh = TriMesh::new(v, &f, "fanned").unwrap();
-    assert!(!mesh.faces_itself(&shells, &LIMITS));
+    assert!(!faces_itself(&mesh, &shells, &LIMITS));
 }
 
 #[test]
 fn a_slab_thinner_than_the_coplanar_distance_faces_itself() {
-    for (thickness, faces_itself) in [(1e-6, true), (1e-3, false)] {
+    for (thickness, facing) in [(1e-6, true), (1e-3, false)] {
         let (v, f) = boxes(&[([0.0; 3], [1.0, 1.0, thickness])]);
         let limits = TidyLimits { zero_volume: 1e-15, ..LIMITS };
         let shells = tidy_shells(&v, &f, &limits).unwrap();
         let mesh = TriMesh::new(v, &f, "slab").unwrap();
-        assert_eq!(mesh.faces_itself(&shells, &limits), faces_itself, "thickness {thickness}");
+        assert_eq!(faces_itself(&mesh, &shells, &limits), facing, "thickness {thickness}");
     }
+    // the same thin slab turned so that its faces' normals lie across the direction that
+    // sorts normals up and down (both of its faces are listed both ways)
+    let g = Vec3::new(0.577_350_269_189_625_8, 0.618_033_988_749_894_8, 0.532_088_886_237_956_1).normalize();
+    let n = g.cross(Vec3::Z).normalize();
+    let (u, w) = (Vec3::Z, n.cross(Vec3::Z));
+    let (v, f) = boxes(&[([0.0; 3], [1.0, 1.0, 1e-6])]);
+    let turned: Vec<Vec3> = v.iter().map(|p| u * p.x + w * p.y + n * p.z).collect();
+    let limits = TidyLimits { zero_volume: 1e-15, ..LIMITS };
+    let shells = tidy_shells(&turned, &f, &limits).unwrap();
+    let mesh = TriMesh::new(turned, &f, "turned slab").unwrap();
+    assert!(faces_itself(&mesh, &shells, &limits));
     // two slabs stacked with a hair between them are two shells: they may rest on each other
     let (v, f) = boxes(&[([0.0; 3], [1.0, 1.0, 0.5]), ([0.0, 0.0, 0.5 + 1e-6], [1.0, 1.0, 1.0])]);
     let shells = tidy_shells(&v, &f, &LIMITS).unwrap();
     let mesh = TriMesh::new(v, &f, "stacked").unwrap();
-    assert!(!mesh.faces_itself(&shells, &LIMITS));
+    assert!(!faces_itself(&mesh, &shells, &LIMITS));
+}
+
+#[test]
+fn the_tidy_windings_are_the_checked_ones() {
+    let apart: &[([f64; 3], [f64; 3])] = &[([0.0; 3], [1.0; 3]), ([2.0, 0.0, 0.0], [3.0, 1.0, 1.0])];
+    let overlapping: &[([f64; 3], [f64; 3])] = &[([0.0; 3], [2.0, 1.0, 1.0]), ([1.0, 0.2, 0.3], [3.0, 1.5, 1.5])];
+    let nested: &[([f64; 3], [f64; 3])] = &[([0.0; 3], [4.0; 3]), ([1.0; 3], [2.0; 3])];
+    for list in [apart, overlapping, nested] {
+        let (v, f) = boxes(list);
+        let tidy = tidy_windings(v.clone(), &f, &LIMITS, "boxes").expect("tidy");
+        let checked = TriMesh::checked_windings(v, &f, "boxes").unwrap();
+        assert_eq!(tidy.fronts, checked.fronts);
+        assert_eq!(tidy.wedges, checked.wedges);
+        assert_eq!(tidy.crossings_inside, checked.crossings_inside);
+        assert!(tidy.solid.is_ok() && checked.solid.is_ok());
+    }
+    let (v, f) = boxes(overlapping);
+    assert!(!tidy_windings(v, &f, &LIMITS, "boxes").unwrap().wedges.is_empty(), "the overlap has crossings");
+    let (v, f) = boxes(nested);
+    assert!(tidy_windings(v, &f, &LIMITS, "boxes").unwrap().fronts[12..].iter().all(|&w| w == Some(1)), "the inner box is inside the outer");
 }
