@@ -66,7 +66,7 @@ from .meshes.kinds import KINDS, Classified, classify
 from .meshes.solids import FACE_CROSSINGS, FACES_INSIDE
 from .minkowski import checked_eps, surface_stats
 from .offsets_ball import ball_offset
-from .offsets_convex import convex_closing, convex_offset
+from .offsets_convex import convex_closing, convex_offset, rounding_allowance
 from .operands import REPAIR_OFFER, as_mesh
 from .progress import StatusLine
 
@@ -303,7 +303,7 @@ def _offset_part(part: Classified, radius: float, eps: float | None, max_cells: 
         _check_surface_offset(radius, method, name, part.reason)
     elif radius < 0:
         _check_boundary_is_every_triangle(solid, name)
-    step = checked_eps(eps, _result_diagonal(extent, radius))
+    step = _offset_eps(eps, solid, extent, radius, name)
     verb = "growing" if radius > 0 else "eroding"
     with StatusLine(progress) as line:
         line.show(f"minkplan: {verb} {name} by {abs(radius):g} at eps {step:.3g}")
@@ -343,9 +343,9 @@ def _say_if_hollow(surface: trimesh.Trimesh, stats: dict[str, Any], name: str,
     stats["inner_shells"] = inner
     if inner:
         log.warning("%s grown by %g as a surface (its triangles): the result has %d inner "
-                    "shell(s), hollow where the part is thicker than %g; it was taken as a "
-                    "surface (%s), and a solid is filled (--repair closes holes where it can)",
-                    name, radius, inner, 2 * radius, reason)
+                    "shell(s), hollow where the part is thicker than %g. It was taken as a "
+                    "surface, being %s; a solid is filled (--repair closes holes where it "
+                    "can)", name, radius, inner, 2 * radius, reason)
 
 
 def _nothing_left(name: str, depth: float, sheet: float) -> str:
@@ -521,6 +521,23 @@ def _composed_bound(first: float, one: OffsetResult, two: OffsetResult) -> float
     return math.inf
 
 
+def _offset_eps(eps: float | None, solid: trimesh.Trimesh, extent: np.ndarray, radius: float,
+                name: str) -> float:
+    """``eps`` as :func:`.minkowski.checked_eps` checks it, also refused below the rounding
+    allowance every hull offset's bound carries (1e-9 of the part's size grown by the
+    radius, :func:`.offsets_convex.rounding_allowance`): finer than the part's coordinates
+    are trusted, and than any other method's grid reaches (its lattice is at most 2^20
+    cells wide)."""
+    step = checked_eps(eps, _result_diagonal(extent, radius))
+    floor = rounding_allowance(solid, radius)
+    if step < floor:
+        raise InvalidParameterError(
+            f"eps = {step:g}: below {floor:.3g}, 1e-9 of {name}'s size grown by the radius, "
+            f"finer than its coordinates are trusted and than any offset method resolves; "
+            f"use eps >= {floor:.3g}")
+    return step
+
+
 def _convex_closing(part: Classified, radius: float, eps: float | None, name: str, t0: float
                     ) -> OffsetResult | None:
     """The closing of a solid convex up to ``eps`` (its default, an offset's by
@@ -529,7 +546,7 @@ def _convex_closing(part: Classified, radius: float, eps: float | None, name: st
     extent = np.ptp(np.asarray(part.mesh.bounds), axis=0)
     _check_radius_scale(radius, float(np.linalg.norm(extent)), name)
     step = _stage_eps(part.mesh, radius) if eps is None else \
-        checked_eps(eps, _result_diagonal(extent, radius))
+        _offset_eps(eps, part.mesh, extent, radius, name)
     found = convex_closing(part.mesh, step)
     if found is None:
         return None

@@ -58,7 +58,11 @@ def test_depth_bad_input_is_one_line_exit_2(pair, tmp_path, capsys):
     open_box = tmp_path / "open.stl"
     box = shapes.box()
     trimesh.Trimesh(box.vertices, box.faces[:-2], process=False).export(open_box)
+    huge = tmp_path / "huge.obj"  # finite, but its volume overflows
+    trimesh.Trimesh(box.vertices * 1e150, box.faces, process=False).export(huge)
     cases = [
+        ["depth", str(huge), str(pair[1])],
+        ["offset", str(huge), "-r", "1e149", "-o", str(tmp_path / "grown.stl")],
         ["depth", str(pair[0]), str(tmp_path / "missing.stl")],
         ["depth", str(pair[0]), str(tmp_path)],
         ["depth", str(pair[0]), str(pair[1]), "--tolerance", "-1"],

@@ -158,6 +158,20 @@ def test_nonfinite_vertex_rejected(value):
         validate_solid(bad, name="robot")
 
 
+def test_coordinates_too_large_to_compute_with_are_refused_unless_unused():
+    mesh = box()
+    vertices = mesh.vertices.copy()
+    vertices[3, 1] = 1e300
+    with pytest.raises(InvalidMeshError, match=r"mesh 'robot': coordinates up to 1e\+300 "
+                                               r"exceed 1e\+30.*rescale"):
+        validate_solid(trimesh.Trimesh(vertices, mesh.faces, process=False), name="robot")
+    with pytest.raises(InvalidMeshError, match="exceed 1e"):
+        repair_mesh(trimesh.Trimesh(vertices, mesh.faces, process=False))
+    unused = np.vstack([mesh.vertices, [[1e300, 0.0, 0.0]]])
+    solid = validate_solid(trimesh.Trimesh(unused, mesh.faces, process=False))
+    assert len(solid.vertices) == len(mesh.vertices)
+
+
 def test_open_box_rejected_with_edge_count():
     mesh = box()
     # drop the two triangles of one side: a square hole with 4 boundary edges

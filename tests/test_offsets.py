@@ -826,6 +826,8 @@ def test_a_closed_part_grown_as_a_surface_is_said_to_be_hollow(caplog):
     assert result.stats["inner_shells"] == 1
     assert len(result.mesh.split(only_watertight=True)) == 2
     assert "1 inner shell(s), hollow where the part is thicker than 0.2" in caplog.text
+    said = caplog.text[caplog.text.index("grown by"):].splitlines()[0]
+    assert said.count("(") == said.count(")"), said
     caplog.clear()
     with caplog.at_level(logging.WARNING, logger="planner.offsets"):
         full = planner.offset(trimesh.creation.box(), 0.6, eps=0.1, kind="surface")
@@ -1214,6 +1216,21 @@ def test_a_huge_radius_is_refused_without_numpy_warnings():
         for how in (planner.offset, planner.closing):
             with pytest.raises(InvalidParameterError, match=r"more than 1e\+06 times"):
                 how(box, 1e300)
+
+
+def test_an_eps_finer_than_the_coordinates_is_refused_naming_the_floor():
+    """Below 1e-9 of the size no method certifies an offset (the hull path's rounding
+    allowance; the grids stop near 1e-6): the refusal says so and names the least eps,
+    which then gives the exact eroded box (it named the octree's cells)."""
+    box = trimesh.creation.box((1.0, 0.6, 0.4))
+    for how, r in ((planner.offset, 0.1), (planner.offset, -0.1), (planner.closing, 0.1)):
+        refused = r"eps = 1e-09: below 1\.\d+e-09, 1e-9 of .* use eps >= 1\.\d+e-09"
+        with pytest.raises(InvalidParameterError, match=refused):
+            how(box, r, eps=1e-9)
+    eroded = planner.offset(box, -0.1, eps=1e-8)
+    assert eroded.error_bound <= 1e-8 and len(eroded.mesh.faces) == 12
+    np.testing.assert_allclose(eroded.mesh.bounds, [[-0.4, -0.2, -0.1], [0.4, 0.2, 0.1]],
+                               atol=1e-12)
 
 
 def test_an_openings_second_ball_stage_that_is_no_clean_solid_goes_to_the_cells_under_auto(

@@ -62,7 +62,29 @@ def checked_arrays(mesh, label: str):
             f"{label}: face indices out of range [0, {len(vertices)}) "
             f"(min {faces.min()}, max {faces.max()})"
         )
+    _check_magnitude(vertices, faces, label)
     return vertices, faces
+
+
+def _check_magnitude(vertices: np.ndarray, faces: np.ndarray, label: str) -> None:
+    """Raise when a vertex the faces use has a finite coordinate beyond
+    :data:`MAX_COORDINATE` (non-finite ones are each caller's to report or drop)."""
+    if not np.any(np.abs(vertices) > MAX_COORDINATE):
+        return
+    used = vertices[np.unique(faces)]
+    largest = np.abs(used[np.isfinite(used)]).max(initial=0.0)
+    if largest > MAX_COORDINATE:
+        raise InvalidMeshError(
+            f"{label}: coordinates up to {largest:.3g} exceed {MAX_COORDINATE:g}, beyond what "
+            f"volumes and distances can be computed with; rescale the model"
+        )
+
+
+MAX_COORDINATE = 1e30
+"""The largest coordinate a mesh may have (any unit): the checks and the core compute
+volumes (cubes of lengths) and squared distances of sums, which overflow float64 near
+1e100 (a box scaled by 1e150 did); 1e30 keeps them far from that and any real part (a
+light year is 1e25 millimetres) inside it."""
 
 
 def compact(vertices: np.ndarray, faces: np.ndarray):
