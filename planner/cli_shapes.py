@@ -33,7 +33,8 @@ def _add_depth_parser(sub, common) -> None:
     d.add_argument("--tolerance", type=float, default=None,
                    help="widest interval wanted (default 1e-3 of the pair's size)")
     d.add_argument("--json", action="store_true",
-                   help="print the result as JSON (docs/schemas/depth.schema.json)")
+                   help="print the result as JSON (docs/schemas/depth.schema.json; a "
+                   "refusal as docs/schemas/depth_error.schema.json, besides the error line)")
     add_repair_option(d)
     d.add_argument("--no-progress", action="store_true", help="no progress line")
 
@@ -137,9 +138,28 @@ def cmd_offset(args) -> int:
 
 
 def cmd_depth(args) -> int:
+    """``minkplan depth``; with ``--json`` a refusal is also a JSON line on stdout
+    (``docs/schemas/depth_error.schema.json``), besides the one-line error on stderr."""
+    from planner.errors import MinkplanError
+
+    try:
+        return _depth(args)
+    except MinkplanError as error:
+        if args.json:
+            from planner.output import schema_id
+
+            document = {"schema": schema_id("depth_error"), "a": args.a, "b": args.b,
+                        "error": str(error)}
+            sys.stdout.write(json.dumps(document) + "\n")
+        raise
+
+
+def _depth(args) -> int:
+    from planner.errors import InvalidParameterError
+
     missing = _missing_mesh("a", args.a) or _missing_mesh("b", args.b)
     if missing:
-        return _fail(missing)
+        raise InvalidParameterError(missing)
     import planner
     from planner.depth import SEPARATION_BY_TRIANGLES
 

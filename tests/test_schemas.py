@@ -106,6 +106,17 @@ def test_depth_json_validates(capsys):
     _valid("depth", json.loads(out))
 
 
+def test_a_refused_depth_is_a_json_line_too(tmp_path, capsys):
+    block = ROOT / "scenarios" / "_schema_examples" / "block.stl"
+    missing = tmp_path / "missing.stl"
+    assert main(["depth", str(block), str(missing), "--json", "--no-progress"]) == 2
+    captured = capsys.readouterr()
+    document = json.loads(captured.out)
+    _valid("depth_error", document)
+    assert document["b"] == str(missing) and "file not found" in document["error"]
+    assert captured.err.strip() == f"minkplan: error: {document['error']}"
+
+
 @pytest.mark.parametrize("scenario, planner", [
     ("peg_in_hole.yaml", "minkplan"),          # found, exact source: no decomposition
     ("bug_trap.yaml", "minkplan"),             # found, decomposed
@@ -145,7 +156,8 @@ def test_a_file_that_breaks_its_schema_is_caught(tmp_path):
 def test_every_schema_names_its_file():
     names = {p.name.removesuffix(".schema.json") for p in SCHEMAS.glob("*.schema.json")}
     assert names == {"path", "report", "certificate", "sequence", "assembly_report",
-                     "assembly_error", "minkowski_stats", "batch_record", "depth"}
+                     "assembly_error", "minkowski_stats", "batch_record", "depth",
+                     "depth_error"}
     for name in names:
         schema = json.loads((SCHEMAS / f"{name}.schema.json").read_text())
         assert schema["properties"]["schema"]["const"] == f"minkplan/{name}/1"

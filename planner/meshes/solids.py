@@ -171,7 +171,8 @@ def _tidy_windings(vertices: np.ndarray, faces: np.ndarray, label: str
     change, as the core checks with the same tolerances, each a little looser (see
     ``minkowski_core/src/exact/tidy.rs``); ``None`` for any other mesh, which the full
     cleaning and checks then take. One native call instead of a few dozen array passes:
-    a box is validated in a tenth of the time."""
+    a box is validated in about a tenth of the time, the IndustReal small gear in 0.6 of
+    it (its winding numbers are most of what is left)."""
     from planner._minkowski_core import tidy_solid_windings  # noqa: PLC0415
 
     scale = scale_of(vertices)

@@ -3,15 +3,15 @@
 //! that the caller may skip it.
 //!
 //! Tidy means, with the limits the caller's tolerances give ([`TidyLimits`]): every vertex
-//! is used; no triangle repeats a corner, repeats another's corners, or has an area at or
-//! below the degenerate limit unless its shell has others above it (the cleaning keeps
-//! those: dropping them would open the shell); every directed edge is used once and its reverse once (so
-//! the winding is consistent and every edge manifold); every shell (the triangles connected
-//! over edges) encloses a positive volume above the flat limit, so none is inside out and
-//! none is a cavity; no two vertices lie within the merge distance; and no two triangles
-//! of one shell face opposite ways in nearly one plane ([`TriMesh::faces_itself`]). Each
-//! comparison is made a little looser than the cleaning's, so rounding can only send a
-//! mesh to the full cleaning, never past it.
+//! is used; no triangle repeats a corner or another's corners; a triangle with an area at
+//! or below the degenerate limit only in a shell that has others above it (the cleaning
+//! keeps those: dropping them would open the shell); every directed edge used once and its
+//! reverse once (so the winding is consistent and every edge manifold); every shell (the
+//! triangles connected over edges) enclosing a positive volume above the flat limit, so
+//! none is inside out and none is a cavity; no two vertices within the merge distance; and
+//! no two triangles of one shell facing opposite ways in nearly one plane
+//! ([`TriMesh::faces_itself`]). Each comparison is made a little looser than the
+//! cleaning's, so rounding can only send a mesh to the full cleaning, never past it.
 //!
 //! Entry point: [`tidy_windings`].
 
