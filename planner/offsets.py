@@ -64,6 +64,7 @@ from planner.errors import (
 
 from .meshes.kinds import KINDS, Classified, classify
 from .meshes.solids import FACE_CROSSINGS, FACES_INSIDE
+from .meshes.topology import checked_arrays
 from .minkowski import checked_eps, surface_stats
 from .offsets_ball import ball_offset
 from .offsets_convex import convex_closing, convex_offset, rounding_allowance
@@ -113,6 +114,7 @@ def _operand(obj, name: str, kind: str, repair: bool, radius: float) -> Classifi
         raise InvalidParameterError("repair = True: a surface is taken as its triangles are; "
                                     "repair makes a solid (kind 'solid' or 'auto')")
     mesh = as_mesh(obj, name)
+    checked_arrays(mesh, f"mesh {name!r}")  # what neither offer below would mend
     try:
         return classify(mesh, name=name, kind=kind, repair=repair)
     except InvalidMeshError as error:
