@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from planner.cli import _fail, _missing_mesh
-from planner.errors import EmptyResultError
+from planner.errors import EmptyResultError, InvalidParameterError, MinkplanError
 
 __all__ = ["add_parsers", "add_repair_option", "cmd_depth", "cmd_offset", "made_solid_text"]
 
@@ -140,8 +140,6 @@ def cmd_offset(args) -> int:
 def cmd_depth(args) -> int:
     """``minkplan depth``; with ``--json`` a refusal is also a JSON line on stdout
     (``docs/schemas/depth_error.schema.json``), besides the one-line error on stderr."""
-    from planner.errors import MinkplanError
-
     try:
         return _depth(args)
     except MinkplanError as error:
@@ -155,8 +153,6 @@ def cmd_depth(args) -> int:
 
 
 def _depth(args) -> int:
-    from planner.errors import InvalidParameterError
-
     missing = _missing_mesh("a", args.a) or _missing_mesh("b", args.b)
     if missing:
         raise InvalidParameterError(missing)

@@ -295,3 +295,18 @@ def roofed_channel() -> trimesh.Trimesh:
         lo_, hi_ = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
         boxes.append(box(hi_ - lo_, (lo_ + hi_) / 2))
     return trimesh.util.concatenate(boxes)
+
+
+def misfanned_l_prism() -> trimesh.Trimesh:
+    """An L prism (volume 3) whose hexagon caps were fanned from a corner that cannot see
+    them all: closed and of the right volume, but its caps overlap themselves (not
+    checked: the solid tests refuse it)."""
+    outline = [(2, 1), (1, 1), (1, 2), (0, 2), (0, 0), (2, 0)]
+    n = len(outline)
+    vertices = [(x, y, 0) for x, y in outline] + [(x, y, 1) for x, y in outline]
+    faces = [(0, k + 1, k) for k in range(1, n - 1)]
+    faces += [(n, n + k, n + k + 1) for k in range(1, n - 1)]
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, n + j), (i, n + j, n + i)]
+    return trimesh.Trimesh(np.array(vertices, float), np.array(faces), process=False)

@@ -8,6 +8,7 @@ import pickle
 
 import numpy as np
 import pytest
+import shapes
 import trimesh
 from conftest import asset
 
@@ -54,10 +55,6 @@ def l_prism_obj(start: int) -> str:
         j = (i + 1) % n
         lines.append(f"f {i + 1} {j + 1} {n + j + 1} {n + i + 1}")
     return "\n".join(lines) + "\n"
-
-
-def fan(polygon):
-    return [(polygon[0], polygon[k], polygon[k + 1]) for k in range(1, len(polygon) - 1)]
 
 
 # ----------------------------------------------------------------------- errors
@@ -247,15 +244,7 @@ def test_boxes_touching_along_an_edge_are_a_valid_union():
 def test_misfanned_polygon_is_rejected():
     # L prism whose hexagon caps were fanned from a corner that cannot see them all:
     # topologically closed, right volume, but the caps overlap themselves
-    outline = [(2, 1), (1, 1), (1, 2), (0, 2), (0, 0), (2, 0)]
-    vertices = [(x, y, 0) for x, y in outline] + [(x, y, 1) for x, y in outline]
-    n = len(outline)
-    faces = [tuple(reversed(t)) for t in fan(list(range(n)))]
-    faces += fan([n + i for i in range(n)])
-    for i in range(n):
-        j = (i + 1) % n
-        faces += [(i, j, n + j), (i, n + j, n + i)]
-    bad = trimesh.Trimesh(np.array(vertices, float), np.array(faces), process=False)
+    bad = shapes.misfanned_l_prism()
     assert bad.is_watertight and bad.volume == pytest.approx(3.0)  # nothing else notices
     with pytest.raises(InvalidMeshError, match=r"mesh 'L'.*overlaps itself"):
         validate_solid(bad, name="L")

@@ -89,19 +89,6 @@ def nudged_copy_of_a_vertex(mesh: trimesh.Trimesh, distance: float) -> trimesh.T
     return trimesh.Trimesh(vertices, faces, process=False)
 
 
-def misfanned_l_prism() -> trimesh.Trimesh:
-    """An L prism whose caps were fanned from a corner that cannot see them all."""
-    outline = [(2, 1), (1, 1), (1, 2), (0, 2), (0, 0), (2, 0)]
-    n = len(outline)
-    vertices = [(x, y, 0) for x, y in outline] + [(x, y, 1) for x, y in outline]
-    faces = [(0, k + 1, k) for k in range(1, n - 1)]
-    faces += [(n, n + k, n + k + 1) for k in range(1, n - 1)]
-    for i in range(n):
-        j = (i + 1) % n
-        faces += [(i, j, n + j), (i, n + j, n + i)]
-    return trimesh.Trimesh(np.array(vertices, float), np.array(faces), process=False)
-
-
 CLEAN = {
     "box": lambda: shapes.box((1.0, 0.6, 0.4)),
     "icosphere": lambda: shapes.icosphere(3),
@@ -134,7 +121,7 @@ UNTIDY = {
     "an open box": lambda: trimesh.Trimesh(shapes.box().vertices, shapes.box().faces[1:],
                                            process=False),
     "a flat box": lambda: trimesh.creation.box(extents=(1.0, 1.0, 1e-14)),
-    "a misfanned polygon": misfanned_l_prism,
+    "a misfanned polygon": shapes.misfanned_l_prism,
     "boxes touching along an edge": lambda: concatenated(shapes.box(),
                                                          shapes.box(center=(1, 1, 0))),
 }

@@ -48,10 +48,9 @@ pub struct TidyLimits {
 /// A short reason (for logs) when the mesh is not tidy.
 pub fn tidy_shells(vertices: &[Vec3], faces: &[[u32; 3]], limits: &TidyLimits) -> Result<Vec<u32>, &'static str> {
     let clear = check_faces(vertices, faces, limits)?;
-    check_edges(faces)?;
-    let shells = shells_over_edges(faces);
-    check_volumes(vertices, faces, &shells, limits)?;
-    check_degenerate_kept(&clear, &shells)?;
+    let (shells, count) = shells_over_edges(faces)?;
+    check_volumes(vertices, faces, &shells, count, limits)?;
+    check_degenerate_kept(&clear, &shells, count)?;
     check_vertex_gaps(vertices, limits.merge)?;
     Ok(shells)
 }
@@ -81,54 +80,37 @@ fn check_faces(vertices: &[Vec3], faces: &[[u32; 3]], limits: &TidyLimits) -> Re
     Ok(clear)
 }
 
-/// Every directed edge used once and its reverse once.
-fn check_edges(faces: &[[u32; 3]]) -> Result<(), &'static str> {
-    let mut directed: HashSet<(u32, u32)> = HashSet::with_capacity(3 * faces.len());
-    for f in faces {
+/// The components of triangles over shared edges (numbered in order of their first
+/// triangle) and how many there are, when every directed edge is used once and its
+/// reverse once.
+fn shells_over_edges(faces: &[[u32; 3]]) -> Result<(Vec<u32>, usize), &'static str> {
+    let mut owner: HashMap<(u32, u32), usize> = HashMap::with_capacity(3 * faces.len());
+    for (i, f) in faces.iter().enumerate() {
         for k in 0..3 {
-            if !directed.insert((f[k], f[(k + 1) % 3])) {
+            if owner.insert((f[k], f[(k + 1) % 3]), i).is_some() {
                 return Err("a directed edge is used twice");
             }
         }
     }
-    if directed.iter().any(|&(a, b)| !directed.contains(&(b, a))) {
-        return Err("an edge is not used once in each direction");
-    }
-    Ok(())
-}
-
-/// The components of triangles over shared edges, numbered in order of their first
-/// triangle (every edge is shared by exactly two: [`check_edges`]).
-fn shells_over_edges(faces: &[[u32; 3]]) -> Vec<u32> {
-    let mut first_user: HashMap<(u32, u32), usize> = HashMap::with_capacity(3 * faces.len());
     let mut sets = UnionFind::new(faces.len());
-    for (i, f) in faces.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            match first_user.remove(&(a.min(b), a.max(b))) {
-                Some(j) => {
-                    sets.union(i, j);
-                }
-                None => {
-                    first_user.insert((a.min(b), a.max(b)), i);
-                }
-            }
-        }
+    for (&(a, b), &i) in &owner {
+        let &j = owner.get(&(b, a)).ok_or("an edge is not used once in each direction")?;
+        sets.union(i, j);
     }
     let mut number: HashMap<usize, u32> = HashMap::new();
-    (0..faces.len())
+    let shells = (0..faces.len())
         .map(|i| {
             let root = sets.find(i);
             let next = number.len() as u32;
             *number.entry(root).or_insert(next)
         })
-        .collect()
+        .collect();
+    Ok((shells, number.len()))
 }
 
 /// Every shell encloses a positive volume above the flat limit.
-fn check_volumes(vertices: &[Vec3], faces: &[[u32; 3]], shells: &[u32], limits: &TidyLimits) -> Result<(), &'static str> {
+fn check_volumes(vertices: &[Vec3], faces: &[[u32; 3]], shells: &[u32], count: usize, limits: &TidyLimits) -> Result<(), &'static str> {
     let centre = vertices.iter().fold(Vec3::ZERO, |s, &v| s + v) / vertices.len() as f64;
-    let count = shells.iter().max().map_or(0, |&k| k as usize + 1);
     let mut six_volumes = vec![0.0; count];
     for (f, &k) in faces.iter().zip(shells) {
         let [a, b, c] = f.map(|i| vertices[i as usize] - centre);
@@ -142,11 +124,10 @@ fn check_volumes(vertices: &[Vec3], faces: &[[u32; 3]], shells: &[u32], limits: 
 
 /// Every shell has a triangle clearly above the degenerate limit. The cleaning drops
 /// degenerate triangles only where the surface stays closed without them; a shell's
-/// edges are each shared by two of its triangles ([`check_edges`]) and it is connected,
+/// edges are each shared by two of its triangles ([`shells_over_edges`]) and it is connected,
 /// so with a triangle of each kind some edge joins the two and dropping the degenerate
 /// ones would open it: the cleaning keeps them.
-fn check_degenerate_kept(clear: &[bool], shells: &[u32]) -> Result<(), &'static str> {
-    let count = shells.iter().max().map_or(0, |&k| k as usize + 1);
+fn check_degenerate_kept(clear: &[bool], shells: &[u32], count: usize) -> Result<(), &'static str> {
     let mut has_clear = vec![false; count];
     clear.iter().zip(shells).filter(|(&c, _)| c).for_each(|(_, &k)| has_clear[k as usize] = true);
     if has_clear.contains(&false) {
