@@ -17,9 +17,8 @@
 
 use super::mesh::{TriMesh, Windings};
 use crate::math::Vec3;
-use crate::util::UnionFind;
+use crate::util::{FastMap, FastSet, UnionFind};
 use rayon::prelude::*;
-use std::collections::{HashMap, HashSet};
 
 /// Relative margin by which every limit is widened (see the module documentation).
 const SLACK: f64 = 1e-6;
@@ -59,7 +58,7 @@ pub fn tidy_shells(vertices: &[Vec3], faces: &[[u32; 3]], limits: &TidyLimits) -
 /// area is clearly above the degenerate limit.
 fn check_faces(vertices: &[Vec3], faces: &[[u32; 3]], limits: &TidyLimits) -> Result<Vec<bool>, &'static str> {
     let mut used = vec![false; vertices.len()];
-    let mut seen: HashSet<[u32; 3]> = HashSet::with_capacity(faces.len());
+    let mut seen: FastSet<[u32; 3]> = FastSet::with_capacity_and_hasher(faces.len(), Default::default());
     let mut clear = Vec::with_capacity(faces.len());
     for f in faces {
         if f[0] == f[1] || f[1] == f[2] || f[2] == f[0] {
@@ -84,7 +83,7 @@ fn check_faces(vertices: &[Vec3], faces: &[[u32; 3]], limits: &TidyLimits) -> Re
 /// triangle) and how many there are, when every directed edge is used once and its
 /// reverse once.
 fn shells_over_edges(faces: &[[u32; 3]]) -> Result<(Vec<u32>, usize), &'static str> {
-    let mut owner: HashMap<(u32, u32), usize> = HashMap::with_capacity(3 * faces.len());
+    let mut owner: FastMap<(u32, u32), usize> = FastMap::with_capacity_and_hasher(3 * faces.len(), Default::default());
     for (i, f) in faces.iter().enumerate() {
         for k in 0..3 {
             if owner.insert((f[k], f[(k + 1) % 3]), i).is_some() {
@@ -97,7 +96,7 @@ fn shells_over_edges(faces: &[[u32; 3]]) -> Result<(Vec<u32>, usize), &'static s
         let &j = owner.get(&(b, a)).ok_or("an edge is not used once in each direction")?;
         sets.union(i, j);
     }
-    let mut number: HashMap<usize, u32> = HashMap::new();
+    let mut number: FastMap<usize, u32> = FastMap::default();
     let shells = (0..faces.len())
         .map(|i| {
             let root = sets.find(i);
@@ -144,7 +143,7 @@ fn check_vertex_gaps(vertices: &[Vec3], merge: f64) -> Result<(), &'static str> 
         return Err("the merge distance is below the coordinates' rounding");
     }
     let key = |c: Vec3| [c.x as i64, c.y as i64, c.z as i64];
-    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(vertices.len());
+    let mut grid: FastMap<[i64; 3], Vec<u32>> = FastMap::with_capacity_and_hasher(vertices.len(), Default::default());
     for (i, &p) in vertices.iter().enumerate() {
         grid.entry(key(cell_of(p))).or_default().push(i as u32);
     }

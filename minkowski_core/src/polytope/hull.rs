@@ -2,8 +2,7 @@
 
 use crate::error::{CoreError, CoreResult};
 use crate::math::{Aabb, Vec3};
-use crate::util::UnionFind;
-use std::collections::HashMap;
+use crate::util::{FastMap, UnionFind};
 
 /// Points this close to a facet's plane, relative to the hull's diagonal, count as on it
 /// (coplanar triangles are merged into one facet within it).
@@ -95,7 +94,7 @@ impl ConvexPolytope {
         let unit: Vec<Vec3> = tri_n.iter().map(|n| n.normalize_or_zero()).collect();
         let off: Vec<f64> = tris.iter().zip(&unit).map(|(t, n)| n.dot(vertices[t[0] as usize])).collect();
         let mut facets = UnionFind::new(tris.len());
-        let mut edge_owner: HashMap<(u32, u32), usize> = HashMap::with_capacity(tris.len() * 2);
+        let mut edge_owner: FastMap<(u32, u32), usize> = FastMap::with_capacity_and_hasher(tris.len() * 2, Default::default());
         let mut adjacent: Vec<(usize, usize)> = Vec::with_capacity(tris.len() * 3 / 2);
         for (ti, t) in tris.iter().enumerate() {
             for k in 0..3 {
@@ -122,7 +121,7 @@ impl ConvexPolytope {
         }
         // One plane per facet: area-weighted normal, offset as the max over the facet's vertices
         // (so every hull vertex satisfies n·v <= d exactly).
-        let mut facet_of_root: HashMap<usize, u32> = HashMap::new();
+        let mut facet_of_root: FastMap<usize, u32> = FastMap::default();
         let mut normals: Vec<Vec3> = Vec::new();
         let mut triangle_facet = vec![u32::MAX; tris.len()];
         for ti in 0..tris.len() {

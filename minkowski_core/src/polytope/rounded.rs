@@ -24,7 +24,7 @@ use super::queries::point_triangle_distance2;
 use super::weld::weld;
 use crate::error::{CoreError, CoreResult};
 use crate::math::Vec3;
-use std::collections::HashMap;
+use crate::util::FastMap;
 
 /// Widest angle (radians) between neighbouring round points, whatever the tolerance.
 const MAX_STEP: f64 = std::f64::consts::FRAC_PI_2;
@@ -146,7 +146,7 @@ struct Structure {
 impl Structure {
     fn of(poly: &ConvexPolytope) -> CoreResult<Self> {
         let degenerate = |detail: String| CoreError::Degenerate { what: "convex polytope".into(), detail };
-        let mut across: HashMap<(u32, u32), usize> = HashMap::with_capacity(poly.triangles.len() * 3);
+        let mut across: FastMap<(u32, u32), usize> = FastMap::with_capacity_and_hasher(poly.triangles.len() * 3, Default::default());
         for (t, tri) in poly.triangles.iter().enumerate() {
             for k in 0..3 {
                 across.insert((tri[k], tri[(k + 1) % 3]), t);
@@ -175,7 +175,7 @@ impl Structure {
     }
 
     /// The facets around `v` in cyclic order, walking its triangles from `start`.
-    fn cone(poly: &ConvexPolytope, across: &HashMap<(u32, u32), usize>, v: u32, start: usize) -> CoreResult<Vec<u32>> {
+    fn cone(poly: &ConvexPolytope, across: &FastMap<(u32, u32), usize>, v: u32, start: usize) -> CoreResult<Vec<u32>> {
         let degenerate = |detail: String| CoreError::Degenerate { what: "convex polytope".into(), detail };
         let mut facets: Vec<u32> = Vec::new();
         let mut t = start;
@@ -227,8 +227,8 @@ struct Tessellation {
 /// inner points at a vertex (the arc from the lower facet id to the higher).
 #[derive(Default)]
 struct Shared {
-    corners: HashMap<(u32, u32), u32>,
-    arcs: HashMap<(u32, u32, u32), Vec<u32>>,
+    corners: FastMap<(u32, u32), u32>,
+    arcs: FastMap<(u32, u32, u32), Vec<u32>>,
 }
 
 impl Tessellation {
@@ -510,7 +510,16 @@ fn interior_axis(normals: &[Vec3]) -> Option<Vec3> {
 fn enclosing_centre(normals: &[Vec3]) -> Vec3 {
     let mut centre = normals[0];
     for k in 1..AXIS_ITERATIONS {
-        let farthest = normals.iter().copied().max_by(|a, b| (*a - centre).length_squared().total_cmp(&(*b - centre).length_squared())).expect("normals");
+        // the last of the farthest, as `max_by` would pick (a plain loop: this is most of
+        // the tessellation's time)
+        let mut farthest = normals[0];
+        let mut widest = f64::NEG_INFINITY;
+        for &n in normals {
+            let d = (n - centre).length_squared();
+            if d >= widest {
+                (farthest, widest) = (n, d);
+            }
+        }
         centre += (farthest - centre) / (k as f64 + 1.0);
     }
     centre

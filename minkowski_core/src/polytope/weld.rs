@@ -12,8 +12,7 @@
 
 use crate::error::{CoreError, CoreResult};
 use crate::math::Vec3;
-use crate::util::UnionFind;
-use std::collections::{HashMap, HashSet};
+use crate::util::{FastMap, FastSet, UnionFind};
 
 /// A welded mesh: its points, its triangles, each one's index in the input, and how far
 /// the surface moved.
@@ -60,7 +59,7 @@ pub fn weld(vertices: &[Vec3], triangles: &[[u32; 3]], within: f64) -> CoreResul
             collapsed.push(w);
         }
     }
-    let mut directed = HashSet::with_capacity(kept_triangles.len() * 3);
+    let mut directed = FastSet::with_capacity_and_hasher(kept_triangles.len() * 3, Default::default());
     for w in &kept_triangles {
         for k in 0..3 {
             if !directed.insert((w[k], w[(k + 1) % 3])) {
@@ -71,7 +70,7 @@ pub fn weld(vertices: &[Vec3], triangles: &[[u32; 3]], within: f64) -> CoreResul
     if directed.iter().any(|&(a, b)| !directed.contains(&(b, a))) {
         return Err(refuse("the welded surface is open"));
     }
-    let used: HashSet<u32> = kept_triangles.iter().flatten().copied().collect();
+    let used: FastSet<u32> = kept_triangles.iter().flatten().copied().collect();
     for w in collapsed {
         let on_surface = |a: u32, b: u32| if a == b { used.contains(&a) } else { directed.contains(&(a, b)) };
         if !(on_surface(w[0], w[1]) && on_surface(w[1], w[2]) && on_surface(w[2], w[0])) {
@@ -87,7 +86,7 @@ fn clusters(vertices: &[Vec3], within: f64) -> Vec<usize> {
     let mut sets = UnionFind::new(vertices.len());
     if within > 0.0 {
         let cell = |p: Vec3| ((p.x / within).floor() as i64, (p.y / within).floor() as i64, (p.z / within).floor() as i64);
-        let mut grid: HashMap<(i64, i64, i64), Vec<usize>> = HashMap::new();
+        let mut grid: FastMap<(i64, i64, i64), Vec<usize>> = FastMap::default();
         for (i, &p) in vertices.iter().enumerate() {
             grid.entry(cell(p)).or_default().push(i);
         }
