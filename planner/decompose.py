@@ -31,6 +31,7 @@ import platformdirs
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
+from .blas import single_blas_thread
 from .decompose_cache import FORMAT_VERSION, SUFFIX, load_entry, store_entry
 from .errors import GeometryError, InvalidParameterError
 from .meshes import split_solid, validate_solid
@@ -92,6 +93,7 @@ def default_cache_dir() -> Path:
     return platformdirs.user_cache_path("minkplan", appauthor=False) / "decompositions"
 
 
+@single_blas_thread
 def decompose(
     mesh,
     *,

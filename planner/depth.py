@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .blas import single_blas_thread
 from .errors import InvalidMeshError, InvalidParameterError, ResourceLimitError
 from .operands import solid_part
 from .problem import Part
@@ -155,6 +156,7 @@ def _fcl_check(a: Part, b: Part, translation: np.ndarray, separated: bool, dista
     return checker.is_valid(translation), fcl_distance
 
 
+@single_blas_thread
 def penetration_depth(a, b, *, tolerance: float | None = None,
                       max_cells: int | None = None, validate: bool = True,
                       source: Source | None = None,

@@ -29,6 +29,7 @@ import trimesh
 
 from . import _minkowski_core as core
 from . import budget
+from .blas import single_blas_thread
 from .decompose import check_threshold
 from .errors import GeometryError, InvalidMeshError, InvalidParameterError, ResourceLimitError
 from .operands import solid_part
@@ -387,6 +388,7 @@ def _exact_sum(source: Source, parts: tuple[Part, Part], *, mirror_b: bool, eps,
         exact=True, stats=stats, primitives=pair.native, pair=pair)
 
 
+@single_blas_thread
 def minkowski_sum(
     a,
     b,
@@ -458,6 +460,7 @@ def minkowski_sum(
     )
 
 
+@single_blas_thread
 def c_obstacle(
     obstacle,
     robot,

@@ -62,6 +62,7 @@ from planner.errors import (
     ResourceLimitError,
 )
 
+from .blas import single_blas_thread
 from .meshes.kinds import KINDS, Classified, classify
 from .meshes.solids import FACE_CROSSINGS, FACES_INSIDE
 from .meshes.topology import checked_arrays
@@ -210,6 +211,7 @@ source); ``"auto"``, the first of those that applies (the cells before the ball 
 solid of small triangles, :data:`FINE_FACETS`)."""
 
 
+@single_blas_thread
 def offset(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
            name: str = "mesh", progress: bool | None = None,
            method: str = "auto", kind: str = "solid", repair: bool = False) -> OffsetResult:
@@ -720,6 +722,7 @@ def _second_method(asked: str, first: str) -> str:
     return first if asked == "auto" and first != "hull" else asked
 
 
+@single_blas_thread
 def opening(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
             name: str = "mesh", progress: bool | None = None,
             method: str = "auto", kind: str = "solid", repair: bool = False) -> OffsetResult:
@@ -734,6 +737,7 @@ def opening(mesh, r: float, *, eps: float | None = None, max_cells: int | None =
                      kind, repair)
 
 
+@single_blas_thread
 def closing(mesh, r: float, *, eps: float | None = None, max_cells: int | None = None,
             name: str = "mesh", progress: bool | None = None,
             method: str = "auto", kind: str = "solid", repair: bool = False) -> OffsetResult:

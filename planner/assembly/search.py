@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from planner.blas import single_blas_thread
 from planner.errors import InvalidParameterError, MinkplanError, ResourceLimitError, ScenarioError
 from planner.problem import Assembly, Part, Scenario
 from planner.progress import StatusLine
@@ -471,6 +472,7 @@ class _Search:
                 **self.stats}
 
 
+@single_blas_thread
 def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=None,
                   progress: bool | None = False, plan_parts: bool = True,
                   minimize: bool = True, groups: bool = True,

@@ -12,6 +12,7 @@ import logging
 import numpy as np
 import trimesh
 
+from planner.blas import single_blas_thread
 from planner.errors import InvalidMeshError
 from planner.tolerances import scale_of, tol
 
@@ -34,6 +35,7 @@ __all__ = ["repair_mesh"]
 log = logging.getLogger(__name__)
 
 
+@single_blas_thread
 def repair_mesh(mesh, *, name: str = "mesh"):
     """Best-effort repair of a messy mesh into a solid, with a report of what was done.
 

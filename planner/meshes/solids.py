@@ -32,6 +32,7 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
+from planner.blas import single_blas_thread
 from planner.errors import InvalidMeshError
 from planner.tolerances import scale_of, tol
 
@@ -68,6 +69,7 @@ def not_solid_reason(error: InvalidMeshError) -> str:
     return str(error).split(": ", 1)[-1].split("; ", 1)[0]
 
 
+@single_blas_thread
 def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
     """Check that a mesh bounds a solid and return a cleaned copy.
 

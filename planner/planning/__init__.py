@@ -11,6 +11,7 @@ makes the native C-space a validity checker and motion validator for OMPL.
 
 from __future__ import annotations
 
+from planner.blas import single_blas_thread
 from planner.errors import InvalidParameterError
 from planner.problem import Scenario
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
@@ -34,6 +35,7 @@ __all__ = [
 ]
 
 
+@single_blas_thread
 def plan(scenario: Scenario, *, planner: str = "minkplan", cache_dir=None,
          progress: bool | None = None, params: OctreeParams | None = None,
          validate: bool = True, source: Source | None = None) -> PlanOutcome:
