@@ -746,7 +746,8 @@ pub struct LoopsClosed {
 /// tolerance and the polygons' own deviation of the boundary) or a band crossing (on it),
 /// so every point of the fill lies within the loop's diameter plus those of the boundary;
 /// and the boundary lay on the polygons and band triangles already, so the fill removes
-/// none of it. Larger loops are left (the caller sees them open).
+/// none of it. Larger loops are left (the caller sees them open), and so are loops whose
+/// fan would turn a triangle over ([`fans_one_way`]: a loop crossing itself).
 pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
     let mut out = LoopsClosed::default();
     // edges used once with no reverse: listed once (one used k > 1 times is listed k times)
@@ -765,8 +766,12 @@ pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
         if diameter > size {
             continue;
         }
+        let middle = corners.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / corners.len() as f64;
+        if !fans_one_way(middle, &corners) {
+            continue;
+        }
         let centre = s.vertices.len() as u32;
-        s.vertices.push(corners.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / corners.len() as f64);
+        s.vertices.push(middle);
         for i in 0..ring.len() {
             s.faces.push([centre, ring[i], ring[(i + 1) % ring.len()]]);
         }
@@ -774,6 +779,17 @@ pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
         out.diameter = out.diameter.max(diameter);
     }
     out
+}
+
+/// Whether the fan about `centre` of the ring `corners` has every triangle facing the
+/// ring's way (its normal on the side of the ring's vector area): a ring that crosses
+/// itself, seen along that direction, fans into triangles turned over, overlapping their
+/// neighbours.
+fn fans_one_way(centre: Vec3, corners: &[Vec3]) -> bool {
+    let n = corners.len();
+    let normals: Vec<Vec3> = (0..n).map(|i| (corners[i] - centre).cross(corners[(i + 1) % n] - centre)).collect();
+    let area = normals.iter().fold(Vec3::ZERO, |acc, &m| acc + m);
+    normals.iter().all(|m| m.dot(area) >= 0.0)
 }
 
 /// The simple cycles of the directed graph `next` (each edge used once; a walk that comes
@@ -806,7 +822,8 @@ fn cycles(next: &mut FastMap<u32, Vec<u32>>) -> Vec<Vec<u32>> {
 }
 
 /// Triangles filling the ring `ring` (in order), which lies in a plane normal to `axis`;
-/// by ear clipping in that plane.
+/// by ear clipping in that plane. `None` when the ring is not simple (no ear, or a last
+/// triangle turned against the ring).
 fn ring_triangles(ring: &[u32], pos: &[Vec3], axis: usize) -> Option<Vec<[u32; 3]>> {
     let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
     let p2 = |v: u32| (pos[v as usize][u], pos[v as usize][w]);
@@ -835,7 +852,14 @@ fn ring_triangles(ring: &[u32], pos: &[Vec3], axis: usize) -> Option<Vec<[u32; 3
         out.push([poly[(ear + n - 1) % n], poly[ear], poly[(ear + 1) % n]]);
         poly.remove(ear);
     }
-    out.push([poly[0], poly[1], poly[2]]);
+    // every ear turns the ring's way; the last triangle does too only when the ring is
+    // simple (one crossing itself leaves a triangle turned over, overlapping its
+    // neighbour): such a ring is left open
+    let last = [poly[0], poly[1], poly[2]];
+    if cross(p2(last[0]), p2(last[1]), p2(last[2])) * turn <= 0.0 {
+        return None;
+    }
+    out.push(last);
     Some(out)
 }
 
@@ -943,6 +967,48 @@ mod tests {
             .sum();
         assert!((volume - 1.0).abs() < 1e-12, "{volume}");
         assert_eq!(s.vertices[8], Vec3::new(0.5, 0.5, 1.0), "the fan's centre is the rim's centroid");
+    }
+
+    /// A ring in the plane x = 0 that crosses itself: its edges (0, 1) and (2, 3) cross at
+    /// (y, z) = (1.2, 0.6), leaving a large lobe turning one way and a small one the other.
+    fn crossed_ring() -> Vec<Vec3> {
+        [(0.0, 0.0), (2.0, 1.0), (2.0, 0.0), (0.0, 1.5)].iter().map(|&(y, z)| Vec3::new(0.0, y, z)).collect()
+    }
+
+    #[test]
+    fn a_simple_ring_is_clipped_into_triangles_turning_its_way() {
+        let square: Vec<Vec3> = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].iter().map(|&(y, z)| Vec3::new(0.0, y, z)).collect();
+        let tris = ring_triangles(&[0, 1, 2, 3], &square, 0).expect("a square is simple");
+        assert_eq!(tris.len(), 2);
+        for t in tris {
+            let p = t.map(|v| square[v as usize]);
+            assert!((p[1] - p[0]).cross(p[2] - p[0]).x > 0.0, "{t:?}");
+        }
+    }
+
+    #[test]
+    fn a_ring_crossing_itself_is_neither_clipped_nor_fanned() {
+        // ear clipping finds an ear in the large lobe, and the triangle left is turned
+        // over across the small one; a fan about the centroid turns one triangle over too
+        let ring = crossed_ring();
+        assert!(ring_triangles(&[0, 1, 2, 3], &ring, 0).is_none());
+        let centre = ring.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / 4.0;
+        assert!(!fans_one_way(centre, &ring));
+        let square = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        assert!(fans_one_way(Vec3::new(0.5, 0.5, 0.0), &square));
+    }
+
+    #[test]
+    fn a_small_hole_that_crosses_itself_is_left_open() {
+        // a cone over the crossed ring from an apex off its plane: the ring's edges are
+        // the only open ones; fanned, the hole would hold a triangle turned over
+        let mut vertices = crossed_ring();
+        vertices.push(Vec3::new(-1.0, 1.0, 0.6));
+        let faces: Vec<[u32; 3]> = (0..4u32).map(|i| [4, i, (i + 1) % 4]).collect();
+        let mut s = Surface { vertices, faces, ..Default::default() };
+        assert_eq!(open_edges(&s.faces).len(), 4);
+        assert_eq!(close_small_loops(&mut s, 10.0), LoopsClosed::default());
+        assert_eq!(open_edges(&s.faces).len(), 4);
     }
 
     /// Two closed unit cubes (outward), the second moved by `offset`, in one surface whose
