@@ -695,7 +695,7 @@ def _main(argv: list[str] | None) -> int:
     handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
     logging.basicConfig(level=level, handlers=[handler])
     try:
-        from planner.errors import MinkplanError
+        from planner.errors import GeometryError, MinkplanError
     except ImportError as exc:  # the native module is missing: a broken install
         return _fail(f"minkplan is not installed correctly: {exc}")
     try:
@@ -727,6 +727,9 @@ def _main(argv: list[str] | None) -> int:
 
             return cmd_offset(args)
         return _fail(f"unknown command {args.command!r}")
+    except GeometryError as exc:  # minkplan's fault (or a numerical limit), not the input's
+        _fail(str(exc))
+        return EXIT_INTERNAL
     except MinkplanError as exc:
         return _fail(str(exc))
     except KeyboardInterrupt:

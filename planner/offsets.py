@@ -388,13 +388,13 @@ def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
     (``"auto"``: the first that applies, :data:`METHODS`; ``refuse_faulty_ball`` as
     :func:`_offset_unwarned`'s)."""
     if method in ("auto", "hull"):
-        done = convex_offset(solid, radius, step)
+        why: list[str] = []
+        done = convex_offset(solid, radius, step, why)
         if done is not None:
             return done, "hull"
         if method == "hull":
-            raise InvalidParameterError(f"method = 'hull': {name} is not convex within "
-                                        f"eps {step:.3g} (or its hull is too large or too "
-                                        f"thin for qhull)")
+            raise InvalidParameterError(f"method = 'hull': {name} {why[0]}; use method "
+                                        f"'auto', 'ball' or 'cells'")
     if method == "auto" and _fine_facets(solid, step):
         return _cell_offset(solid, radius, step, max_cells, name), "cells"
     if method in ("auto", "ball"):
@@ -503,7 +503,7 @@ def _composed(mesh, first: float, second: float, eps, max_cells, name: str,
         one, two = stages(method)
     except _StageOutputRefused as refused:
         if method != "auto" or refused.first_method == "cells":
-            raise
+            raise GeometryError(str(refused)) from refused  # (the public class)
         # auto's first choice made a surface its second stage cannot take: the cells
         log.warning("%s; %s again by the cells", refused, what)
         one, two = stages("cells")
@@ -672,8 +672,14 @@ def _stage_output_refused(error: Exception, one: OffsetResult, stage: str, what:
         one.stats["method"],
         f"{stage}: {what}'s first stage ({one.stats['method']} at eps {one.eps:.3g}) made a "
         f"surface its second stage cannot take as a solid ({found}); a fault of minkplan's, "
-        f"not of the input: try another eps or method (--method cells), and please report "
-        f"this input")
+        f"not of the input: try another eps{_other_method(one)}, and please report this "
+        f"input")
+
+
+def _other_method(one: OffsetResult) -> str:
+    """The advice of another method after a first stage ``one`` that was not the
+    cells'."""
+    return "" if one.stats["method"] == "cells" else " or method (--method cells)"
 
 
 class _BallFault(GeometryError):

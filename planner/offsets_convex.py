@@ -61,14 +61,14 @@ from .errors import InvalidMeshError, InvalidParameterError
 from .meshes.closest import closest_points_on_triangles
 
 __all__ = ["BALL_CONE_ANGLE", "BALL_INNER", "CLOSED", "MAX_FACES", "MAX_POINTS", "ROUNDED",
-           "convex_closing", "convex_hull", "convex_offset", "hull_mesh", "measured_ball",
-           "merge_distance", "representatives", "rounding_allowance", "unit_ball"]
+           "Declined", "convex_closing", "convex_hull", "convex_offset", "hull_mesh",
+           "measured_ball", "merge_distance", "representatives", "rounding_allowance", "unit_ball"]
 
 log = logging.getLogger(__name__)
 
-MAX_FACES = 5000
-"""Solids with more triangles are left to the cell source (the test is faces × hull
-facets)."""
+MAX_FACES = 200_000
+"""Solids with more triangles are left to the cell source (qhull and the tessellation
+grow with them; an icosphere of 5 subdivisions has 20,480)."""
 
 MAX_POINTS = 2_000_000
 """Most points ``v + u`` one grown hull may take (vertices of ``H`` times those of ``B``)."""
@@ -98,20 +98,18 @@ MERGE_EPS_SHARE = 1.0 / 16.0
 0.2 sphere at x = 1000) 1e-6 of the distance would be more than the whole tolerance."""
 
 
-def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
+def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float,
+                  why: list[str] | None = None
                   ) -> tuple[trimesh.Trimesh, float, dict[str, Any]] | None:
     """``(mesh, error_bound, stats)`` of the closed solid's offset by ``radius`` by its
-    hull (see the module documentation), or ``None``. An erosion that leaves nothing gives
-    an empty mesh."""
+    hull (see the module documentation), or ``None``, with the reason appended to ``why``
+    (a phrase about the solid). An erosion that leaves nothing gives an empty mesh."""
     from scipy.spatial import QhullError  # noqa: PLC0415
 
     t0 = time.perf_counter()
     rounding = rounding_allowance(solid, radius)
     try:
-        found = _between_hulls(solid, eps)
-        if found is None:
-            return None
-        hull, deepest = found
+        hull, deepest = _between_hulls(solid, eps)
         extra: dict[str, Any] = {}
         if radius < 0:
             mesh, between, sheet = _eroded(hull, -radius, rounding, eps)
@@ -129,15 +127,24 @@ def convex_offset(solid: trimesh.Trimesh, radius: float, eps: float
             else:
                 grown = _grown(hull, radius, eps)
                 if grown is None:
+                    _declined(why, "is convex, but its grown hull would need more than "
+                                   f"{MAX_POINTS:,} points or a finer ball than "
+                                   f"{MAX_SUBDIVISIONS} subdivisions")
                     return None
                 mesh, chord, subdivisions = grown
                 if chord + between + rounding > eps and not measured:
                     between = min(between, _gap_exact(hull, eps))
                 method = "hull of the vertices' tessellated balls"
     except QhullError:  # a hull too thin for qhull: the cell source decides
+        _declined(why, "has a hull too thin or flat for qhull")
+        return None
+    except Declined as declined:
+        _declined(why, str(declined))
         return None
     bound = chord + between + rounding
     if len(mesh.faces) and bound > eps:
+        _declined(why, f"is convex, but its hull's offset has a bound of {bound:.3g}, "
+                       f"above eps")
         return None
     stats = {"triangles": len(mesh.faces), "band_cells": 0, "h": 0.0, "refinements": 0,
              "planar_cells": 0, "planar_pieces": 0, "planar_regions": 0,
@@ -161,12 +168,9 @@ def convex_closing(solid: trimesh.Trimesh, eps: float) -> tuple[float, dict[str,
 
     t0 = time.perf_counter()
     try:
-        found = _between_hulls(solid, eps)
-        if found is None:
-            return None
-        hull, deepest = found
+        hull, deepest = _between_hulls(solid, eps)
         between, _ = _hull_gap(hull, deepest, eps)
-    except QhullError:
+    except (QhullError, Declined):
         return None
     bound = between + rounding_allowance(solid, 0.0)
     if bound > eps:
@@ -175,17 +179,30 @@ def convex_closing(solid: trimesh.Trimesh, eps: float) -> tuple[float, dict[str,
                    "hull_depth": hull.depth, "seconds": time.perf_counter() - t0}
 
 
+class Declined(Exception):
+    """Why a solid is not offset by its hull (a phrase about it: "has ...", "is ...")."""
+
+
+def _declined(why: list[str] | None, reason: str) -> None:
+    """The reason appended to ``why`` (when given) and logged."""
+    log.debug("the hull method declines: the solid %s", reason)
+    if why is not None:
+        why.append(reason)
+
+
 def _between_hulls(solid: trimesh.Trimesh, eps: float
-                   ) -> tuple[_Hull, tuple[np.ndarray, float]] | None:
+                   ) -> tuple[_Hull, tuple[np.ndarray, float]]:
     """The solid's hull ``H`` and a point inside ``H_t`` with its depth, when ``H_t ⊂ P ⊂
-    H`` with the depth ``t`` within ``eps`` (see the module documentation), else ``None``:
-    the point is inside the solid by one winding number exactly when ``H_t`` is."""
+    H`` with the depth ``t`` within ``eps`` (see the module documentation): the point is
+    inside the solid by one winding number exactly when ``H_t`` is. :class:`Declined`
+    otherwise."""
     hull = _hull_planes(solid, eps)
-    if hull is None:
-        return None
     deepest = _inner_point(hull, eps)
-    if deepest is None or deepest[1] <= hull.depth or not _inside_at(solid, deepest[0]):
-        return None
+    if deepest is None or deepest[1] <= hull.depth:
+        raise Declined(f"is convex only to {hull.depth:.3g}, as deep as its hull's inside")
+    if not _inside_at(solid, deepest[0]):
+        raise Declined("does not hold the inside of its hull (its winding number there is "
+                       "not 1)")
     return hull, deepest
 
 
@@ -199,12 +216,12 @@ def rounding_allowance(solid: trimesh.Trimesh, radius: float) -> float:
 @dataclass(frozen=True)
 class _Hull:
     """The hull ``H`` of a solid's vertices: its distinct facet planes (unit ``normals``,
-    ``offsets`` each the largest ``n · v`` over the vertices, so every plane bounds them),
-    the ``depth`` ``t`` within which every triangle of the solid has its corners on one of
-    them, its ``corners`` (vertices), and its triangles' corners (``triangles``, (k, 3,
-    3)) with their unit normals (``triangle_normals``); per corner, a circular cone
-    holding its normal cone (the directions in which it is extreme): unit ``cone_axes``
-    and half-angles ``cone_angles``."""
+    ``offsets`` each the largest ``n · v`` over the vertices, so every plane bounds them:
+    :func:`_plane_offsets`), the ``depth`` ``t`` within which every triangle of the solid
+    has its corners on one of them, its ``corners`` (vertices), and its triangles' corners
+    (``triangles``, (k, 3, 3)) with their unit normals (``triangle_normals``); per
+    corner, a circular cone holding its normal cone (the directions in which it is
+    extreme): unit ``cone_axes`` and half-angles ``cone_angles``."""
 
     normals: np.ndarray
     offsets: np.ndarray
@@ -216,21 +233,26 @@ class _Hull:
     cone_angles: np.ndarray
 
 
-def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull | None:
-    """The solid's :class:`_Hull`; ``None`` when its depth exceeds ``eps`` or there are too
-    many faces."""
-    if len(solid.faces) > MAX_FACES or len(solid.faces) < 4:
-        return None
+def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull:
+    """The solid's :class:`_Hull`; :class:`Declined` when its depth exceeds ``eps`` or it
+    has too many triangles."""
+    if len(solid.faces) > MAX_FACES:
+        raise Declined(f"has {len(solid.faces):,} triangles, more than the hull method takes "
+                       f"({MAX_FACES:,})")
+    if len(solid.faces) < 4:
+        raise Declined(f"has {len(solid.faces)} triangles")
     vertices = np.asarray(solid.vertices, dtype=np.float64)
     hull = convex_hull(vertices)
     triangle_normals = hull.equations[:, :3] / np.linalg.norm(hull.equations[:, :3],
                                                               axis=1)[:, None]
-    normals = np.unique(np.round(triangle_normals, 12), axis=0)  # coplanar triangles' repeats
+    # coplanar triangles' repeats are one plane
+    normals, plane_of = np.unique(np.round(triangle_normals, 12), axis=0, return_inverse=True)
     normals /= np.linalg.norm(normals, axis=1)[:, None]
-    offsets = (vertices @ normals.T).max(axis=0)
+    offsets = _plane_offsets(vertices[hull.simplices], normals, plane_of.ravel())
     depth = _depth(vertices, np.asarray(solid.faces), normals, offsets, eps)
     if depth > eps:
-        return None
+        raise Declined(f"is not convex within eps {eps:.3g}: some triangle lies deeper than "
+                       f"that inside its hull")
     used = np.sort(hull.vertices)
     axes, angles = _normal_cones(np.searchsorted(used, hull.simplices), triangle_normals,
                                  len(used))
@@ -238,24 +260,50 @@ def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull | None:
                  triangle_normals, axes, angles)
 
 
+def _plane_offsets(triangles: np.ndarray, normals: np.ndarray, plane_of: np.ndarray
+                   ) -> np.ndarray:
+    """Per plane, the largest ``n · v`` over the corners of the hull's triangles on it
+    (``plane_of``): a hull facet's corners are where its normal is extreme, so that is the
+    largest over every vertex, to qhull's rounding (far within the allowance every bound
+    adds). Linear in the triangles: every vertex against every plane was quadratic (an
+    icosphere of 20k triangles: 1.7 GB and 5 s)."""
+    heights = np.einsum("tkj,tj->tk", triangles, normals[plane_of]).max(axis=1)
+    offsets = np.full(len(normals), -np.inf)
+    np.maximum.at(offsets, plane_of, heights)
+    return offsets
+
+
 def _depth(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray,
            offsets: np.ndarray, eps: float) -> float:
     """A ``t`` such that every triangle has its corners within ``t`` below one of the
-    planes: each triangle's depth below the plane nearest its own normal, all planes
-    searched for the least only where that is farther than ``eps`` (so ``t`` exceeds
-    ``eps`` only when the least does, and the hull path's choice is the same). By
-    :data:`DEPTH_ROWS` triangles at a time (a triangle per plane is a float); the search
-    stops at the first triangle deeper than ``eps`` below every plane."""
+    planes (any plane gives such a ``t``; the least is sought): each triangle's depth below
+    the plane nearest its own normal (a k-d tree over the unit normals), and where that is
+    farther than ``eps``, the least over every plane, or over the :data:`NEAR_PLANES`
+    nearest its normal when every plane would be too many (:data:`FULL_SEARCH`); the
+    search stops at the first triangle deeper than ``eps`` below all it tries. In
+    pieces of at most :data:`DEPTH_ENTRIES` triangle corners times planes."""
+    from scipy.spatial import cKDTree  # noqa: PLC0415
+
     corners = vertices[faces]                                       # (faces, 3, 3)
     own = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    nearest = np.concatenate([np.argmax(own[k:k + DEPTH_ROWS] @ normals.T, axis=1)
-                              for k in range(0, len(own), DEPTH_ROWS)])
+    length = np.linalg.norm(own, axis=1)
+    flat = length == 0  # no normal: its nearest plane is the first, as any would do
+    own = np.where(flat[:, None], normals[0], own / np.where(flat, 1.0, length)[:, None])
+    tree = cKDTree(normals)
+    nearest = tree.query(own)[1]
     depths = (offsets[nearest][:, None]
               - np.einsum("fkj,fj->fk", corners, normals[nearest])).max(axis=1)
     far = np.flatnonzero(depths > eps)
-    for k in range(0, len(far), DEPTH_ROWS // 3):
+    if len(far) * len(normals) > FULL_SEARCH:
+        tried = tree.query(own[far], k=min(NEAR_PLANES, len(normals)))[1].reshape(len(far), -1)
+        below = offsets[tried][:, None, :] - np.einsum("fkj,fpj->fkp", corners[far],
+                                                       normals[tried])
+        depths[far] = np.minimum(depths[far], below.max(axis=1).min(axis=1))
+        return float(depths.max())
+    rows_at_once = max(1, DEPTH_ENTRIES // (3 * len(normals)))
+    for k in range(0, len(far), rows_at_once):
         # per far triangle and plane, the deepest corner's depth; per triangle, its best
-        rows = far[k:k + DEPTH_ROWS // 3]
+        rows = far[k:k + rows_at_once]
         below = offsets[None, None, :] - corners[rows] @ normals.T  # (rows, 3, planes)
         depths[rows] = np.minimum(depths[rows], below.max(axis=1).min(axis=1))
         if depths[rows].max() > eps:
@@ -263,8 +311,16 @@ def _depth(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray,
     return float(depths.max())
 
 
-DEPTH_ROWS = 3000
-"""Triangles :func:`_depth` measures against every plane at once."""
+DEPTH_ENTRIES = 9_000_000
+"""Most triangle corners times planes :func:`_depth` holds at once (72 MB of floats)."""
+
+FULL_SEARCH = 50_000_000
+"""Most far triangles times planes :func:`_depth` searches in full; beyond it each far
+triangle tries the :data:`NEAR_PLANES` planes nearest its normal (a larger ``t``, at worst:
+the hull path is then declined, never wrong)."""
+
+NEAR_PLANES = 32
+"""Planes a far triangle of a large solid tries (:data:`FULL_SEARCH`)."""
 
 
 def _normal_cones(corners_of: np.ndarray, triangle_normals: np.ndarray, count: int
@@ -494,12 +550,12 @@ def _fewer_corners(corners: np.ndarray, budget: float) -> tuple[np.ndarray, floa
     (:func:`_directions`), from :data:`THIN_START` on. The gap goes as ``1 / n`` on round
     surfaces (a sphere's corners) and as ``1 / n²`` along round edges (a cylinder's rims),
     so a try over the budget is followed by one with ``n`` scaled by the square root of
-    their ratio (and a margin): too few for a surface, a try more."""
+    their ratio (and a margin), and later ones by the power the last two tries measured."""
     from scipy.spatial import QhullError  # noqa: PLC0415
 
     if budget <= 0 or len(corners) <= 8:
         return corners, 0.0
-    count = THIN_START
+    count, power, last = THIN_START, 0.5, None
     for _ in range(THIN_TRIES):
         if count > THIN_ENOUGH * len(corners):
             break
@@ -512,7 +568,11 @@ def _fewer_corners(corners: np.ndarray, budget: float) -> tuple[np.ndarray, floa
             break
         if gap <= budget:
             return corners[kept], gap
-        count = math.ceil(count * max(THIN_AIM * math.sqrt(gap / budget), 1.5))
+        if last is not None and 0 < gap < last[1]:
+            # the gap went as count^-1/power between the last two tries
+            power = min(max(math.log(count / last[0]) / math.log(last[1] / gap), 0.5), 1.0)
+        last = count, gap
+        count = math.ceil(count * max(THIN_AIM * (gap / budget) ** power, 1.5))
     return corners, 0.0
 
 
@@ -523,7 +583,7 @@ by (:func:`_fewer_corners`)."""
 THIN_START = 64
 """Directions :func:`_fewer_corners` tries first."""
 
-THIN_TRIES = 4
+THIN_TRIES = 5
 """Direction spreads :func:`_fewer_corners` tries at most."""
 
 THIN_AIM = 1.2

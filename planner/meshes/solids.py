@@ -65,8 +65,14 @@ log = logging.getLogger(__name__)
 
 def not_solid_reason(error: InvalidMeshError) -> str:
     """Why a mesh is no solid, from :func:`validate_solid`'s error, without its label and
-    the advice on fixing it."""
-    return str(error).split(": ", 1)[-1].split("; ", 1)[0]
+    the advice on fixing it (what follows the first ``"; "`` outside parentheses)."""
+    reason = str(error).split(": ", 1)[-1]
+    depth = 0
+    for at, char in enumerate(reason):
+        depth += {"(": 1, ")": -1}.get(char, 0)
+        if depth == 0 and reason.startswith("; ", at):
+            return reason[:at]
+    return reason
 
 
 @single_blas_thread
