@@ -39,6 +39,9 @@ def add_parser(sub, common) -> None:
 def cmd_verify(args) -> int:
     path = Path(args.certificate)
     if path.is_dir():
+        missing = _no_certificate_in(path)
+        if missing:
+            return _fail(missing)
         path = path / "certificate.json"
     if not path.is_file():
         return _fail(f"certificate: file {str(path)!r} not found")
@@ -50,10 +53,9 @@ def cmd_verify(args) -> int:
     if not scenario_path.is_file():
         return _fail(f"scenario: file {str(scenario_path)!r} not found")
 
-    from planner.io import load_scenario
     from planner.validation.certificate_check import check_certificate
 
-    scenario = load_scenario(scenario_path, hold_orientation=args.hold_orientation)
+    scenario = _scenario(scenario_path, args.hold_orientation, certificate)
     try:
         check = check_certificate(certificate, scenario)
     except (ValueError, KeyError, TypeError, IndexError, AttributeError) as exc:
@@ -77,3 +79,58 @@ def cmd_verify(args) -> int:
     if check.n_failures > len(check.failures):
         sys.stdout.write(f"  ... and {check.n_failures - len(check.failures)} more\n")
     return 1
+
+
+def _no_certificate_in(folder: Path) -> str | None:
+    """Why the ``--out`` folder ``folder`` holds no certificate, if it holds none: its
+    plan's status from its report (a path found, a start in collision), else that it is
+    no plan's folder."""
+    if (folder / "certificate.json").is_file():
+        return None
+    try:
+        report = json.loads((folder / "report.json").read_text(encoding="utf-8"))
+        status = str(report["status"])
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError):
+        return (f"certificate: {str(folder)!r} holds no certificate.json (nor a plan's "
+                f"report.json): give the --out folder of a plan that proved no path")
+    return (f"certificate: {str(folder)!r} holds no certificate.json: its plan's status is "
+            f"{status!r}; a certificate is written only for a no path proved by one")
+
+
+def _scenario(path: Path, hold: str | None, certificate: dict):
+    """The scenario the certificate was made for: read with ``hold`` (``--hold-orientation``),
+    or, without it, for a problem whose start and goal orientations differ, with the one
+    the certificate records. An assembly, or a problem neither orientation of which the
+    certificate is for, is refused (one line)."""
+    from planner.errors import ScenarioError
+    from planner.io import load_problem, load_scenario
+    from planner.problem import Scenario
+
+    try:
+        problem = load_problem(path, hold_orientation=hold)
+    except ScenarioError as error:
+        if hold is not None or "--hold-orientation" not in str(error):
+            raise
+        for held in ("start", "goal"):
+            scenario = load_scenario(path, hold_orientation=held)
+            if _orientation_is(certificate, scenario.orientation):
+                return scenario
+        raise ScenarioError(f"{path}: its start and goal orientations differ, and the "
+                            f"certificate is for neither: give verify --hold-orientation "
+                            f"start or goal, as given to plan") from error
+    if not isinstance(problem, Scenario):
+        raise ScenarioError(f"{path}: an assembly, not a planning problem: verify checks the "
+                            f"certificate of a plan's scenario (.yaml or OMPL.app .cfg)")
+    return problem
+
+
+def _orientation_is(certificate: dict, orientation) -> bool:
+    """Whether the certificate records the robot at ``orientation`` (3 x 3)."""
+    import numpy as np
+
+    try:
+        given = np.asarray(certificate["robot_orientation"], dtype=np.float64)
+        return given.shape == (3, 3) and bool(np.allclose(given, np.asarray(orientation),
+                                                          rtol=0.0, atol=1e-9))
+    except (KeyError, TypeError, ValueError):
+        return False

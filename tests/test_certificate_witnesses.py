@@ -168,6 +168,41 @@ def test_a_tampered_certificate_fails_and_the_command_says_so(tmp_path, capsys):
     assert "not a minkplan certificate" in capsys.readouterr().err
 
 
+def test_verify_takes_the_orientation_the_certificate_is_for_and_says_what_it_was_given(
+        tmp_path, capsys):
+    """A try-out: verify of a problem planned with --hold-orientation asked to plan with it;
+    an assembly file said "base: unknown key"; a folder of a found path said
+    "certificate.json not found". The certificate records its orientation: verify takes
+    the end of the problem that has it; the others say what they were given."""
+    hollow_box(4, 2).export(tmp_path / "cage.stl")
+    (tmp_path / "s.yaml").write_text(
+        "name: cage\nrobot: {name: cage, mesh: cage.stl}\n"
+        "obstacles:\n  - {name: post, box: [1, 1, 1]}\n"
+        "start: {position: [0, 0, 0], orientation: {rpy: [0, 0, 30]}}\n"
+        "goal: [0, 0, 9]\n"
+        "bounds: {min: [-12, -12, -12], max: [12, 12, 12]}\n")
+    out = tmp_path / "out"
+    assert main(["plan", str(tmp_path / "s.yaml"), "--out", str(out), "--no-progress",
+                 "--hold-orientation", "start"]) == 1
+    capsys.readouterr()
+    assert main(["verify", str(tmp_path / "s.yaml"), str(out)]) == 0
+    assert "holds" in capsys.readouterr().out
+    assemblies = Path(__file__).resolve().parents[1] / "scenarios" / "assemblies"
+    assembly = assemblies / "peg_in_block.yaml"
+    assert main(["verify", str(assembly), str(out)]) == 2
+    assert "an assembly, not a planning problem" in capsys.readouterr().err
+    (tmp_path / "free.yaml").write_text(
+        "name: free\nrobot: {name: cube, box: [1, 1, 1]}\nobstacles: []\n"
+        "start: [0, 0, 0]\ngoal: [3, 0, 0]\nbounds: {min: [-5, -5, -5], max: [5, 5, 5]}\n")
+    found = tmp_path / "found"
+    assert main(["plan", str(tmp_path / "free.yaml"), "--out", str(found),
+                 "--no-progress"]) == 0
+    capsys.readouterr()
+    assert main(["verify", str(tmp_path / "free.yaml"), str(found)]) == 2
+    said = capsys.readouterr().err
+    assert "holds no certificate.json: its plan's status is 'found'" in said
+
+
 def test_a_decomposition_certificate_is_said_to_rest_on_primitives(tmp_path, capsys):
     scenario = Path(__file__).resolve().parents[1] / "scenarios" / "sealed_chamber.yaml"
     out = tmp_path / "out"
