@@ -2,8 +2,9 @@
 
 Exit codes: 0 success, 1 no result (planning: no path / not found; assembly: no
 sequence), 2 bad input or a resource limit (one line on stderr naming the field or file),
-3 an internal error (one line naming the command; -vv adds the traceback), 130
-interrupted (Ctrl+C), 143 terminated (SIGTERM).
+3 an internal error (one line naming the command; -vv adds the traceback) or a fault of
+minkplan's on valid input (a ``GeometryError``: a numerical limit, a surface of its own it
+cannot take on; one line), 130 interrupted (Ctrl+C), 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -166,7 +167,7 @@ def _parser() -> argparse.ArgumentParser:
         "Writes DIR/path.json (status, waypoints, length, clearance, timings, validation) "
         "and DIR/report.json (cells, graph, refinement, seconds, certificate summary), and "
         "DIR/certificate.json for a proved no-path. Exit 0: path found; 1: no path or not "
-        "found; 2: bad input.",
+        "found; 2: bad input; 3: a fault of minkplan's.",
     )
     pl.add_argument("scenario", help="scenario .yaml, or an OMPL.app problem .cfg")
     pl.add_argument("--out", required=True, help="output directory (created if needed)")

@@ -26,7 +26,8 @@ def _add_depth_parser(sub, common) -> None:
         help="penetration depth of two overlapping closed meshes (or their distance)",
         description="The length of the shortest translation of A that frees it from B, as "
         "a proved interval [lower, upper], with its direction; for disjoint meshes, their "
-        "separation distance as a negative depth. Exit 0; 2: bad input.",
+        "separation distance as a negative depth. Exit 0; 2: bad input; 3: a fault of "
+        "minkplan's.",
     )
     d.add_argument("a", help="the mesh that moves")
     d.add_argument("b", help="the mesh it penetrates")
@@ -46,7 +47,8 @@ def _add_offset_parser(sub, common) -> None:
         description="Write the offset {x : dist(x, P) <= r} of a closed mesh P (r > 0), its "
         "erosion (r < 0), or with --opening / --closing both in turn, with a two-sided "
         "error bound. Exit 0; 1: nothing is left (every part of the solid no thicker than 2|r|, "
-        "eroded or opened away; nothing written); 2: bad input.",
+        "eroded or opened away; nothing written); 2: bad input; 3: a fault of minkplan's "
+        "(nothing written).",
     )
     o.add_argument("mesh", help="closed mesh file")
     o.add_argument("-r", "--radius", type=float, required=True,

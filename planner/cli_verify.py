@@ -33,7 +33,8 @@ def add_parser(sub, common) -> None:
     v.add_argument("scenario", help="the scenario .yaml, or OMPL.app .cfg, that was planned")
     v.add_argument("certificate", help="its certificate.json (or the --out folder holding it)")
     v.add_argument("--hold-orientation", choices=("start", "goal"), default=None,
-                   help="as given to minkplan plan for a problem whose orientations differ")
+                   help="as given to minkplan plan for a problem whose orientations differ "
+                   "(without it: the one the certificate records)")
 
 
 def cmd_verify(args) -> int:
@@ -93,8 +94,11 @@ def _no_certificate_in(folder: Path) -> str | None:
     except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError):
         return (f"certificate: {str(folder)!r} holds no certificate.json (nor a plan's "
                 f"report.json): give the --out folder of a plan that proved no path")
+    message = str(report.get("message") or "").strip()
+    said = f" ({message})" if message else ""
     return (f"certificate: {str(folder)!r} holds no certificate.json: its plan's status is "
-            f"{status!r}; a certificate is written only for a no path proved by one")
+            f"{status!r}{said}; a certificate is written only when the planner proves there "
+            f"is no path")
 
 
 def _scenario(path: Path, hold: str | None, certificate: dict):
@@ -111,6 +115,11 @@ def _scenario(path: Path, hold: str | None, certificate: dict):
     except ScenarioError as error:
         if hold is not None or "--hold-orientation" not in str(error):
             raise
+        if "robot_orientation" not in certificate:
+            raise ScenarioError(f"{path}: its start and goal orientations differ, and the "
+                                f"certificate records no orientation: give verify "
+                                f"--hold-orientation start or goal, as given to plan") \
+                from error
         for held in ("start", "goal"):
             scenario = load_scenario(path, hold_orientation=held)
             if _orientation_is(certificate, scenario.orientation):

@@ -64,7 +64,7 @@ from planner.errors import (
 
 from .blas import single_blas_thread
 from .meshes.kinds import KINDS, Classified, classify
-from .meshes.solids import FACE_CROSSINGS, FACES_INSIDE
+from .meshes.solids import FACE_CROSSINGS, FACES_INSIDE, without_advice
 from .meshes.topology import checked_arrays
 from .minkowski import checked_eps, surface_stats
 from .offsets_ball import ball_offset
@@ -427,7 +427,7 @@ def _solid_fault(mesh: trimesh.Trimesh, name: str) -> str | None:
     try:
         checked = validate_solid(mesh, name=f"{name} (offset)")
     except InvalidMeshError as error:
-        return str(error).split("; ", 1)[0]
+        return without_advice(str(error))
     inner = int(checked.metadata.get(FACES_INSIDE) or 0)
     return f"{inner} of its triangles face into it" if inner else None
 
@@ -666,7 +666,7 @@ def _stage_output_refused(error: Exception, one: OffsetResult, stage: str, what:
     other refusal (of a parameter) as it is."""
     if not (isinstance(error, InvalidMeshError) or str(error).startswith(stage)):
         return error
-    found = str(error).split("; ", 1)[0].replace(f"mesh {stage!r}: ", "").replace(
+    found = without_advice(str(error)).replace(f"mesh {stage!r}: ", "").replace(
         f"{stage}: ", "")
     return _StageOutputRefused(
         one.stats["method"],

@@ -198,7 +198,9 @@ def _between_hulls(solid: trimesh.Trimesh, eps: float
     otherwise."""
     hull = _hull_planes(solid, eps)
     deepest = _inner_point(hull, eps)
-    if deepest is None or deepest[1] <= hull.depth:
+    if deepest is None:
+        raise Declined("has a hull whose deepest point the solver did not find")
+    if deepest[1] <= hull.depth:
         raise Declined(f"is convex only to {hull.depth:.3g}, as deep as its hull's inside")
     if not _inside_at(solid, deepest[0]):
         raise Declined("does not hold the inside of its hull (its winding number there is "
@@ -242,13 +244,13 @@ def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull:
     if len(solid.faces) < 4:
         raise Declined(f"has {len(solid.faces)} triangles")
     vertices = np.asarray(solid.vertices, dtype=np.float64)
-    hull = convex_hull(vertices)
+    hull = convex_hull(vertices, keep_coplanar=True)
     triangle_normals = hull.equations[:, :3] / np.linalg.norm(hull.equations[:, :3],
                                                               axis=1)[:, None]
     # coplanar triangles' repeats are one plane
     normals, plane_of = np.unique(np.round(triangle_normals, 12), axis=0, return_inverse=True)
     normals /= np.linalg.norm(normals, axis=1)[:, None]
-    offsets = _plane_offsets(vertices[hull.simplices], normals, plane_of.ravel())
+    offsets = _plane_offsets(vertices, hull, normals, plane_of.ravel())
     depth = _depth(vertices, np.asarray(solid.faces), normals, offsets, eps)
     if depth > eps:
         raise Declined(f"is not convex within eps {eps:.3g}: some triangle lies deeper than "
@@ -260,16 +262,19 @@ def _hull_planes(solid: trimesh.Trimesh, eps: float) -> _Hull:
                  triangle_normals, axes, angles)
 
 
-def _plane_offsets(triangles: np.ndarray, normals: np.ndarray, plane_of: np.ndarray
+def _plane_offsets(vertices: np.ndarray, hull, normals: np.ndarray, plane_of: np.ndarray
                    ) -> np.ndarray:
-    """Per plane, the largest ``n · v`` over the corners of the hull's triangles on it
-    (``plane_of``): a hull facet's corners are where its normal is extreme, so that is the
-    largest over every vertex, to qhull's rounding (far within the allowance every bound
-    adds). Linear in the triangles: every vertex against every plane was quadratic (an
-    icosphere of 20k triangles: 1.7 GB and 5 s)."""
-    heights = np.einsum("tkj,tj->tk", triangles, normals[plane_of]).max(axis=1)
+    """Per plane, the largest ``n · v`` over the corners of the ``hull``'s triangles on it
+    (``plane_of``) and the vertices qhull left out as on one of them (``coplanar``: it
+    keeps no point that lies above a facet by more than its precision, but keeps within it
+    some that do): the largest over every vertex. Linear in the triangles: every vertex
+    against every plane was quadratic (an icosphere of 20k triangles: 1.7 GB and 5 s)."""
+    heights = np.einsum("tkj,tj->tk", vertices[hull.simplices], normals[plane_of]).max(axis=1)
     offsets = np.full(len(normals), -np.inf)
     np.maximum.at(offsets, plane_of, heights)
+    if len(hull.coplanar):
+        point, planes = hull.coplanar[:, 0], plane_of[hull.coplanar[:, 1]]
+        np.maximum.at(offsets, planes, np.einsum("pj,pj->p", vertices[point], normals[planes]))
     return offsets
 
 
@@ -280,8 +285,9 @@ def _depth(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray,
     the plane nearest its own normal (a k-d tree over the unit normals), and where that is
     farther than ``eps``, the least over every plane, or over the :data:`NEAR_PLANES`
     nearest its normal when every plane would be too many (:data:`FULL_SEARCH`); the
-    search stops at the first triangle deeper than ``eps`` below all it tries. In
-    pieces of at most :data:`DEPTH_ENTRIES` triangle corners times planes."""
+    search stops at the first piece of triangles with one deeper than ``eps`` below all
+    it tries (the ``t`` returned then exceeds ``eps``, by an amount that means nothing).
+    In pieces of at most :data:`DEPTH_ENTRIES` triangle corners times planes."""
     from scipy.spatial import cKDTree  # noqa: PLC0415
 
     corners = vertices[faces]                                       # (faces, 3, 3)
@@ -294,17 +300,19 @@ def _depth(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray,
     depths = (offsets[nearest][:, None]
               - np.einsum("fkj,fj->fk", corners, normals[nearest])).max(axis=1)
     far = np.flatnonzero(depths > eps)
-    if len(far) * len(normals) > FULL_SEARCH:
-        tried = tree.query(own[far], k=min(NEAR_PLANES, len(normals)))[1].reshape(len(far), -1)
-        below = offsets[tried][:, None, :] - np.einsum("fkj,fpj->fkp", corners[far],
-                                                       normals[tried])
-        depths[far] = np.minimum(depths[far], below.max(axis=1).min(axis=1))
-        return float(depths.max())
-    rows_at_once = max(1, DEPTH_ENTRIES // (3 * len(normals)))
-    for k in range(0, len(far), rows_at_once):
-        # per far triangle and plane, the deepest corner's depth; per triangle, its best
-        rows = far[k:k + rows_at_once]
-        below = offsets[None, None, :] - corners[rows] @ normals.T  # (rows, 3, planes)
+    near = len(far) * len(normals) > FULL_SEARCH
+    tried = min(NEAR_PLANES, len(normals)) if near else len(normals)
+    step = _rows_at_once(3 * tried)
+    for k in range(0, len(far), step):
+        # per far triangle and plane tried, the deepest corner's depth; per triangle, its
+        # best
+        rows = far[k:k + step]
+        if near:
+            planes = tree.query(own[rows], k=tried)[1].reshape(len(rows), -1)
+            below = offsets[planes][:, None, :] - np.einsum("fkj,fpj->fkp", corners[rows],
+                                                            normals[planes])
+        else:
+            below = offsets[None, None, :] - corners[rows] @ normals.T  # (rows, 3, planes)
         depths[rows] = np.minimum(depths[rows], below.max(axis=1).min(axis=1))
         if depths[rows].max() > eps:
             break
@@ -312,7 +320,23 @@ def _depth(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray,
 
 
 DEPTH_ENTRIES = 9_000_000
-"""Most triangle corners times planes :func:`_depth` holds at once (72 MB of floats)."""
+"""Most entries (points times planes or directions) one product holds at once in
+:func:`_depth`, :func:`_gap` and :func:`_fewer_corners` (72 MB of floats, a few times
+that with the arrays made from it)."""
+
+
+def _rows_at_once(columns: int) -> int:
+    """Rows of a product with ``columns`` columns that keep it within
+    :data:`DEPTH_ENTRIES`."""
+    return max(1, DEPTH_ENTRIES // max(columns, 1))
+
+
+def _extreme(points: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """The distinct indices of the points extreme in each direction (sorted), the
+    directions taken a piece at a time."""
+    step = _rows_at_once(len(points))
+    return np.unique(np.concatenate([np.argmax(points @ directions[k:k + step].T, axis=0)
+                                     for k in range(0, len(directions), step)]))
 
 FULL_SEARCH = 50_000_000
 """Most far triangles times planes :func:`_depth` searches in full; beyond it each far
@@ -384,14 +408,19 @@ def _gap(points: np.ndarray, smaller: trimesh.Trimesh) -> float:
     (``p - q`` is a positive mix of the normals at ``q``, so it makes a positive dot
     product with one of them), so only those facets are measured."""
     normals = np.asarray(smaller.face_normals)
-    ahead = points @ normals.T - np.einsum("fj,fj->f", normals, smaller.triangles[:, 0])
-    point, facet = np.nonzero(ahead > 0)
-    if len(point) == 0:
-        return 0.0
-    nearest = closest_points_on_triangles(smaller.triangles[facet], points[point])
-    distance = np.full(len(points), np.inf)
-    np.minimum.at(distance, point, np.linalg.norm(points[point] - nearest, axis=1))
-    return float(np.max(distance[np.isfinite(distance)]))
+    heights = np.einsum("fj,fj->f", normals, smaller.triangles[:, 0])
+    step = _rows_at_once(len(normals))
+    gap = 0.0
+    for start in range(0, len(points), step):
+        chunk = points[start:start + step]
+        point, facet = np.nonzero(chunk @ normals.T - heights > 0)
+        if len(point) == 0:
+            continue
+        nearest = closest_points_on_triangles(smaller.triangles[facet], chunk[point])
+        distance = np.full(len(chunk), np.inf)
+        np.minimum.at(distance, point, np.linalg.norm(chunk[point] - nearest, axis=1))
+        gap = max(gap, float(np.max(distance[np.isfinite(distance)])))
+    return gap
 
 
 def _eroded(hull: _Hull, r: float, rounding: float, eps: float
@@ -559,7 +588,7 @@ def _fewer_corners(corners: np.ndarray, budget: float) -> tuple[np.ndarray, floa
     for _ in range(THIN_TRIES):
         if count > THIN_ENOUGH * len(corners):
             break
-        kept = np.unique(np.argmax(corners @ _directions(count).T, axis=0))
+        kept = _extreme(corners, _directions(count))
         if len(kept) > THIN_ENOUGH * len(corners):
             break
         try:  # the kept corners are on their hull
@@ -588,7 +617,8 @@ THIN_TRIES = 5
 
 THIN_AIM = 1.2
 """A try whose gap is over the budget is followed by one with this much more than the
-square root of the gap's ratio to it times its directions."""
+gap's ratio to it, raised to the power measured (at first one half), times its
+directions."""
 
 THIN_ENOUGH = 0.7
 """A thinning that keeps (or tries directions for) more than this share of the corners is
@@ -723,11 +753,13 @@ def measured_ball(subdivisions: int) -> tuple[float, float]:
             float(np.arccos(np.clip(cosines.min(), -1.0, 1.0))))
 
 
-def convex_hull(points: np.ndarray):
-    """Qhull's convex hull of ``points`` (triangulated facets, outward ``equations``)."""
+def convex_hull(points: np.ndarray, keep_coplanar: bool = False):
+    """Qhull's convex hull of ``points`` (triangulated facets, outward ``equations``);
+    with ``keep_coplanar``, the points it found on a facet to its precision but left out
+    are listed with that facet (``coplanar``)."""
     from scipy.spatial import ConvexHull  # noqa: PLC0415
 
-    return ConvexHull(points, qhull_options="Qt")
+    return ConvexHull(points, qhull_options="Qt Qc" if keep_coplanar else "Qt")
 
 
 def hull_mesh(hull) -> trimesh.Trimesh:

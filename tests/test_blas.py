@@ -62,6 +62,21 @@ def test_the_public_functions_that_compute_are_wrapped(name):
     assert getattr(getattr(planner, name), "__wrapped__", None) is not None
 
 
+def test_an_offset_computes_on_one_thread(two_blas_threads, monkeypatch):
+    import planner.offsets
+
+    seen: list[list[int]] = []
+    inner = planner.offsets._offset_unwarned
+
+    def spying(*args, **kwargs):
+        seen.append(_numpy_blas_threads())
+        return inner(*args, **kwargs)
+
+    monkeypatch.setattr(planner.offsets, "_offset_unwarned", spying)
+    planner.offset(trimesh.creation.box((1.0, 0.6, 0.4)), 0.1, eps=0.02)
+    assert [set(s) for s in seen] == [{1}]
+
+
 def test_an_offset_leaves_the_users_blas_threads_as_they_were(two_blas_threads):
     grown = planner.offset(trimesh.creation.box((1.0, 0.6, 0.4)), 0.1, eps=0.02)
     assert len(grown.mesh.faces) > 0

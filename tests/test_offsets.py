@@ -674,6 +674,59 @@ def test_the_hull_method_says_why_it_declines(monkeypatch):
     assert why == ["has 320 triangles, more than the hull method takes (100)"]
 
 
+def test_the_hull_planes_offsets_are_the_largest_over_every_vertex(monkeypatch):
+    """The planes' offsets come from the hull's own triangles and qhull's coplanar points
+    (linear), not every vertex against every plane: the same to rounding, on a fine
+    icosphere, a random polytope and a float32 sphere far from the origin; and the far
+    search over a large solid's nearest planes (FULL_SEARCH) finds the same depth."""
+    from shapes import random_convex
+
+    import planner.offsets_convex as convex
+
+    sphere = trimesh.creation.icosphere(3)
+    far = trimesh.Trimesh((sphere.vertices * 1e-3 + [1e3, 2e3, -5e2]).astype(np.float32)
+                          .astype(np.float64), sphere.faces, process=False)
+    for solid in (trimesh.creation.icosphere(4), random_convex(60, (10.0, 8.0, 6.0), seed=1),
+                  far):
+        vertices = np.asarray(solid.vertices)
+        hull = convex._hull_planes(solid, 0.1 * solid.scale)
+        exact = (vertices @ hull.normals.T).max(axis=0)
+        ulps = 8 * np.spacing(np.abs(exact) + np.abs(vertices).max())
+        assert np.all(np.abs(hull.offsets - exact) <= ulps), solid
+    # a dent 2e-3 deep: the least depth by every plane for every triangle, against both
+    # searches at an eps just above it (neither stops early)
+    solid = random_convex(60, (10.0, 8.0, 6.0), seed=2)
+    a, b, c = solid.faces[0]
+    dent = solid.triangles_center[0] - 2e-3 * solid.face_normals[0]
+    n = len(solid.vertices)
+    dented = trimesh.Trimesh(np.vstack([solid.vertices, dent]), np.vstack(
+        [solid.faces[1:], [[a, b, n], [b, c, n], [c, a, n]]]), process=False)
+    hull = convex._hull_planes(dented, 0.1)
+    corners = np.asarray(dented.vertices)[np.asarray(dented.faces)]     # (faces, 3, 3)
+    below = hull.offsets[None, None, :] - corners @ hull.normals.T
+    least = float(below.max(axis=1).min(axis=1).max())
+    assert 1e-3 < least < 2.1e-3
+    eps = least * (1 + 1e-9)
+    found = convex._depth(np.asarray(dented.vertices), np.asarray(dented.faces),
+                          hull.normals, hull.offsets, eps)
+    assert least - 1e-12 <= found <= eps
+    # a zero-area triangle along the unit cube's top edge has no normal: its first guess
+    # (the first plane, x = -0.5) is 1 off, and the search finds a plane it lies on, over
+    # every plane or over the nearest ones (FULL_SEARCH 0) when they include one
+    cube = trimesh.creation.box()
+    top = [int(np.flatnonzero(np.all(np.isclose(cube.vertices, [x, -0.5, 0.5]), axis=1))[0])
+           for x in (-0.5, 0.5)]
+    vertices = np.vstack([cube.vertices, cube.vertices[top].mean(axis=0)])
+    faces = np.vstack([cube.faces, [[top[0], top[1], len(cube.vertices)]]])
+    normals = np.vstack([-np.eye(3), np.eye(3)])
+    offsets = np.full(6, 0.5)
+    assert convex._depth(vertices, faces, normals, offsets, 0.01) == 0.0
+    monkeypatch.setattr(convex, "FULL_SEARCH", 0)
+    assert convex._depth(vertices, faces, normals, offsets, 0.01) == 0.0
+    monkeypatch.setattr(convex, "NEAR_PLANES", 1)  # the first guess only: an upper bound
+    assert convex._depth(vertices, faces, normals, offsets, 0.01) == 1.0
+
+
 def test_the_gap_bound_holds_the_measured_gap_of_a_dented_hull():
     """A dent of up to 6e-3 in one face of a convex solid: the bound on the distance
     between its hull and the hull's planes moved in by the depth holds the measured one,
@@ -866,8 +919,7 @@ def test_a_closed_part_grown_as_a_surface_is_said_to_be_hollow(caplog):
     with caplog.at_level(logging.WARNING, logger="planner.offsets"):
         full = planner.offset(trimesh.creation.box(), 0.6, eps=0.1, kind="surface")
     assert full.stats["inner_shells"] == 0 and "inner shell" not in caplog.text
-    # taken as a surface by auto for a hole (a try-out: the reason, cut at a "; " inside
-    # its parentheses, left one open)
+    # taken as a surface by auto for a hole: the reason as said, up to its advice
     caplog.clear()
     box = trimesh.creation.box().subdivide().subdivide()  # a hole 0.25 across
     holed = trimesh.Trimesh(box.vertices, box.faces[1:], process=False)
@@ -875,7 +927,18 @@ def test_a_closed_part_grown_as_a_surface_is_said_to_be_hollow(caplog):
         planner.offset(holed, 0.1, eps=0.05, kind="auto")
     said = caplog.text[caplog.text.index("grown by"):].splitlines()[0]
     assert "being not watertight (3 boundary edges, 0 non-manifold edges); a solid" in said
-    assert said.count("(") == said.count(")"), said
+
+
+def test_a_reason_is_cut_from_its_advice_outside_its_parentheses():
+    """A try-out: the hollow warning cut "not watertight (168 boundary edges, 0
+    non-manifold edges; 2 zero-area triangles); close the holes ..." at the first "; ",
+    leaving a parenthesis open."""
+    from planner.meshes.solids import without_advice
+
+    reason = "not watertight (168 boundary edges, 0 non-manifold edges; 2 zero-area triangles)"
+    assert without_advice(f"{reason}; close the holes; or repair") == reason
+    assert without_advice("no advice (here; at all)") == "no advice (here; at all)"
+    assert without_advice("plain; advice") == "plain"
 
 
 def test_an_open_surface_is_grown_as_the_set_within_r_of_its_triangles(tmp_path):

@@ -65,14 +65,20 @@ log = logging.getLogger(__name__)
 
 def not_solid_reason(error: InvalidMeshError) -> str:
     """Why a mesh is no solid, from :func:`validate_solid`'s error, without its label and
-    the advice on fixing it (what follows the first ``"; "`` outside parentheses)."""
-    reason = str(error).split(": ", 1)[-1]
+    the advice on fixing it."""
+    return without_advice(str(error).split(": ", 1)[-1])
+
+
+def without_advice(message: str) -> str:
+    """An error message up to its advice: to the first ``"; "`` outside parentheses (the
+    reason may hold one: "not watertight (3 boundary edges, 0 non-manifold edges; 1
+    zero-area triangles)")."""
     depth = 0
-    for at, char in enumerate(reason):
+    for at, char in enumerate(message):
         depth += {"(": 1, ")": -1}.get(char, 0)
-        if depth == 0 and reason.startswith("; ", at):
-            return reason[:at]
-    return reason
+        if depth == 0 and message.startswith("; ", at):
+            return message[:at]
+    return message
 
 
 @single_blas_thread

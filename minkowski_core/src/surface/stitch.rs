@@ -784,7 +784,8 @@ pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
 /// Whether the fan about `centre` of the ring `corners` has every triangle facing the
 /// ring's way (its normal on the side of the ring's vector area): a ring that crosses
 /// itself, seen along that direction, fans into triangles turned over, overlapping their
-/// neighbours.
+/// neighbours. A simple ring not star-shaped about its centroid is declined too (left
+/// open: the caller samples around it).
 fn fans_one_way(centre: Vec3, corners: &[Vec3]) -> bool {
     let n = corners.len();
     let normals: Vec<Vec3> = (0..n).map(|i| (corners[i] - centre).cross(corners[(i + 1) % n] - centre)).collect();
@@ -822,8 +823,9 @@ fn cycles(next: &mut FastMap<u32, Vec<u32>>) -> Vec<Vec<u32>> {
 }
 
 /// Triangles filling the ring `ring` (in order), which lies in a plane normal to `axis`;
-/// by ear clipping in that plane. `None` when the ring is not simple (no ear, or a last
-/// triangle turned against the ring).
+/// by ear clipping in that plane. `None` when no ear is found, or the last triangle turns
+/// against the ring: a ring crossing itself into lobes that turn opposite ways (a ring
+/// that curls over itself the same way is not caught).
 fn ring_triangles(ring: &[u32], pos: &[Vec3], axis: usize) -> Option<Vec<[u32; 3]>> {
     let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
     let p2 = |v: u32| (pos[v as usize][u], pos[v as usize][w]);
