@@ -710,6 +710,7 @@ fn fill_face_gaps(s: &mut Surface, tol: f64, lattice: (Vec3, f64)) {
     let mut planes: Vec<(LatticePlane, Vec<(u32, u32)>)> = by_plane.into_iter().collect();
     planes.sort_unstable_by_key(|p| p.0);
     let mut filled = FastSet::default();
+    let before = s.vertices.len();
     for ((axis, _), edges) in planes {
         // the fill runs each open edge backwards: b -> a
         let mut next: FastMap<u32, Vec<u32>> = FastMap::default();
@@ -717,7 +718,7 @@ fn fill_face_gaps(s: &mut Surface, tol: f64, lattice: (Vec3, f64)) {
             next.entry(b).or_default().push(a);
         }
         for ring in cycles(&mut next) {
-            if let Some(tris) = ring_triangles(&ring, &s.vertices, axis) {
+            if let Some(tris) = ring_fill(&ring, &mut s.vertices, axis, RING_SPLITS) {
                 for i in 0..ring.len() {
                     filled.insert((ring[(i + 1) % ring.len()], ring[i]));
                 }
@@ -725,6 +726,70 @@ fn fill_face_gaps(s: &mut Surface, tol: f64, lattice: (Vec3, f64)) {
             }
         }
     }
+    if s.vertices.len() > before {
+        // a ring split where it crosses itself: the faces whose open edges cross there
+        // take the crossing point as a corner too
+        split_t_junctions(s, tol);
+    }
+}
+
+/// Most crossings [`ring_fill`] splits a ring at.
+const RING_SPLITS: usize = 4;
+
+/// Triangles filling `ring` (in order, in a plane normal to `axis`): ear clipped
+/// ([`ring_triangles`]), or, for a ring that crosses itself, split where two of its edges
+/// cross (a new point, appended to `vertices`) into two loops filled so in turn, up to
+/// `splits` times. Each loop keeps the ring's order, so the one that turns the other way
+/// faces the other way, as the edges around it ask; the two meet at the point and do not
+/// overlap. `None` when that does not give a fill.
+fn ring_fill(ring: &[u32], vertices: &mut Vec<Vec3>, axis: usize, splits: usize) -> Option<Vec<[u32; 3]>> {
+    if let Some(tris) = ring_triangles(ring, vertices, axis) {
+        return Some(tris);
+    }
+    if splits == 0 {
+        return None;
+    }
+    let (i, j, t) = first_crossing(ring, vertices, axis)?;
+    let n = ring.len();
+    let (a, b) = (vertices[ring[i] as usize], vertices[ring[(i + 1) % n] as usize]);
+    let x = vertices.len() as u32;
+    vertices.push(a + (b - a) * t);
+    // x -> ring[i + 1] .. ring[j] -> x, and x -> ring[j + 1] .. ring[i] -> x
+    let first: Vec<u32> = std::iter::once(x).chain((i + 1..=j).map(|k| ring[k])).collect();
+    let second: Vec<u32> = std::iter::once(x).chain((j + 1..n + i + 1).map(|k| ring[k % n])).collect();
+    let mut out = Vec::new();
+    for lobe in [first, second] {
+        if lobe.len() >= 3 {
+            out.extend(ring_fill(&lobe, vertices, axis, splits - 1)?);
+        }
+    }
+    Some(out)
+}
+
+/// The first two edges of `ring` (in the plane normal to `axis`) that cross each other
+/// properly, not next to each other: `(i, j, t)` with `i < j`, edge `i` (from `ring[i]` to
+/// `ring[i + 1]`) crossing edge `j` at the fraction `t` of edge `i`.
+fn first_crossing(ring: &[u32], vertices: &[Vec3], axis: usize) -> Option<(usize, usize, f64)> {
+    let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+    let p2 = |k: usize| {
+        let p = vertices[ring[k % ring.len()] as usize];
+        (p[u], p[w])
+    };
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0);
+    let n = ring.len();
+    for i in 0..n {
+        for j in i + 2..n {
+            if i == 0 && j == n - 1 {
+                continue; // neighbours through the ring's start
+            }
+            let (a, b, c, d) = (p2(i), p2(i + 1), p2(j), p2(j + 1));
+            let (ca, cb) = (cross(c, d, a), cross(c, d, b));
+            if ca * cb < 0.0 && cross(a, b, c) * cross(a, b, d) < 0.0 {
+                return Some((i, j, ca / (ca - cb)));
+            }
+        }
+    }
+    None
 }
 
 /// What [`close_small_loops`] filled.
@@ -740,14 +805,15 @@ pub struct LoopsClosed {
 /// Close the small holes left where the polygons of neighbouring cells or sub-cells meet
 /// at a crevice or needle thinner than the weld tolerance (the two sides' corners weld to
 /// different vertices, or not at all, and a few open edges ring a small hole): every
-/// loop of edges used once with no reverse, at most `size` across, is filled by a fan
-/// about its centroid (edges used twice are sheets touching, left to
-/// [`unzip_touching_sheets`]). Each loop vertex is a polygon corner (within the weld
+/// loop of edges used once with no reverse, at most `size` across, is filled (edges used
+/// twice are sheets touching, left to [`unzip_touching_sheets`]). Each loop vertex is a polygon corner (within the weld
 /// tolerance and the polygons' own deviation of the boundary) or a band crossing (on it),
 /// so every point of the fill lies within the loop's diameter plus those of the boundary;
 /// and the boundary lay on the polygons and band triangles already, so the fill removes
-/// none of it. Larger loops are left (the caller sees them open), and so are loops whose
-/// fan would turn a triangle over ([`fans_one_way`]: a loop crossing itself).
+/// none of it. Each is filled by ear clipping as seen along its vector area
+/// ([`clipped_in_its_plane`]), else by the fan when no triangle of it turns over
+/// ([`fans_one_way`]), else left open: a loop crossing itself. Larger loops are left (the
+/// caller sees them open).
 pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
     let mut out = LoopsClosed::default();
     // edges used once with no reverse: listed once (one used k > 1 times is listed k times)
@@ -767,18 +833,36 @@ pub fn close_small_loops(s: &mut Surface, size: f64) -> LoopsClosed {
             continue;
         }
         let middle = corners.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / corners.len() as f64;
-        if !fans_one_way(middle, &corners) {
+        if let Some(tris) = clipped_in_its_plane(&ring, &s.vertices, middle) {
+            s.faces.extend(tris);
+        } else if fans_one_way(middle, &corners) {
+            let centre = s.vertices.len() as u32;
+            s.vertices.push(middle);
+            for i in 0..ring.len() {
+                s.faces.push([centre, ring[i], ring[(i + 1) % ring.len()]]);
+            }
+        } else {
             continue;
-        }
-        let centre = s.vertices.len() as u32;
-        s.vertices.push(middle);
-        for i in 0..ring.len() {
-            s.faces.push([centre, ring[i], ring[(i + 1) % ring.len()]]);
         }
         out.loops += 1;
         out.diameter = out.diameter.max(diameter);
     }
     out
+}
+
+/// The ring `ring` ear clipped as seen along its vector area (about `centre`), when that
+/// view of it is simple and every triangle then faces the ring's way in 3D too (a ring
+/// that bends out of its plane could turn one over): no new vertex, and a ring that is
+/// not star-shaped about its centroid is filled as well.
+fn clipped_in_its_plane(ring: &[u32], pos: &[Vec3], centre: Vec3) -> Option<Vec<[u32; 3]>> {
+    let at = |v: u32| pos[v as usize] - centre;
+    let area = (0..ring.len()).fold(Vec3::ZERO, |acc, i| acc + at(ring[i]).cross(at(ring[(i + 1) % ring.len()])));
+    let normal = area.try_normalize()?;
+    let u = normal.any_orthonormal_vector();
+    let w = normal.cross(u);
+    let tris = ear_clip(ring, |v| (at(v).dot(u), at(v).dot(w)))?;
+    let faces_its_way = |t: &[u32; 3]| (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0])).dot(normal) > 0.0;
+    tris.iter().all(faces_its_way).then_some(tris)
 }
 
 /// Whether the fan about `centre` of the ring `corners` has every triangle facing the
@@ -823,12 +907,17 @@ fn cycles(next: &mut FastMap<u32, Vec<u32>>) -> Vec<Vec<u32>> {
 }
 
 /// Triangles filling the ring `ring` (in order), which lies in a plane normal to `axis`;
-/// by ear clipping in that plane. `None` when no ear is found, or the last triangle turns
-/// against the ring: a ring crossing itself into lobes that turn opposite ways (a ring
-/// that curls over itself the same way is not caught).
+/// by ear clipping in that plane ([`ear_clip`]).
 fn ring_triangles(ring: &[u32], pos: &[Vec3], axis: usize) -> Option<Vec<[u32; 3]>> {
     let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
-    let p2 = |v: u32| (pos[v as usize][u], pos[v as usize][w]);
+    ear_clip(ring, |v: u32| (pos[v as usize][u], pos[v as usize][w]))
+}
+
+/// Triangles filling the ring `ring` (in order) by ear clipping its points as `p2` puts
+/// them in a plane. `None` when no ear is found, or the last triangle turns against the
+/// ring: a ring crossing itself into lobes that turn opposite ways (a ring that curls over
+/// itself the same way is not caught).
+fn ear_clip(ring: &[u32], p2: impl Fn(u32) -> (f64, f64)) -> Option<Vec<[u32; 3]>> {
     let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0);
     let area: f64 = (0..ring.len()).map(|i| cross((0.0, 0.0), p2(ring[i]), p2(ring[(i + 1) % ring.len()]))).sum();
     let turn = area.signum();
@@ -968,7 +1057,34 @@ mod tests {
             })
             .sum();
         assert!((volume - 1.0).abs() < 1e-12, "{volume}");
-        assert_eq!(s.vertices[8], Vec3::new(0.5, 0.5, 1.0), "the fan's centre is the rim's centroid");
+        assert_eq!((s.vertices.len(), s.faces.len()), (8, 12), "the rim ear clipped: no new vertex");
+    }
+
+    #[test]
+    fn a_small_hole_not_star_shaped_about_its_centroid_is_ear_clipped() {
+        // a U-shaped rim (its centroid in the U's gap, where a fan would turn triangles
+        // over) under a cone from an apex above it: its edges are the only open ones
+        let rim: Vec<Vec3> = [(0.0, 0.0), (3.0, 0.0), (3.0, 3.0), (2.0, 3.0), (2.0, 1.0), (1.0, 1.0), (1.0, 3.0), (0.0, 3.0)].iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect();
+        let centroid = rim.iter().fold(Vec3::ZERO, |acc, &p| acc + p) / rim.len() as f64;
+        assert!(!fans_one_way(centroid, &rim));
+        let mut vertices = rim.clone();
+        vertices.push(Vec3::new(1.5, 1.5, -2.0));
+        let n = rim.len() as u32;
+        let faces: Vec<[u32; 3]> = (0..n).map(|i| [n, (i + 1) % n, i]).collect();
+        let mut s = Surface { vertices, faces, ..Default::default() };
+        assert_eq!(close_small_loops(&mut s, 10.0).loops, 1);
+        assert!(open_edges(&s.faces).is_empty(), "{:?}", open_edges(&s.faces));
+        assert_eq!(s.vertices.len(), rim.len() + 1, "no new vertex");
+        // the fill is the U itself: 7 units of area, every triangle facing the same way
+        let fill: Vec<f64> = s.faces[rim.len()..]
+            .iter()
+            .map(|f| {
+                let p = f.map(|v| s.vertices[v as usize]);
+                (p[1] - p[0]).cross(p[2] - p[0]).z / 2.0
+            })
+            .collect();
+        assert!(fill.iter().all(|&a| a > 0.0) || fill.iter().all(|&a| a < 0.0), "{fill:?}");
+        assert!((fill.iter().sum::<f64>().abs() - 7.0).abs() < 1e-12);
     }
 
     /// A ring in the plane x = 0 that crosses itself: its edges (0, 1) and (2, 3) cross at
@@ -998,6 +1114,29 @@ mod tests {
         assert!(!fans_one_way(centre, &ring));
         let square = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
         assert!(fans_one_way(Vec3::new(0.5, 0.5, 0.0), &square));
+    }
+
+    #[test]
+    fn a_gap_ring_crossing_itself_is_split_where_it_crosses() {
+        // the crossed ring's edges (0, 1) and (2, 3) cross at (y, z) = (1.2, 0.6): two
+        // triangles meeting there, turning opposite ways as the ring does, their signed
+        // areas summing to the ring's (a fan or one ear clipping would overlap them)
+        let mut vertices = crossed_ring();
+        let tris = ring_fill(&[0, 1, 2, 3], &mut vertices, 0, RING_SPLITS).expect("split and filled");
+        assert_eq!((vertices.len(), tris.len()), (5, 2));
+        assert!((vertices[4] - Vec3::new(0.0, 1.2, 0.6)).length() < 1e-12, "{:?}", vertices[4]);
+        let signed: Vec<f64> = tris
+            .iter()
+            .map(|t| {
+                let p = t.map(|v| vertices[v as usize]);
+                (p[1] - p[0]).cross(p[2] - p[0]).x / 2.0
+            })
+            .collect();
+        assert!(signed[0] * signed[1] < 0.0, "{signed:?}");
+        let ring = crossed_ring();
+        let shoelace: f64 = (0..4).map(|i| ring[i].y * ring[(i + 1) % 4].z - ring[i].z * ring[(i + 1) % 4].y).sum::<f64>() / 2.0;
+        assert!((signed.iter().sum::<f64>() - shoelace).abs() < 1e-12);
+        assert!(tris.iter().all(|t| t.contains(&4)));
     }
 
     #[test]
