@@ -537,7 +537,7 @@ def _cmd_view(args) -> int:
     from planner.io import load_scenario
     from planner.progress import StatusLine
 
-    scenario = load_scenario(scenario_path)
+    scenario = load_scenario(scenario_path, hold_orientation=args.hold_orientation)
     with StatusLine(False if args.no_progress else None) as line:
         line.show("minkplan: drawing the scene (C-obstacle surfaces)")
         scene = viz.scene_for_plan(scenario, plan_json, c_obstacle=not args.no_c_obstacle)
@@ -562,6 +562,8 @@ def _add_viz_parsers(sub, common: _Parser) -> None:
     )
     v.add_argument("scenario", help="scenario .yaml, or an OMPL.app problem .cfg")
     v.add_argument("--path", default=None, help="a path.json written by minkplan plan")
+    v.add_argument("--hold-orientation", choices=("start", "goal"), default=None,
+                   help="as given to minkplan plan for a problem whose orientations differ")
     v.add_argument("--no-c-obstacle", action="store_true", help="do not compute C-obstacles")
     v.add_argument("--no-progress", action="store_true", help="no progress line")
     v.add_argument("--host", default="127.0.0.1",

@@ -626,3 +626,43 @@ def test_differing_orientations_are_held_when_asked(folder):
     assert any("keeps the goal orientation throughout" in n for n in held.notes)
     np.testing.assert_allclose(load_scenario(folder / "turn.yaml", hold_orientation="start")
                                .orientation, rz(90), atol=1e-12)
+
+
+def test_an_assembly_or_a_scenario_in_the_wrong_place_is_named():
+    """A try-out: plan and view of an assembly said "parts: unknown key; did you mean
+    'start'?", and planner.plan(assembly) raised an AttributeError."""
+    import planner
+    from planner.cli import _parser
+
+    assembly_file = Path(__file__).resolve().parents[1] / "scenarios" / "assemblies" / \
+        "peg_in_block.yaml"
+    with pytest.raises(ScenarioError, match="an assembly .* not a planning problem: use "
+                       "minkplan assemble"):
+        load_scenario(assembly_file)
+    assembly = planner.load_assembly(assembly_file)
+    with pytest.raises(InvalidParameterError, match="plan takes a Scenario .* not Assembly; "
+                       "an assembly goes to planner.plan_assembly"):
+        planner.plan(assembly)
+    scenario = load_scenario(Path(__file__).resolve().parents[1] / "scenarios" /
+                             "peg_in_hole.yaml")
+    with pytest.raises(InvalidParameterError, match="plan_assembly takes an Assembly .* not "
+                       "Scenario; a scenario goes to planner.plan"):
+        planner.plan_assembly(scenario)
+    # view takes --hold-orientation, as its advice for a turning problem says
+    args = _parser().parse_args(["view", "x.cfg", "--hold-orientation", "goal"])
+    assert args.hold_orientation == "goal"
+
+
+def test_a_python_scenarios_goal_outside_its_bounds_is_refused_by_plan():
+    """A try-out: a goal moved outside the bounds in Python (the reader refuses it in a
+    file) gave not_found, "the goal is within the clearance margin of bounds"."""
+    import dataclasses
+
+    import planner
+
+    scenario = load_scenario(Path(__file__).resolve().parents[1] / "scenarios" /
+                             "peg_in_hole.yaml")
+    moved = dataclasses.replace(scenario, goal=[500.0, 0.0, 0.0])
+    with pytest.raises(InvalidParameterError, match=r"Scenario.goal: \[500.0, 0.0, 0.0\] is "
+                       r"outside the bounds \(x = 500 not in"):
+        planner.plan(moved)

@@ -493,6 +493,10 @@ def plan_assembly(assembly: Assembly, *, planner: str = "minkplan", cache_dir=No
             within a short way along every axis, try to prove it cannot leave by a local
             enclosure (:mod:`.enclosure`).
     """
+    if not isinstance(assembly, Assembly):
+        hint = "; a scenario goes to planner.plan" if isinstance(assembly, Scenario) else ""
+        raise InvalidParameterError(f"plan_assembly takes an Assembly (planner.load_assembly), "
+                                    f"not {type(assembly).__name__}{hint}")
     t_start = time.perf_counter()
     search = _Search(assembly, planner=planner, cache_dir=cache_dir, progress=progress,
                      plan_parts=plan_parts, groups=groups, enclosures=enclosures)

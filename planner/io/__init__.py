@@ -88,6 +88,10 @@ def load_scenario(path: str | os.PathLike[str], *,
     path = Path(path)
     if path.suffix.lower() == ".cfg":
         return load_omplapp(path, hold_orientation=hold_orientation)
+    if path.suffix.lower() in (".yaml", ".yml") and _is_assembly_yaml(path):
+        raise ScenarioError(f"{path}: an assembly (it lists parts:), not a planning problem: "
+                            f"use minkplan assemble (planner.load_assembly, "
+                            f"planner.plan_assembly)")
     return read_scenario(path, hold_orientation=hold_orientation)
 
 

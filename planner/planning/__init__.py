@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from planner.blas import single_blas_thread
 from planner.errors import InvalidParameterError
-from planner.problem import Scenario
+from planner.problem import Assembly, Scenario
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
 from planner.sources import Source
 
@@ -60,6 +60,12 @@ def plan(scenario: Scenario, *, planner: str = "minkplan", cache_dir=None,
         ScenarioError: ``planner.exact: false`` with a part that is a surface.
         InvalidMeshError, GeometryError: unusable meshes.
     """
+    if not isinstance(scenario, Scenario):
+        hint = "; an assembly goes to planner.plan_assembly" \
+            if isinstance(scenario, Assembly) else ""
+        raise InvalidParameterError(f"plan takes a Scenario (planner.load_scenario), not "
+                                    f"{type(scenario).__name__}{hint}")
+    _check_within_bounds(scenario)
     if planner == "minkplan":
         return OctreePlanner(scenario, params=params, source=source, cache_dir=cache_dir,
                              progress=progress, validate=validate).solve()
@@ -69,3 +75,16 @@ def plan(scenario: Scenario, *, planner: str = "minkplan", cache_dir=None,
         return plan_ompl(scenario, planner[5:], validate=validate)
     raise InvalidParameterError(
         f"planner {planner!r}: use 'minkplan' or 'ompl:NAME' (e.g. ompl:RRTConnect)")
+
+
+def _check_within_bounds(scenario: Scenario) -> None:
+    """Refuse a start or goal outside the scenario's bounds (the readers refuse it in a
+    file; a scenario made in Python is checked here)."""
+    lo, hi = scenario.bounds
+    for name, point in (("start", scenario.start), ("goal", scenario.goal)):
+        outside = [f"{axis} = {v:g} not in [{a:g}, {b:g}]"
+                   for axis, v, a, b in zip("xyz", point, lo, hi, strict=True)
+                   if not a <= v <= b]
+        if outside:
+            raise InvalidParameterError(f"Scenario.{name}: {point.tolist()} is outside the "
+                                        f"bounds ({'; '.join(outside)})")
