@@ -517,6 +517,12 @@ def _cmd_assemble(args) -> int:
 
 
 def _cmd_view(args) -> int:
+    import socket
+
+    try:
+        socket.getaddrinfo(args.host, None)
+    except OSError as exc:
+        return _fail(f"--host {args.host!r}: not an address of this machine's network ({exc})")
     scenario_path = Path(args.scenario)
     if not scenario_path.is_file():
         return _fail(f"scenario: file {str(scenario_path)!r} not found")
@@ -542,14 +548,18 @@ def _cmd_view(args) -> int:
         line.show("minkplan: drawing the scene (C-obstacle surfaces)")
         scene = viz.scene_for_plan(scenario, plan_json, c_obstacle=not args.no_c_obstacle)
 
-    def _terminate(signum, frame):  # SIGTERM stops the server like Ctrl+C (no orphans)
-        raise KeyboardInterrupt
-
     import signal
+
+    stopped_by = [signal.SIGINT]
+
+    def _terminate(signum, frame):  # SIGTERM stops the server like Ctrl+C (no orphans)
+        stopped_by[0] = signal.SIGTERM
+        raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, _terminate)
     viz.serve(scene, out=sys.stdout, host=args.host)
-    return 0
+    # it serves until interrupted: 130 for Ctrl+C, 143 for SIGTERM, as every command
+    return EXIT_TERMINATED if stopped_by[0] == signal.SIGTERM else 130
 
 
 def _add_viz_parsers(sub, common: _Parser) -> None:

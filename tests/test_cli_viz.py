@@ -102,3 +102,21 @@ def test_view_rejects_bad_input(tmp_path, capsys):
     assert main(["view", str(ROOT / "scenarios" / "peg_in_hole.yaml"), "--path", str(bad)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "path.json" in err
+    # a host that is no address (a try-out: an internal error about free ports, exit 3)
+    assert main(["view", str(ROOT / "scenarios" / "peg_in_hole.yaml"), "--host",
+                 "999.1.1.1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "--host '999.1.1.1'" in err
+
+
+def test_view_stopped_by_ctrl_c_exits_130(monkeypatch, capsys):
+    """A try-out: view exited 0 when stopped; every command exits 130 after Ctrl+C (the
+    server is served until then: here a stand-in returns at once, as serve does after
+    one)."""
+    import planner.viz
+
+    served: list[str] = []
+    monkeypatch.setattr(planner.viz, "serve", lambda scene, out, host: served.append(host))
+    assert main(["view", str(ROOT / "scenarios" / "peg_in_hole.yaml"), "--no-c-obstacle",
+                 "--no-progress"]) == 130
+    assert served == ["127.0.0.1"]
