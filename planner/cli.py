@@ -516,6 +516,38 @@ def _cmd_assemble(args) -> int:
     return result.exit_code
 
 
+def _not_a_path(document) -> str | None:
+    """What keeps a JSON document from being a plan's path.json, if anything."""
+    from planner.output import schema_id
+
+    if not isinstance(document, dict) or "status" not in document:
+        return "no 'status'"
+    schema = document.get("schema")
+    if schema is not None and schema != schema_id("path"):
+        return f"its schema is {schema!r}"
+    return None
+
+
+def _path_of_another(document: dict, scenario) -> str | None:
+    """Why a found path's waypoints are not the scenario's (they must run from its start to
+    its goal), if they are not."""
+    import numpy as np
+
+    waypoints = np.asarray(document.get("waypoints") or [], dtype=float).reshape(-1, 3)
+    if document.get("status") != "found" or len(waypoints) < 2:
+        return None
+    lo, hi = scenario.bounds
+    near = 1e-6 * float(np.linalg.norm(hi - lo))
+    ends = (waypoints[0], waypoints[-1])
+    if max(float(np.linalg.norm(ends[0] - scenario.start)),
+           float(np.linalg.norm(ends[1] - scenario.goal))) <= near:
+        return None
+    return (f"its path runs from {np.round(ends[0], 6).tolist()} to "
+            f"{np.round(ends[1], 6).tolist()}, not from this scenario's start "
+            f"{np.round(scenario.start, 6).tolist()} to its goal "
+            f"{np.round(scenario.goal, 6).tolist()} (a path of another scenario?)")
+
+
 def _cmd_view(args) -> int:
     import socket
 
@@ -529,14 +561,17 @@ def _cmd_view(args) -> int:
     plan_json = None
     if args.path is not None:
         path_file = Path(args.path)
+        if path_file.is_dir():  # a plan's --out folder, as verify takes it
+            path_file = path_file / "path.json"
         if not path_file.is_file():
             return _fail(f"--path: file {str(path_file)!r} not found")
         try:
-            plan_json = json.loads(path_file.read_text())
+            document = json.loads(path_file.read_text())
         except (OSError, ValueError) as exc:
             return _fail(f"--path {path_file}: not a path.json file ({exc})")
-        if not isinstance(plan_json, dict) or "status" not in plan_json:
-            return _fail(f"--path {path_file}: not a path.json file (no 'status')")
+        problem = _not_a_path(document)
+        if problem:
+            return _fail(f"--path {path_file}: not a path.json file ({problem})")
         plan_json = path_file
 
     from planner import viz
@@ -544,6 +579,10 @@ def _cmd_view(args) -> int:
     from planner.progress import StatusLine
 
     scenario = load_scenario(scenario_path, hold_orientation=args.hold_orientation)
+    if plan_json is not None:
+        other = _path_of_another(document, scenario)
+        if other:
+            return _fail(f"--path {plan_json}: {other}")
     with StatusLine(False if args.no_progress else None) as line:
         line.show("minkplan: drawing the scene (C-obstacle surfaces)")
         scene = viz.scene_for_plan(scenario, plan_json, c_obstacle=not args.no_c_obstacle)

@@ -120,3 +120,31 @@ def test_view_stopped_by_ctrl_c_exits_130(monkeypatch, capsys):
     assert main(["view", str(ROOT / "scenarios" / "peg_in_hole.yaml"), "--no-c-obstacle",
                  "--no-progress"]) == 130
     assert served == ["127.0.0.1"]
+
+
+def test_view_refuses_a_path_of_another_scenario_or_another_document(tmp_path, monkeypatch,
+                                                                     capsys):
+    """A try-out: view drew a path.json of another scenario, and an assembly's
+    sequence.json, and did not take a plan's folder."""
+    import json
+
+    import planner.viz
+
+    monkeypatch.setattr(planner.viz, "serve", lambda scene, out, host: None)
+    peg = ROOT / "scenarios" / "peg_in_hole.yaml"
+    found = {"schema": "minkplan/path/1", "status": "found",
+             "waypoints": [[45.0, 10.0, 10.0], [0.0, 0.0, 10.0], [0.0, 0.0, -15.0]]}
+    folder = tmp_path / "out"
+    folder.mkdir()
+    (folder / "path.json").write_text(json.dumps(found))
+    view = ["view", str(peg), "--no-c-obstacle", "--no-progress", "--path"]
+    assert main([*view, str(folder)]) == 130  # its folder: taken, served, stopped
+    capsys.readouterr()
+    other = dict(found, waypoints=[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    (tmp_path / "other.json").write_text(json.dumps(other))
+    assert main([*view, str(tmp_path / "other.json")]) == 2
+    assert "not from this scenario's start [45.0, 10.0, 10.0]" in capsys.readouterr().err
+    (tmp_path / "sequence.json").write_text(json.dumps({"schema": "minkplan/sequence/1",
+                                                        "status": "sequence"}))
+    assert main([*view, str(tmp_path / "sequence.json")]) == 2
+    assert "its schema is 'minkplan/sequence/1'" in capsys.readouterr().err
