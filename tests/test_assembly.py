@@ -524,3 +524,14 @@ def test_an_exact_assembly_runs_no_coacd_and_says_what_it_used(tmp_path, monkeyp
     assert report["reuse"]["decompositions"] == 0
     assert not (tmp_path / "cache").exists()  # nothing was decomposed, nothing cached
     _revalidate(result)
+
+
+def test_stuck_parts_without_planning_say_that_planning_was_off():
+    """A try-out: with plan_parts=False the interlocked verdict said "some planner gave
+    up", though none ran."""
+    rings = Path(__file__).resolve().parents[1] / "scenarios" / "assemblies" / \
+        "linked_rings.yaml"
+    result = plan_assembly(load_assembly(rings), plan_parts=False, minimize=False)
+    assert not result.found
+    assert "not proved: no straight removal, and planning was not asked for" in \
+        result.message, result.message

@@ -169,6 +169,9 @@ class AssemblyResult:
         speak of motions that meet no other part, which is all a user asked when no
         interference was allowed, and not all when one was."""
         if not self.proved:
+            tries = [*self.core_attempts.values(), *self.attempts.values()]
+            if any(t.get("reason") == "plan_parts" for t in tries):
+                return "not proved: no straight removal, and planning was not asked for"
             return "not proved: some planner gave up"
         if self.assembly.interference > 0:
             return (f"proved for motions that meet no other part; motions that penetrate "
