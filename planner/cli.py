@@ -307,7 +307,10 @@ def _cmd_minkowski(args) -> int:
         write_mesh(result.mesh, out)
     except OSError as exc:
         return _fail(f"--output {out}: cannot write it ({exc.strerror or exc})")
-    from planner.output import schema_id
+    from planner.cli_shapes import _warn_if_float32_breaks
+    from planner.output import float32_fault, schema_id
+
+    _warn_if_float32_breaks(float32_fault(result.mesh, out), out)
 
     summary = {
         "schema": schema_id("minkowski_stats"),

@@ -88,11 +88,20 @@ def made_solid_text(changes: list[tuple[str, dict]]) -> str:
     return f"; made a solid by: {'; '.join(made)}" if made else ""
 
 
+def _warn_if_float32_breaks(fault: str | None, out: Path) -> None:
+    """Say on stderr that the file's float32 copy of a solid is no clean solid, if so."""
+    if fault:
+        sys.stderr.write(f"minkplan: warning: {out}: its float32 coordinates make the solid "
+                         f"no clean solid ({fault}); minkplan and other tools may refuse the "
+                         f"file: write .obj or .off to keep every digit\n")
+
+
 def cmd_offset(args) -> int:
     out = Path(args.output)
     from planner.offsets import changes_text
     from planner.output import (
         created_text,
+        float32_fault,
         float32_move,
         missing_folder,
         unknown_mesh_format,
@@ -120,6 +129,8 @@ def cmd_offset(args) -> int:
         sys.stderr.write(f"minkplan: offset: {empty}; nothing written\n")
         return 1
     write_mesh(result.mesh, out)
+    _warn_if_float32_breaks(float32_fault(result.mesh, out) if result.stats["kind"] == "solid"
+                            else None, out)
     stats = result.stats
     of = "" if stats["kind"] == "solid" else ", of its triangles"
     if "stage_bounds" in stats and math.isinf(result.error_bound):  # each stage's bound

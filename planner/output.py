@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SCHEMA_VERSION", "atomic_write", "jsonable", "schema_id", "unwritable",
-           "write_json", "write_mesh"]
+__all__ = ["SCHEMA_VERSION", "atomic_write", "float32_fault", "jsonable", "schema_id",
+           "unwritable", "write_json", "write_mesh"]
 
 SCHEMA_VERSION = 1
 """The version of every output file's layout; it changes when a key changes meaning or
@@ -90,6 +90,33 @@ def float32_move(mesh, path: Path) -> float:
         return 0.0
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     return float(np.linalg.norm(vertices - vertices.astype(np.float32), axis=1).max(initial=0.0))
+
+
+def float32_fault(mesh, path: Path) -> str | None:
+    """Why the clean solid ``mesh``, rounded to float32 as the format of ``path`` stores
+    it, is no clean solid (two sheets a rounding apart now cross, a sliver turns over), or
+    ``None``: always ``None`` for OBJ and OFF, which keep every digit, and for a ``mesh``
+    that is no clean solid itself. The copy is validated as :func:`planner.validate_solid`
+    would read the file back."""
+    if path.suffix.lower() not in (".stl", ".glb", ".ply"):
+        return None
+    import trimesh
+
+    from planner.errors import InvalidMeshError
+    from planner.meshes.solids import not_solid_reason, validate_solid
+
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.faces)
+    try:
+        validate_solid(trimesh.Trimesh(vertices.astype(np.float32).astype(np.float64), faces,
+                                       process=False), name=str(path))
+    except InvalidMeshError as error:
+        try:  # (said only of a clean solid the rounding breaks)
+            validate_solid(trimesh.Trimesh(vertices, faces, process=False), name=str(path))
+        except InvalidMeshError:
+            return None
+        return not_solid_reason(error)
+    return None
 
 
 def unknown_mesh_format(path: Path) -> str | None:

@@ -1516,3 +1516,21 @@ def test_a_straight_crease_is_refined_before_coplanar_triangles_are_merged():
     assert res.stats["sag_splits"] > 0
     # the refinement's target: a sixteenth of the grid's bound
     assert sag <= res.error_bound / 16, (sag, res.error_bound)
+
+
+def test_a_solid_whose_float32_copy_is_no_solid_is_warned_of(tmp_path):
+    """A try-out: an opening written as an STL did not load back (its float32 rounding made
+    two sheets cross). Two boxes 4e-8 apart: a clean solid in float64, glued along a face
+    in float32; said for .stl, not for .obj."""
+    from pathlib import Path
+
+    from planner.output import float32_fault
+
+    lower = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    upper = trimesh.creation.box(bounds=[[0, 0, 1 + 4e-8], [1, 1, 2]])
+    pair = trimesh.util.concatenate([lower, upper])
+    validate_solid(pair, name="pair")  # clean as it is
+    fault = float32_fault(pair, Path("pair.stl"))
+    assert fault is not None and "not watertight" in fault, fault
+    assert float32_fault(pair, Path("pair.obj")) is None
+    assert float32_fault(lower, Path("lower.stl")) is None
