@@ -806,9 +806,10 @@ pub struct LoopsClosed {
 /// at a crevice or needle thinner than the weld tolerance (the two sides' corners weld to
 /// different vertices, or not at all, and a few open edges ring a small hole): every
 /// loop of edges used once with no reverse, at most `size` across, is filled (edges used
-/// twice are sheets touching, left to [`unzip_touching_sheets`]). Each loop vertex is a polygon corner (within the weld
-/// tolerance and the polygons' own deviation of the boundary) or a band crossing (on it),
-/// so every point of the fill lies within the loop's diameter plus those of the boundary;
+/// twice are sheets touching, left to [`unzip_touching_sheets`]). Each loop vertex is a
+/// polygon corner (within the weld tolerance and the polygons' own deviation of the
+/// boundary) or a band crossing (on it), so every point of the fill (in the loop's hull)
+/// lies within the loop's diameter plus those of the boundary;
 /// and the boundary lay on the polygons and band triangles already, so the fill removes
 /// none of it. Each is filled by ear clipping as seen along its vector area
 /// ([`clipped_in_its_plane`]), else by the fan when no triangle of it turns over
