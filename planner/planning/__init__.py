@@ -56,7 +56,8 @@ def plan(scenario: Scenario, *, planner: str = "minkplan", cache_dir=None,
         :class:`PlanOutcome`; planning outcomes are statuses, never exceptions.
 
     Raises:
-        InvalidParameterError: unknown planner.
+        InvalidParameterError: unknown planner; ``scenario`` not a Scenario, or its start
+            or goal outside its bounds.
         ScenarioError: ``planner.exact: false`` with a part that is a surface.
         InvalidMeshError, GeometryError: unusable meshes.
     """
