@@ -48,11 +48,19 @@ __all__ = [
     "SETTING_CHECKS",
     "Scenario",
     "default_bounds",
+    "outside_bounds",
 ]
 
 
 DEFAULT_BOUNDS_MARGIN = 0.1
 """Default bounds grow on every side by this fraction of their largest side."""
+
+
+def outside_bounds(point: Any, bounds: tuple[Any, Any]) -> list[str]:
+    """Per axis on which ``point`` lies outside the box ``bounds`` (``(lo, hi)``), what
+    that is (``"z = 60 not in [0, 50]"``); empty when it lies inside."""
+    return [f"{axis} = {v:g} not in [{a:g}, {b:g}]"
+            for axis, v, a, b in zip("xyz", point, *bounds, strict=True) if not a <= v <= b]
 
 
 def _frozen_array(value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.problem import Scenario, default_bounds
+from planner.problem import Scenario, default_bounds, outside_bounds
 from planner.tolerances import tol
 from planner.values import describe_value
 
@@ -179,8 +179,7 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
     else:
         bounds = explicit_bounds
         for field, point in (("start", start), ("goal", goal)):
-            outside = [f"{axis} = {v:g} not in [{a:g}, {b:g}]"
-                       for axis, v, a, b in zip("xyz", point, *bounds) if not a <= v <= b]
+            outside = outside_bounds(point, bounds)
             if outside:
                 target = f"{field}.position" if isinstance(top[field], Mapping) else field
                 raise field_error(target, f"{point.tolist()} is outside bounds "

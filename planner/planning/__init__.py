@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from planner.blas import single_blas_thread
 from planner.errors import InvalidParameterError
-from planner.problem import Assembly, Scenario
+from planner.problem import Assembly, Scenario, outside_bounds
 from planner.roles import FOUND, NO_PATH, NOT_FOUND, PlanStatus
 from planner.sources import Source
 
@@ -81,11 +81,8 @@ def plan(scenario: Scenario, *, planner: str = "minkplan", cache_dir=None,
 def _check_within_bounds(scenario: Scenario) -> None:
     """Refuse a start or goal outside the scenario's bounds (the readers refuse it in a
     file; a scenario made in Python is checked here)."""
-    lo, hi = scenario.bounds
     for name, point in (("start", scenario.start), ("goal", scenario.goal)):
-        outside = [f"{axis} = {v:g} not in [{a:g}, {b:g}]"
-                   for axis, v, a, b in zip("xyz", point, lo, hi, strict=True)
-                   if not a <= v <= b]
+        outside = outside_bounds(point, scenario.bounds)
         if outside:
             raise InvalidParameterError(f"Scenario.{name}: {point.tolist()} is outside the "
                                         f"bounds ({'; '.join(outside)})")
