@@ -205,3 +205,20 @@ def test_cli_interference_option(tmp_path, capsys):
     assert main(["assemble", str(path), "--out", str(tmp_path / "bad"), "--no-progress",
                  "--interference", "-1"]) == 2
     assert "--interference: must be a finite number >= 0" in capsys.readouterr().err
+
+
+def test_the_advice_names_where_the_interference_is_set(tmp_path, capsys):
+    """The suggested tolerance is advised where the one in force was set: the file's
+    field (which ``minkplan batch`` reads too: it has no ``--interference``), or the
+    option when the command line gave it (it replaces the file's)."""
+    path = _press_fit(tmp_path, 0.01)
+    assert main(["assemble", str(path), "--out", str(tmp_path / "file"),
+                 "--no-progress"]) == 2
+    in_file = capsys.readouterr().err
+    assert "give interference: 0.021 or more in the assembly file" in in_file
+    assert "--interference" not in in_file
+    assert main(["assemble", str(path), "--out", str(tmp_path / "option"), "--no-progress",
+                 "--interference", "0.01"]) == 2
+    on_line = capsys.readouterr().err
+    assert "give --interference 0.021 or more" in on_line
+    assert "assembly file" not in on_line

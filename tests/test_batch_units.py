@@ -14,8 +14,9 @@ import pytest
 from conftest import SHARED_ASSETS
 
 from planner.batch import Limits, find_problems, make_tasks, worker
+from planner.batch.execute import execute
 from planner.batch.results import ResultsFile
-from planner.batch.summary import experiment_names
+from planner.batch.summary import experiment_names, write_summary
 from planner.batch.worker import run_task
 from planner.errors import ScenarioError
 from planner.io import load_scenario
@@ -66,6 +67,21 @@ def test_two_problems_with_one_stem_get_distinct_log_names():
     names = experiment_names(["/a/x/easy.cfg", "/a/y/easy.cfg", "/a/y/hard.cfg"])
     assert names == {"/a/x/easy.cfg": "x_easy", "/a/y/easy.cfg": "y_easy",
                      "/a/y/hard.cfg": "hard"}
+
+
+def test_a_failure_in_the_summary_advises_what_a_batch_reads(tmp_path):
+    """An assembly whose parts overlap: summary.md advises the file's ``interference``
+    (a batch reads it; ``--interference`` is an option of ``assemble``, not of batch)."""
+    path = tmp_path / "press_fit.yaml"
+    path.write_text("name: press_fit\nparts:\n  - {name: block, box: [2, 2, 2]}\n"
+                    "  - {name: cap, box: [1, 1, 1], position: [0, 0, 1.48]}\n")
+    (task,) = make_tasks(find_problems([path]), ["minkplan"], 1)
+    record = execute(task)
+    assert (record["status"], record["reason"]) == ("error", "input")
+    write_summary(tmp_path / "summary.md", [record], title="press fit")
+    failures = (tmp_path / "summary.md").read_text().split("## Failures")[1]
+    assert "give interference: 0.021 or more in the assembly file" in failures
+    assert "--interference" not in failures
 
 
 def test_results_keep_whole_records_and_refuse_to_overwrite(tmp_path):

@@ -78,18 +78,19 @@ def parse_assembly(source: str | Mapping[str, Any], base_dir: str | os.PathLike[
                           lambda data: _build(data, base, None, "assembly", interference))
 
 
-def _interference(top: Mapping[str, Any], given: float | None) -> float:
-    """The interference tolerance: ``given`` (the command line's), else the file's, else
-    ``0``."""
+def _interference(top: Mapping[str, Any], given: float | None) -> tuple[float, str]:
+    """The interference tolerance and where it is set: ``given`` (the command line's,
+    ``"--interference"``), else the file's (``"interference"``), else ``0`` (the file's
+    field, where it would be set)."""
     if given is not None:
         value, where = float(given), "--interference"
     elif top.get("interference") is not None:
         value, where = real(top["interference"], "interference"), "interference"
     else:
-        return 0.0
+        return 0.0, "interference"
     if not (math.isfinite(value) and value >= 0):
         raise field_error(where, f"must be a finite number >= 0, got {value:g}")
-    return value
+    return value, where
 
 
 def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
@@ -125,7 +126,7 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
                          f"{settings.contact_tolerance:g} differs from contact_tolerance "
                          f"{delta:g}; give it once")
         delta = settings.contact_tolerance
-    interference = _interference(top, given_interference)
+    interference, interference_field = _interference(top, given_interference)
     cache: dict = {}
     parts = [build_part(spec, part_name, cache, spec.pose.matrix)
              for spec, part_name in zip(specs, names, strict=True)]
@@ -136,7 +137,8 @@ def _build(data: Any, base_dir: Path, path: Path | None, default_name: str,
     settings = dataclasses.replace(settings, contact_tolerance=delta + interference)
     overlaps = _accepted_overlaps(parts, delta, interference, base) if interference > 0 else ()
     parts = _with_escape_hints(parts, overlaps)
-    parts = _check_assembled_pose(parts, delta, interference, overlaps, base=base)
+    parts = _check_assembled_pose(parts, delta, interference, overlaps, base=base,
+                                  interference_field=interference_field)
     return Assembly(name=name, units=units, parts=parts, base=base, contact_tolerance=delta,
                     settings=settings, path=path, interference=interference,
                     overlaps=overlaps)
@@ -147,8 +149,8 @@ _SUGGEST_UPTO = 0.1
 
 
 def _check_assembled_pose(parts: list[Part], delta: float, interference: float = 0.0,
-                          overlaps: tuple[dict, ...] = (), base: str | None = None
-                          ) -> list[Part]:
+                          overlaps: tuple[dict, ...] = (), base: str | None = None,
+                          interference_field: str = "interference") -> list[Part]:
     """The assembled pose must be valid: no part overlaps another beyond the contact
     tolerance plus the interference tolerance, pair by pair (one part checked against
     all later ones at once first: a witness that frees it from all frees it from each).
@@ -156,8 +158,9 @@ def _check_assembled_pose(parts: list[Part], delta: float, interference: float =
     when that frees it (a depth within the tolerance, whose way out is along no contact
     normal or axis), the parts keep that direction as an escape hint. Else the overlap is
     reported for the part to move (:func:`_moving`), with its penetration depth (from
-    ``overlaps`` when it is there, else computed for that pair only). Returns the parts
-    with those hints."""
+    ``overlaps`` when it is there, else computed for that pair only), its advice naming
+    ``interference_field`` (where the interference tolerance is set, see
+    :func:`_interference`). Returns the parts with those hints."""
     allowed = delta + interference
     hints: dict[str, list[tuple[float, float, float]]] = {}
     origin = np.zeros(3)
@@ -182,7 +185,7 @@ def _check_assembled_pose(parts: list[Part], delta: float, interference: float =
                                                              -way_out[2]))
                     continue
             raise _overlap_error(parts, (mover, fixed), checker, (delta, interference),
-                                 depth)
+                                 depth, interference_field)
     return [dataclasses.replace(p, escape_hints=p.escape_hints + tuple(hints[p.name]))
             if p.name in hints else p for p in parts]
 
@@ -197,12 +200,14 @@ def _known_depth(overlaps: tuple[dict, ...], mover: Part, fixed: Part,
 
 
 def _overlap_error(parts: list[Part], moving: tuple[Part, Part], checker: FclChecker,
-                   tolerances: tuple[float, float], depth: dict | None) -> ScenarioError:
+                   tolerances: tuple[float, float], depth: dict | None,
+                   interference_field: str = "interference") -> ScenarioError:
     """The error for ``moving`` (the part to move, and the one it overlaps; ``depth``:
     the first's penetration depth into the second) overlapping beyond the ``(contact,
     interference)`` tolerances, as FCL's ``checker`` of the pair (its depth's direction
     tried) refused it: the moving part's entry, its depth and the interference
-    tolerance that accepts the pose."""
+    tolerance that accepts the pose, to be set as ``interference_field`` says
+    (:func:`_interference_advice`)."""
     delta, interference = tolerances
     mover, fixed = moving
     suggested = _interference_accepting(checker, delta, depth)
@@ -214,9 +219,8 @@ def _overlap_error(parts: list[Part], moving: tuple[Part, Part], checker: FclChe
     beyond = (f"contact tolerance {delta:g}" if interference == 0 else
               f"contact tolerance {delta:g} + interference {interference:g}")
     hint = "" if suggested is None else (
-        f"; to accept it as an interference fit, give interference: {suggested}"
-        + (" or more (assemble --interference)" if depth is not None else
-           " (assemble --interference; FCL's check accepts the pose with it)"))
+        f"; to accept it as an interference fit, "
+        f"{_interference_advice(suggested, interference_field, depth is not None)}")
     error = field_error(f"parts[{parts.index(mover)}]",
                         f"part '{mover.name}' collides with '{fixed.name}' in the assembled "
                         f"pose (overlap beyond {beyond}, or clamped between faces on "
@@ -228,6 +232,21 @@ def _overlap_error(parts: list[Part], moving: tuple[Part, Part], checker: FclChe
                                  "suggested_interference":
                                      None if suggested is None else float(suggested)}}
     return error
+
+
+def _interference_advice(suggested: str, field: str, at_least: bool) -> str:
+    """``"give interference: 0.021 or more in the assembly file"``: the ``suggested``
+    tolerance set where the one in force was (``field``): with the option
+    ``--interference`` when the command line gave it (it replaces the file's), else in
+    the file, which every command reads (``minkplan batch`` has no such option).
+    ``at_least``: any larger tolerance accepts the pose too (a known depth); else it is
+    the one FCL's check was found to accept."""
+    given = (f"give --interference {suggested}" if field.startswith("--")
+             else f"give interference: {suggested}")
+    more = " or more" if at_least else ""
+    where = "" if field.startswith("--") else " in the assembly file"
+    accepted = "" if at_least else " (FCL's check accepts the pose with it)"
+    return f"{given}{more}{where}{accepted}"
 
 
 def _direction_text(direction) -> str:
