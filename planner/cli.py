@@ -402,6 +402,7 @@ def _cmd_plan(args) -> int:
         planner=args.planner,
         cache_dir=args.cache_dir,
         progress=False if args.no_progress else None,
+        source=_source_of_exact_option(args, scenario),
     )
     write_json(out / "path.json", outcome.path_json())
     write_json(out / "report.json", outcome.report_json())
@@ -440,6 +441,21 @@ def _cmd_plan(args) -> int:
             scene = viz.scene_for_plan(scenario, outcome, c_obstacle=True)
             _write_views(scene, out / "scene.html" if args.html else None, args.glb)
     return outcome.exit_code
+
+
+def _source_of_exact_option(args, scenario):
+    """The C-obstacle source ``--exact true`` or ``--exact false`` asks for, chosen here so
+    that what it says (a surface the decomposition refuses, report.json's ``why``) names
+    the option, not the scenario's ``planner.exact``; ``None`` for the planner to choose
+    (no such option, ``auto``, which names no setting and whose convexity checks stay in
+    the planner's timings, or an OMPL planner, which takes no source)."""
+    if args.exact not in ("true", "false") or args.planner != "minkplan":
+        return None
+    from planner.sources import choose_for
+
+    return choose_for([scenario.robot, *scenario.obstacles], scenario.settings,
+                      cache_dir=args.cache_dir,
+                      progress=False if args.no_progress else None, field="--exact")
 
 
 def _close_planner(name: str) -> str:

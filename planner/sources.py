@@ -96,13 +96,21 @@ class SourceSettings:
 
 
 def choose_for(parts: Sequence[Part], settings: PlannerSettings, *, cache_dir=None,
-               progress: bool | None = False) -> Source:
+               progress: bool | None = False, field: str = "planner.exact") -> Source:
     """:func:`choose` with a problem's planner settings (``planner.exact``,
-    ``planner.decomposition_threshold``, ``planner.seed``)."""
+    ``planner.decomposition_threshold``, ``planner.seed``); ``field`` names where the
+    ``exact`` setting was given (``"--exact"``: the command line's option)."""
     return choose(parts, SourceSettings(exact=settings.exact,
                                         threshold=settings.decomposition_threshold,
                                         seed=settings.seed, cache_dir=cache_dir,
-                                        progress=progress), field="planner.exact")
+                                        progress=progress), field=field)
+
+
+def _setting_text(field: str, value: str) -> str:
+    """A setting as its user wrote it: ``"--exact false"`` for a command-line option
+    (``field`` starts with ``--``), ``"planner.exact: false"`` for a YAML field or a
+    keyword."""
+    return f"{field} {value}" if field.startswith("--") else f"{field}: {value}"
 
 
 def choose(parts: Sequence[Part], settings: SourceSettings | None = None, *,
@@ -110,20 +118,21 @@ def choose(parts: Sequence[Part], settings: SourceSettings | None = None, *,
     """The source for these parts: ``exact: true`` the exact source, ``false`` the
     decomposition (refused when a part is a surface, which it cannot represent), ``auto``
     the decomposition when every body of every part is convex (exact then, and fastest),
-    else the exact source (CoACD's hulls would over-approximate)."""
+    else the exact source (CoACD's hulls would over-approximate). ``field`` names the
+    setting in messages and in the reason the source gives (:func:`_setting_text`)."""
     settings = settings or SourceSettings()
     setting = parse_exact(settings.exact, field)
     surfaces = [p.name for p in parts if not p.solid]
     if setting is True:
-        return ExactSource(settings, f"{field}: true")
+        return ExactSource(settings, _setting_text(field, "true"))
     if setting is False:
         if surfaces:
             raise ScenarioError(
-                f"{field}: false: {', '.join(surfaces)} "
+                f"{_setting_text(field, 'false')}: {', '.join(surfaces)} "
                 f"{'is a surface' if len(surfaces) == 1 else 'are surfaces'} (not closed "
-                f"solids), which the convex decomposition cannot represent; use exact: auto",
-                field=field)
-        return DecompositionSource(settings, f"{field}: false")
+                f"solids), which the convex decomposition cannot represent; use "
+                f"{_setting_text(field, 'auto')}", field=field)
+        return DecompositionSource(settings, _setting_text(field, "false"))
     if surfaces:
         return ExactSource(settings, f"auto: {', '.join(surfaces)} not solid (surfaces)")
     checked = CheckedParts()

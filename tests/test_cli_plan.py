@@ -140,6 +140,33 @@ def test_bad_options_exit_2(tmp_path, capsys, extra, expected):
     assert len(err.strip().splitlines()) == 1 and expected in err
 
 
+def test_the_exact_option_is_named_where_its_value_came_from(tmp_path, capsys, cache_dir):
+    """``--exact false`` on a surface is refused as the option's, not as the scenario's
+    ``planner.exact`` (which is named when the file set it); the source chosen by the
+    option says so in report.json."""
+    text = (SCENARIOS / "sealed_chamber_open.yaml").read_text().replace(
+        "mesh: sealed_chamber/chamber_open.stl",
+        f"mesh: {SCENARIOS / 'sealed_chamber' / 'chamber_open.stl'}, kind: surface")
+    surface = write(tmp_path, text)
+    code, _, err = run(["plan", str(surface), "--out", str(tmp_path / "o"), "--exact", "false",
+                        "--no-progress"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "--exact false: chamber is a surface" in err and "use --exact auto" in err
+    assert "planner.exact" not in err
+    surface.write_text(text + "planner: {exact: false}\n")
+    code, _, err = run(["plan", str(surface), "--out", str(tmp_path / "o"), "--no-progress"],
+                       capsys)
+    assert code == 2 and "planner.exact: false: chamber is a surface" in err
+    assert "use planner.exact: auto" in err
+    out = tmp_path / "peg"
+    code, _, err = run(["plan", str(SCENARIOS / "peg_in_hole_0.1.yaml"), "--out", str(out),
+                        "--exact", "true", "--cache-dir", str(cache_dir), "--no-progress"],
+                       capsys)
+    assert code == 0, err
+    report = json.loads((out / "report.json").read_text())
+    assert (report["source"]["used"], report["source"]["why"]) == ("exact", "--exact true")
+
+
 def test_missing_scenario_and_bad_out(tmp_path, capsys):
     code, _, err = run(["plan", str(tmp_path / "none.yaml"), "--out", str(tmp_path)], capsys)
     assert code == 2 and "none.yaml" in err and len(err.strip().splitlines()) == 1
