@@ -107,6 +107,19 @@ def _open_box(path) -> None:
     trimesh.Trimesh(box.vertices, box.faces[:-2], process=False).export(path)
 
 
+def test_a_degenerate_face_dropped_is_on_the_line(pair, tmp_path, capsys):
+    """A face ``f 1 1 2`` (a repeated vertex) is dropped to make the solid, and the line
+    says so with the count, as it says a turned face."""
+    box = shapes.box()
+    degenerate = tmp_path / "degenerate.obj"
+    degenerate.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in box.vertices.tolist())
+                          + "".join(f"f {i + 1} {j + 1} {k + 1}\n"
+                                    for i, j, k in [*box.faces.tolist(), [0, 0, 1]]))
+    assert main(["depth", str(degenerate), str(pair[1])]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.endswith(f"; made a solid by: {degenerate} removed_collapsed_faces 1"), line
+
+
 def test_depth_and_minkowski_repair_an_open_mesh_with_repair(pair, tmp_path, capsys):
     """Without --repair the refusal names it; with it the commands work and say what they
     changed to make a solid."""

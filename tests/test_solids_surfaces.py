@@ -169,6 +169,27 @@ def test_a_face_wound_against_its_neighbours_is_turned_and_said(reversed_face):
     assert classify(box, name="box").changes == {}
 
 
+def test_degenerate_faces_dropped_are_said():
+    """A face repeating a vertex (``[0, 0, 1]``) and a zero-area sliver along an edge are
+    dropped to make the solid, and counted in the part's changes (they were dropped
+    silently)."""
+    from planner.meshes.kinds import classify
+
+    box = trimesh.creation.box()
+    collapsed = np.vstack([box.faces, [[0, 0, 1]]])
+    part = classify(trimesh.Trimesh(box.vertices, collapsed, process=False), name="box")
+    assert part.solid and len(part.mesh.faces) == 12
+    assert part.changes == {"removed_collapsed_faces": 1}
+    a, b = box.faces[0][:2]
+    middle = (box.vertices[a] + box.vertices[b]) / 2
+    sliver = trimesh.Trimesh(np.vstack([box.vertices, [middle]]),
+                             np.vstack([box.faces, [[a, len(box.vertices), b]]]),
+                             process=False)
+    part = classify(sliver, name="box")
+    assert part.solid and len(part.mesh.faces) == 12
+    assert part.changes == {"removed_degenerate_faces": 1}
+
+
 def test_t_junctions_are_split_and_the_part_is_a_solid():
     from planner.meshes.kinds import classify
 

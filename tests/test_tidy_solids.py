@@ -15,7 +15,7 @@ from planner.errors import InvalidMeshError
 from planner.meshes import load_mesh, validate_solid
 from planner.meshes.kinds import classify
 
-KEYS = (solids.TURNED, solids.FACES_INSIDE, solids.FACE_CROSSINGS)
+KEYS = (solids.SOLID_CHANGES, solids.FACES_INSIDE, solids.FACE_CROSSINGS)
 
 
 def outcome(mesh: trimesh.Trimesh):

@@ -10,8 +10,8 @@ where triangles meet. ``kind`` chooses:
   its geometry -- vertices closer than the tolerance welded, degenerate and repeated faces
   dropped, winding made consistent, inverted shells flipped (all in ``validate_solid``),
   and T-junctions split (a vertex lying on another face's edge: the edge is split there,
-  :func:`split_t_junctions`); else a surface. What turned faces, flipped shells or split
-  edges is in :attr:`Classified.changes`.
+  :func:`split_t_junctions`); else a surface. What dropped degenerate faces, turned faces,
+  flipped shells or split edges is in :attr:`Classified.changes`.
 - ``"solid"``: a solid or an error (with ``repair``: :func:`~planner.meshes.repair_mesh`
   may also fill holes, which adds geometry, and says so).
 - ``"surface"``: the triangles as they are.
@@ -32,7 +32,7 @@ from planner.errors import InvalidMeshError
 from planner.tolerances import scale_of, tol
 
 from .repair import repair_mesh
-from .solids import SOLID_REASON, TURNED, not_solid_reason, validate_solid
+from .solids import SOLID_CHANGES, SOLID_REASON, not_solid_reason, validate_solid
 from .topology import checked_arrays, group_rows
 
 __all__ = ["KINDS", "Classified", "classify", "split_t_junctions"]
@@ -74,7 +74,7 @@ def classify(mesh: trimesh.Trimesh, *, name: str, kind: str = "auto",
         return Classified(_surface(mesh, name), False, "kind surface asked for")
     try:
         solid = validate_solid(mesh, name=name)
-        return Classified(solid, True, SOLID_REASON, dict(solid.metadata.get(TURNED, {})))
+        return Classified(solid, True, SOLID_REASON, dict(solid.metadata.get(SOLID_CHANGES, {})))
     except InvalidMeshError as error:
         first = error
     split = _with_t_junctions_split(mesh, name)
@@ -126,7 +126,7 @@ def _with_t_junctions_split(mesh: trimesh.Trimesh, name: str) -> Classified | No
     except InvalidMeshError:
         return None
     return Classified(solid, True, f"closed once {count} T-junctions were split",
-                      {"t_junctions_split": count, **solid.metadata.get(TURNED, {})})
+                      {"t_junctions_split": count, **solid.metadata.get(SOLID_CHANGES, {})})
 
 
 def split_t_junctions(vertices: np.ndarray, faces: np.ndarray, tolerance: float,

@@ -90,7 +90,9 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
     repeated faces dropped; zero-area faces and back-to-back coincident face pairs
     dropped when the surface stays closed without them; winding made consistent;
     shells that are inside out (negative volume, not nested in another shell) flipped,
-    with a log message. The input is never modified.
+    with a log message. The degenerate faces dropped, faces turned and shells flipped
+    are counted in ``metadata[SOLID_CHANGES]`` (:data:`SOLID_CHANGES`). The input is
+    never modified.
 
     Args:
         mesh: a ``trimesh.Trimesh`` (anything with ``vertices`` and ``faces``).
@@ -157,21 +159,25 @@ def validate_solid(mesh, *, name: str = "mesh") -> trimesh.Trimesh:
             "%s: merged %d vertices, removed %d faces",
             label, report["merged_vertices"], report["removed_faces"],
         )
-    turned = {key: report[key] for key in ("fixed_winding_faces", "flipped_shells")
-              if report[key]}
-    return _solid(mesh, name, vertices, faces, windings, turned)
+    return _solid(mesh, name, vertices, faces, windings, _solid_changes(report))
+
+
+def _solid_changes(report: dict[str, Any]) -> dict[str, int]:
+    """What the cleaning's ``report`` changed to make a solid (:data:`SOLID_CHANGES`):
+    the counts of :data:`_CHANGE_KEYS` that are not zero."""
+    return {key: report[key] for key in _CHANGE_KEYS if report[key]}
 
 
 def _solid(mesh, name: str, vertices: np.ndarray, faces: np.ndarray,
-           windings: tuple[int, int, Any], turned: dict[str, int]) -> trimesh.Trimesh:
+           windings: tuple[int, int, Any], changes: dict[str, int]) -> trimesh.Trimesh:
     """The validated solid: a new mesh with the input's metadata, its name, what was
-    turned to make it one (:data:`TURNED`), its winding counts and the core's checked
-    solid (:func:`_check_winding`'s ``windings``)."""
+    changed to make it one (:data:`SOLID_CHANGES`), its winding counts and the core's
+    checked solid (:func:`_check_winding`'s ``windings``)."""
     faces_inside, crossings, checked = windings
     result = trimesh.Trimesh(vertices, faces, process=False)
     result.metadata.update(getattr(mesh, "metadata", {}) or {})
     result.metadata["name"] = name
-    result.metadata[TURNED] = turned
+    result.metadata[SOLID_CHANGES] = changes
     result.metadata[FACES_INSIDE] = faces_inside
     result.metadata[FACE_CROSSINGS] = crossings
     remember(result, checked, solid=True)
@@ -225,11 +231,18 @@ the solid in front of them too (winding number above 0 there: shells that touch 
 overlap), so are not part of its boundary."""
 
 
-TURNED = "turned"
-"""Key of a solid's ``metadata`` (from :func:`validate_solid`): the faces it turned to make
-the winding consistent and the shells it flipped outward, as counts
-(``{"fixed_winding_faces": 1}``; empty when the input was oriented), which the callers
-report as changes made to make a solid."""
+SOLID_CHANGES = "solid_changes"
+"""Key of a solid's ``metadata`` (from :func:`validate_solid`): what it changed to make a
+solid, as counts (``{"removed_collapsed_faces": 1, "fixed_winding_faces": 1}``, the keys
+of :data:`_CHANGE_KEYS`; empty when the input was a tidy solid), which the callers report
+as changes made to make a solid."""
+
+_CHANGE_KEYS = ("removed_collapsed_faces", "removed_degenerate_faces", "fixed_winding_faces",
+                "flipped_shells")
+"""The cleaning's counts that are changes to the input's solid: degenerate faces dropped
+(a repeated vertex, also once vertices closer than the merge tolerance are welded; zero
+area), faces wound against their neighbours turned and shells exported inside out flipped
+(the keys :func:`planner.meshes.repair_mesh` reports them by too)."""
 
 
 FACE_CROSSINGS = "face_crossings"
