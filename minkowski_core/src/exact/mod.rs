@@ -964,7 +964,7 @@ impl CellSource for ExactSource {
             let Some(Some((pl, _))) = self.flat.get(i) else { return None };
             // the plane from both sides, each thickened by the facet's slack
             let (n, w, slack) = (pl[0].0, 0.5 * (pl[0].1 - pl[1].1), 0.5 * (pl[0].1 + pl[1].1));
-            if !cut.add(n, w, 100.0 * slack) {
+            if !cut.add_within(n, w, 100.0 * slack, self.facets[i].aabb(self.margin).inflated(100.0 * slack)) {
                 return None;
             }
         }

@@ -38,6 +38,10 @@ const MERGE: f64 = 1e-4;
 pub struct Cut {
     /// The planes; the first `n` are used.
     pub planes: [(Vec3, f64); MAX_PLANES],
+    /// Per plane, a box holding every candidate on it (everywhere when the source gave
+    /// none): a part of the plane wholly outside it holds no boundary, so it is no piece
+    /// ([`Cut::pieces`]).
+    pub extents: [Aabb; MAX_PLANES],
     /// How many.
     pub n: usize,
 }
@@ -66,15 +70,22 @@ pub struct Piece {
 impl Cut {
     /// An empty cut.
     pub fn new() -> Cut {
-        Cut { planes: [(Vec3::ZERO, 0.0); MAX_PLANES], n: 0 }
+        Cut { planes: [(Vec3::ZERO, 0.0); MAX_PLANES], extents: [EVERYWHERE; MAX_PLANES], n: 0 }
     }
 
     /// Add the plane `(n, w)` unless one of the cut's planes is the same (within `tol` in
     /// offset, either orientation); `false` when that would make more than [`MAX_PLANES`].
     pub fn add(&mut self, n: Vec3, w: f64, tol: f64) -> bool {
-        for &(m, v) in &self.planes[..self.n] {
+        self.add_within(n, w, tol, EVERYWHERE)
+    }
+
+    /// [`Cut::add`] for a candidate lying in the box `extent`: its plane's extent grows to
+    /// hold it.
+    pub fn add_within(&mut self, n: Vec3, w: f64, tol: f64, extent: Aabb) -> bool {
+        for (k, &(m, v)) in self.planes[..self.n].iter().enumerate() {
             let c = n.dot(m);
             if c.abs() >= 1.0 - 1e-12 && (w - c.signum() * v).abs() <= tol {
+                self.extents[k] = self.extents[k].union(&extent);
                 return true;
             }
         }
@@ -82,6 +93,7 @@ impl Cut {
             return false;
         }
         self.planes[self.n] = (n, w);
+        self.extents[self.n] = extent;
         self.n += 1;
         true
     }
@@ -101,15 +113,19 @@ impl Cut {
         let mut out = Vec::new();
         for (i, &(n, w)) in planes.iter().enumerate().filter(|&(i, _)| merged.rep[i] == i) {
             let section = plane_section(cell, n, w);
-            if section.len() < 3 {
+            // (grown past the planes taken as this one, which lie that close in the cell)
+            let extent = self.extent_of(i, &merged).inflated(MERGE * size);
+            if section.len() < 3 || !meets(&section, &extent) {
                 continue;
             }
-            // the section split by the line of every other (kept) plane in it
+            // the section split by the line of every other (kept) plane in it, the parts
+            // wholly outside the candidates' extent dropped as they are made
             let (mut parts, mut next) = (vec![section], Vec::new());
             for (_, &(m, v)) in planes.iter().enumerate().filter(|&(j, _)| j != i && merged.rep[j] == j) {
                 for poly in parts.drain(..) {
                     split(poly, (m, v), THIN * THIN * size * size, &mut next);
                 }
+                next.retain(|poly| meets(poly, &extent));
                 std::mem::swap(&mut parts, &mut next);
             }
             for poly in parts {
@@ -153,6 +169,21 @@ fn gap_in_cell((n, w): (Vec3, f64), (m, v): (Vec3, f64), cell: &Aabb) -> Option<
     let s = c.signum();
     let corners = (0..8).map(|k| Vec3::new([cell.min.x, cell.max.x][k & 1], [cell.min.y, cell.max.y][(k >> 1) & 1], [cell.min.z, cell.max.z][(k >> 2) & 1]));
     Some(corners.map(|x| ((n.dot(x) - w) - s * (m.dot(x) - v)).abs()).fold(0.0, f64::max))
+}
+
+impl Cut {
+    /// The extent of plane `i` and of those taken as it.
+    fn extent_of(&self, i: usize, merged: &Merged) -> Aabb {
+        (0..self.n).filter(|&j| merged.rep[j] == i).fold(Aabb::empty(), |e, j| e.union(&self.extents[j]))
+    }
+}
+
+/// The box of every point: the extent of a plane whose candidates' are not known.
+pub const EVERYWHERE: Aabb = Aabb { min: Vec3::splat(f64::NEG_INFINITY), max: Vec3::splat(f64::INFINITY) };
+
+/// Whether the polygon's box meets `extent`.
+fn meets(poly: &[Vec3], extent: &Aabb) -> bool {
+    Aabb::from_points(poly).overlaps(extent)
 }
 
 impl Default for Cut {
