@@ -418,7 +418,7 @@ def table(rows: list[dict]) -> str:
     for w in rows:
         res = PARAM[w["tool"]].format(w["param"])
         if "failed" in w:
-            out.append(f"| {w['input']} | {w['tool']} | {res} | {w['failed']} ||||||||||")
+            out.append(f"| {w['input']} | {w['tool']} | {res} | {w['failed']} |||||||||||")
             continue
         holds = {True: "yes", False: "NO"}.get(w.get("holds"), "—")
         out.append(

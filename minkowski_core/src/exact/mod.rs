@@ -956,7 +956,9 @@ impl CellSource for ExactSource {
         merge_sorted(out);
     }
 
-    /// Only facets, each flat with its half-spaces known (no margin), on at most three planes.
+    /// Only facets, each flat with its half-spaces known (no margin), on at most
+    /// [`crate::surface::planar::MAX_PLANES`] planes; each plane's extent holds the boxes
+    /// of its facets.
     fn plane_cut(&self, own: &[u32]) -> Option<Cut> {
         let mut cut = Cut::new();
         for rec in records(own) {

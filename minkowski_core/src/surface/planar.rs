@@ -103,9 +103,10 @@ impl Cut {
         self.planes[..self.n].iter().enumerate().fold(0, |r, (i, &(n, w))| r | (((n.dot(p) > w) as usize) << i))
     }
 
-    /// The pieces of every plane in `cell`, or `None` when the cell cannot be resolved
-    /// safely (a piece too thin to tell its sides: nearly coincident planes, a grazing
-    /// line, a sliver at a cell face).
+    /// The pieces of every plane in `cell` (parts of a plane outside its candidates'
+    /// extent left out: they hold no boundary), or `None` when the cell cannot be
+    /// resolved safely (a piece too thin to tell its sides: nearly coincident planes, a
+    /// grazing line, a sliver at a cell face).
     pub fn pieces(&self, cell: &Aabb) -> Option<Vec<Piece>> {
         let size = cell.extent().max_element();
         let planes = &self.planes[..self.n];
