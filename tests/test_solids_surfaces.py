@@ -190,6 +190,27 @@ def test_degenerate_faces_dropped_are_said():
     assert part.changes == {"removed_degenerate_faces": 1}
 
 
+def test_repeated_faces_and_back_to_back_pairs_dropped_are_said():
+    """A face given twice, and a fin of no thickness (a face and its reverse), are
+    dropped to make the solid and counted in the part's changes (they were dropped
+    silently; the fin is geometry the input had)."""
+    from planner.meshes.kinds import classify
+
+    box = trimesh.creation.box()
+    repeated = trimesh.Trimesh(box.vertices, np.vstack([box.faces, box.faces[:1]]),
+                               process=False)
+    part = classify(repeated, name="box")
+    assert part.solid and len(part.mesh.faces) == 12
+    assert part.changes == {"removed_duplicate_faces": 1}
+    fin = np.vstack([box.vertices, [[0.0, 0.0, 2.0]]])
+    a, b = box.faces[0][:2]
+    pair = [[a, b, len(box.vertices)], [b, a, len(box.vertices)]]
+    part = classify(trimesh.Trimesh(fin, np.vstack([box.faces, pair]), process=False),
+                    name="box")
+    assert part.solid and len(part.mesh.faces) == 12
+    assert part.changes == {"removed_back_to_back_faces": 2}
+
+
 def test_t_junctions_are_split_and_the_part_is_a_solid():
     from planner.meshes.kinds import classify
 

@@ -237,12 +237,14 @@ solid, as counts (``{"removed_collapsed_faces": 1, "fixed_winding_faces": 1}``, 
 of :data:`_CHANGE_KEYS`; empty when the input was a tidy solid), which the callers report
 as changes made to make a solid."""
 
-_CHANGE_KEYS = ("removed_collapsed_faces", "removed_degenerate_faces", "fixed_winding_faces",
-                "flipped_shells")
+_CHANGE_KEYS = ("removed_collapsed_faces", "removed_degenerate_faces",
+                "removed_duplicate_faces", "removed_back_to_back_faces",
+                "fixed_winding_faces", "flipped_shells")
 """The cleaning's counts that are changes to the input's solid: degenerate faces dropped
 (a repeated vertex, also once vertices closer than the merge tolerance are welded; zero
-area), faces wound against their neighbours turned and shells exported inside out flipped
-(the keys :func:`planner.meshes.repair_mesh` reports them by too)."""
+area), repeated faces and back-to-back pairs (a fin of no thickness) dropped, faces wound
+against their neighbours turned and shells exported inside out flipped (the keys
+:func:`planner.meshes.repair_mesh` reports them by too)."""
 
 
 FACE_CROSSINGS = "face_crossings"
