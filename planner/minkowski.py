@@ -158,7 +158,7 @@ def bound_by_region(surf: dict) -> dict[str, float]:
 
 SURFACE_STATS = ("band_cells", "h", "refinements", "planar_cells", "planar_pieces",
                  "planar_regions", "planar_fanned", "planar_straight_dropped",
-                 "planes_fallback_edges",
+                 "planes_fallback_edges", "slivers_apart",
                  "bound_by_region", "holes_closed", "sheets_unzipped", "sheets_apart")
 """The statistics every extracted surface reports (sums, C-obstacles, offsets)."""
 
@@ -289,6 +289,11 @@ def _widened_by(surf: dict) -> str:
     missed boundary, else plane-resolved cells' deviation or vertices parted where sheets
     touched (the larger)."""
     missed = int(surf["complex_cells"]) + int(surf["silent_cells"])
+    slivers = int(surf["slivers_apart"])
+    if slivers and not missed:
+        return (f"{slivers} slivers of a sheet thinner than the weld ({float(surf['h']):.3g} "
+                f"cells) came apart from the rest and were dropped after "
+                f"{surf['refinements']} refinements: the bound reaches over them")
     if missed:
         return (f"the lattice may miss boundary in {missed} cells after {surf['refinements']} "
                 f"refinements (a feature thinner than {float(surf['h']):.3g}: "

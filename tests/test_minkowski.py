@@ -685,8 +685,11 @@ def test_a_widened_bound_is_put_down_to_what_widened_it():
     from planner.minkowski import _widened_by
 
     surf = {"complex_cells": 3, "silent_cells": 2, "refinements": 1, "h": 0.01,
-            "planar_deviation": 0.0, "sheets_apart": 0.0}
+            "planar_deviation": 0.0, "sheets_apart": 0.0, "slivers_apart": 0}
     assert "may miss boundary in 5 cells after 1 refinements" in _widened_by(surf)
+    # slivers of a sheet thinner than the weld, dropped apart from the rest
+    assert "4 slivers of a sheet thinner than the weld" in _widened_by(
+        {**surf, "complex_cells": 0, "silent_cells": 0, "slivers_apart": 4})
     # no cell missed: the warning said "in 0 cells after 0 refinements" before
     surf.update(complex_cells=0, silent_cells=0, planar_deviation=0.03, sheets_apart=0.001)
     assert _widened_by(surf) == "the cells resolved by planes deviate from them by up to 0.03"

@@ -275,6 +275,7 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("complex_cells", s.complex_cells)?;
     d.set_item("unresolved_cells", s.unresolved_cells)?;
     d.set_item("silent_cells", s.silent_cells)?;
+    d.set_item("slivers_apart", s.slivers_apart)?;
     d.set_item("inconsistent_edges", s.inconsistent_edges)?;
     d.set_item("cells_per_level", r.level_counts.iter().map(|c| c.to_vec()).collect::<Vec<_>>())?;
     d.set_item("seconds_octree", r.seconds_octree)?;

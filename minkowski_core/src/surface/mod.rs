@@ -122,6 +122,10 @@ pub struct Surface {
     /// Closed slivers (two layers folded onto each other, under two cells across) removed
     /// after the join ([`stitch::drop_slivers`]).
     pub slivers_dropped: usize,
+    /// Of those, how many lay apart from the rest (farther than two cells from its
+    /// vertices): parts of a sheet thinner than the weld, whose reach the bound takes
+    /// (they are in [`Surface::loose_at`]).
+    pub slivers_apart: usize,
 }
 
 #[inline]
@@ -310,8 +314,15 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -
             let at = open.iter().flat_map(|&(a, b)| [a, b]).chain(pinched.iter().copied()).collect();
             s.sheets_unzipped = stitch::unzip_touching_sheets(&mut s, at, oct.h);
         }
-        // (a sheet unzipped from the rest may be a sliver: a triangle and its reverse)
-        s.slivers_dropped = stitch::drop_slivers(&mut s, 2.0 * oct.h, 1e-4 * oct.h.powi(3));
+        // (a sheet unzipped from the rest may be a sliver: a triangle and its reverse; a
+        // sheet thinner than the weld, its sides welded, comes apart into slivers far from
+        // the rest, which are loose cells: their reach is in the bound)
+        let slivers = stitch::drop_slivers(&mut s, 2.0 * oct.h, 1e-4 * oct.h.powi(3));
+        s.slivers_dropped = slivers.len();
+        let apart = reach::apart_from(&s, &slivers, 2.0 * oct.h);
+        s.slivers_apart = apart.len();
+        // (each at least a cell across: the reach's search bins follow the first's size)
+        s.loose_at.extend(apart.into_iter().map(|b| (b.inflated(0.5 * oct.h), false)));
         s.sheets_unzipped += stitch::part_coincident_vertices(&mut s, oct.h);
         if s.sheets_unzipped > 0 || s.slivers_dropped > 0 {
             (open, pinched) = open_or_pinched(&s.faces);

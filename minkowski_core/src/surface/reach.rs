@@ -82,6 +82,27 @@ impl LargeFaces {
 }
 
 /// The vertices the faces use (a dropped sliver may leave others behind).
+/// The boxes that lie apart from the surface: no vertex of it within `within` of the box
+/// (none within that plus half its diagonal of its centre; a box near only the middle of
+/// a large face counts as apart, and [`loose_reach`] then finds it near).
+pub fn apart_from(surface: &Surface, boxes: &[Aabb], within: f64) -> Vec<Aabb> {
+    if boxes.is_empty() {
+        return Vec::new();
+    }
+    let bins = bin_points(&used_vertices(surface), within);
+    boxes.iter().filter(|b| !any_within(&bins, b.center(), within + 0.5 * b.diagonal(), within)).copied().collect()
+}
+
+/// Whether a point binned in `bins` (of size `bin`) lies within `radius` of `c`.
+fn any_within(bins: &Bins, c: Vec3, radius: f64, bin: f64) -> bool {
+    let home = bin_of(c, bin);
+    let rings = (radius / bin).ceil() as i64 + 1;
+    (0..=rings).flat_map(ring_offsets).any(|d| {
+        let key = [home[0] + d[0], home[1] + d[1], home[2] + d[2]];
+        bins.get(&key).into_iter().flatten().any(|&p| (p - c).length() <= radius)
+    })
+}
+
 fn used_vertices(surface: &Surface) -> Vec<Vec3> {
     let mut used = vec![false; surface.vertices.len()];
     for face in &surface.faces {
@@ -174,5 +195,19 @@ mod tests {
         let none = Surface { complex_cells: 1, loose_at: vec![(cell, false)], ..Default::default() };
         assert!(loose_reach(&none, 1.0).is_infinite());
         assert_eq!(loose_reach(&Surface::default(), 1.0), 0.0);
+    }
+
+    #[test]
+    fn boxes_with_no_vertex_within_the_distance_are_apart() {
+        let tri = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let surface = surface_with(tri, Vec::new());
+        let near = Aabb::new(Vec3::new(1.1, 0.0, 0.0), Vec3::new(1.2, 0.1, 0.0)); // 0.1 off a corner
+        let far = Aabb::new(Vec3::new(5.0, 0.0, 0.0), Vec3::new(5.1, 0.1, 0.0));
+        let apart = apart_from(&surface, &[near, far], 0.5);
+        assert_eq!(apart.len(), 1);
+        assert_eq!(apart[0].min, far.min);
+        // with every vertex farther than the distance, each is apart
+        assert_eq!(apart_from(&surface, &[near, far], 0.05).len(), 2);
+        assert!(apart_from(&surface, &[], 0.5).is_empty());
     }
 }

@@ -110,9 +110,10 @@ pub fn cancel_opposite_twins(faces: &mut Vec<[u32; 3]>) -> usize {
 
 /// Remove closed components that are slivers: at most `size` across and enclosing less
 /// than `volume` (two layers of the joined surface folded onto each other, left where a
-/// fill and a polygon overlap). They lie within `size` of the rest, so the bound holds
-/// without them. Returns how many were removed.
-pub fn drop_slivers(s: &mut Surface, size: f64, volume: f64) -> usize {
+/// fill and a polygon overlap, or the two sides of a sheet thinner than the weld, welded
+/// into pieces). Returns their boxes: one that lies apart from the rest held boundary no
+/// other part of the surface shows (the caller takes its reach into the bound).
+pub fn drop_slivers(s: &mut Surface, size: f64, volume: f64) -> Vec<Aabb> {
     let mut uf = crate::util::UnionFind::new(s.vertices.len());
     for f in &s.faces {
         uf.union(f[0] as usize, f[1] as usize);
@@ -125,13 +126,13 @@ pub fn drop_slivers(s: &mut Surface, size: f64, volume: f64) -> usize {
         e.0 += p[0].dot(p[1].cross(p[2])) / 6.0;
         e.1 = e.1.union(&Aabb::from_points(&p));
     }
-    let slivers: FastSet<usize> = parts.iter().filter(|(_, (v, b))| v.abs() < volume && b.extent().max_element() <= size).map(|(&r, _)| r).collect();
-    if slivers.is_empty() || slivers.len() == parts.len() {
-        return 0;
+    let slivers: FastMap<usize, Aabb> = parts.into_iter().filter(|(_, (v, b))| v.abs() < volume && b.extent().max_element() <= size).map(|(r, (_, b))| (r, b)).collect();
+    if slivers.is_empty() || s.faces.iter().all(|f| slivers.contains_key(&uf.find(f[0] as usize))) {
+        return Vec::new();
     }
-    s.faces.retain(|f| !slivers.contains(&uf.find(f[0] as usize)));
+    s.faces.retain(|f| !slivers.contains_key(&uf.find(f[0] as usize)));
     drop_unused_vertices(s);
-    slivers.len()
+    slivers.into_values().collect()
 }
 
 /// Remove the vertices no triangle uses (renumbering the triangles'). Returns each old
