@@ -308,9 +308,9 @@ def _cmd_minkowski(args) -> int:
     except OSError as exc:
         return _fail(f"--output {out}: cannot write it ({exc.strerror or exc})")
     from planner.cli_shapes import _warn_if_float32_breaks
-    from planner.output import float32_fault, schema_id
+    from planner.output import schema_id
 
-    _warn_if_float32_breaks(float32_fault(result.mesh, out), out)
+    _warn_if_float32_breaks(result.mesh, out, progress=False if args.no_progress else None)
 
     summary = {
         "schema": schema_id("minkowski_stats"),

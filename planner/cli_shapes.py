@@ -88,8 +88,19 @@ def made_solid_text(changes: list[tuple[str, dict]]) -> str:
     return f"; made a solid by: {'; '.join(made)}" if made else ""
 
 
-def _warn_if_float32_breaks(fault: str | None, out: Path) -> None:
-    """Say on stderr that the file's float32 copy of a solid is no clean solid, if so."""
+def _warn_if_float32_breaks(mesh, out: Path, *, progress: bool | None) -> None:
+    """Say on stderr when the file's float32 copy of the clean solid ``mesh`` is no clean
+    solid (:func:`planner.output.float32_fault`), the check shown on the status line (a
+    920k-triangle gear takes some 20 s)."""
+    from planner.output import FLOAT32_SUFFIXES, float32_fault
+    from planner.progress import StatusLine
+
+    if out.suffix.lower() not in FLOAT32_SUFFIXES:
+        return
+    with StatusLine(progress) as status:
+        status.show(f"checking that {out.name}'s float32 coordinates keep "
+                    f"{len(mesh.faces):,} triangles a solid")
+        fault = float32_fault(mesh, out)
     if fault:
         sys.stderr.write(f"minkplan: warning: {out}: its float32 coordinates make the solid "
                          f"no clean solid ({fault}); minkplan and other tools may refuse the "
@@ -101,7 +112,6 @@ def cmd_offset(args) -> int:
     from planner.offsets import changes_text
     from planner.output import (
         created_text,
-        float32_fault,
         float32_move,
         missing_folder,
         unknown_mesh_format,
@@ -129,8 +139,8 @@ def cmd_offset(args) -> int:
         sys.stderr.write(f"minkplan: offset: {empty}; nothing written\n")
         return 1
     write_mesh(result.mesh, out)
-    _warn_if_float32_breaks(float32_fault(result.mesh, out) if result.stats["kind"] == "solid"
-                            else None, out)
+    if result.stats["kind"] == "solid":
+        _warn_if_float32_breaks(result.mesh, out, progress=options["progress"])
     stats = result.stats
     of = "" if stats["kind"] == "solid" else ", of its triangles"
     if "stage_bounds" in stats and math.isinf(result.error_bound):  # each stage's bound

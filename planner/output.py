@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SCHEMA_VERSION", "atomic_write", "float32_fault", "jsonable", "schema_id",
-           "unwritable", "write_json", "write_mesh"]
+__all__ = ["FLOAT32_SUFFIXES", "SCHEMA_VERSION", "atomic_write", "float32_fault", "jsonable",
+           "schema_id", "unwritable", "write_json", "write_mesh"]
 
 SCHEMA_VERSION = 1
 """The version of every output file's layout; it changes when a key changes meaning or
@@ -92,13 +92,17 @@ def float32_move(mesh, path: Path) -> float:
     return float(np.linalg.norm(vertices - vertices.astype(np.float32), axis=1).max(initial=0.0))
 
 
+FLOAT32_SUFFIXES = (".stl", ".glb", ".ply")
+"""The mesh formats written with float32 coordinates."""
+
+
 def float32_fault(mesh, path: Path) -> str | None:
     """Why the clean solid ``mesh``, rounded to float32 as the format of ``path`` stores
     it, is no clean solid (two sheets a rounding apart now cross, a sliver turns over), or
     ``None``: always ``None`` for OBJ and OFF, which keep every digit, and for a ``mesh``
     that is no clean solid itself. The copy is validated as :func:`planner.validate_solid`
     would read the file back."""
-    if path.suffix.lower() not in (".stl", ".glb", ".ply"):
+    if path.suffix.lower() not in FLOAT32_SUFFIXES:
         return None
     import trimesh
 

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import trimesh
 from scipy.spatial import cKDTree
+from shapes import box, from_manifold, to_manifold
 
 import planner
 from planner.cli import main
@@ -328,6 +329,24 @@ def test_two_corners_nearly_touching_keep_the_bound_as_stated():
     probes = _on_the_offset(pair, r, 3000, seed=5)
     _, to_output, _ = trimesh.proximity.closest_point(result.mesh, probes)
     assert np.max(to_output) <= result.error_bound
+
+
+def test_an_erosion_to_sheets_thinner_than_the_weld_states_a_bound_reaching_them():
+    """An L of two bars 0.2 thick eroded by just under 0.1 leaves sheets 2e-7 thick along
+    its arms. At eps 0.02 the extraction welds their two sides together, and they come
+    apart into slivers, which are dropped: the bound must then reach over where they were
+    (it stated 0.02, the sheets lying 0.4 from the output)."""
+    bars = box((0.8, 0.2, 0.3)), box((0.2, 0.4, 0.3), center=(0.3, 0.1, 0.0))
+    solid = from_manifold(to_manifold(bars[0]) + to_manifold(bars[1]), "L")
+    r = 0.0999999
+    result = planner.offset(solid, -r, eps=0.02, method="ball")
+    assert result.stats["slivers_apart"] > 0
+    mid_arm = np.array([[-0.2, 0.1 - r, 0.0]])  # on the true erosion's boundary: r deep
+    depth = float(mesh_distance(solid.vertices, solid.faces, mid_arm)[0])
+    assert depth == pytest.approx(r, abs=1e-9)
+    _, to_output, _ = trimesh.proximity.closest_point(result.mesh, mid_arm)
+    assert to_output[0] > 0.3  # (the sheet is gone from the output)
+    assert to_output[0] <= result.error_bound
 
 
 @pytest.mark.parametrize("method", ["ball", "cells"])
@@ -1534,3 +1553,20 @@ def test_a_solid_whose_float32_copy_is_no_solid_is_warned_of(tmp_path):
     assert fault is not None and "not watertight" in fault, fault
     assert float32_fault(pair, Path("pair.obj")) is None
     assert float32_fault(lower, Path("lower.stl")) is None
+
+
+def test_the_commands_warn_when_a_solid_written_in_float32_is_no_solid(tmp_path, capsys):
+    """What ``offset`` and ``minkowski`` call after writing: the check (on the status
+    line, shown here) and its one warning line, for the pair of boxes 4e-8 apart."""
+    from planner.cli_shapes import _warn_if_float32_breaks
+
+    lower = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    upper = trimesh.creation.box(bounds=[[0, 0, 1 + 4e-8], [1, 1, 2]])
+    pair = trimesh.util.concatenate([lower, upper])
+    for suffix, warned in ((".stl", True), (".obj", False)):
+        _warn_if_float32_breaks(pair, tmp_path / f"pair{suffix}", progress=True)
+        err = capsys.readouterr().err
+        # (an OBJ keeps every digit: nothing to check)
+        assert (f"checking that pair{suffix}'s float32 coordinates keep 24 triangles"
+                in err) is warned
+        assert ("its float32 coordinates make the solid no clean solid" in err) is warned, err
