@@ -44,7 +44,8 @@ Hausdorff distance; ours is compared with its stated bound.
 The "equal error" table takes, for each of our runs, each other tool's cheapest run whose
 measured error is at most ours, and gives its seconds and triangles as ratios to ours; and
 the same ratios interpolated (log-log, between the tool's two runs whose errors bracket
-ours) at exactly our error.
+ours) at exactly our error; then the same for the warm seconds (the cheapest run by them).
+Rerun the tables from a results JSON with ``--tables PREFIX.json``.
 """
 
 from __future__ import annotations
@@ -434,7 +435,8 @@ def equal_error(rows: list[dict]) -> str:
     """Per run of ours: each other tool's cheapest run at most as far off as ours."""
     out = ["| input | ours | ours err | ours s | ours tris | tool | its cheapest run ≤ ours err "
            "| its err | s ratio (it / ours) | tris ratio (it / ours) "
-           "| interpolated at ours err: s ratio | tris ratio | warm s ratio | interpolated |",
+           "| interpolated at ours err: s ratio | tris ratio | warm s ratio (its cheapest warm) "
+           "| warm s, interpolated |",
            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     ok = [w for w in rows if "failed" not in w]
     for o in (w for w in ok if w["tool"] == "ours"):
@@ -450,7 +452,10 @@ def equal_error(rows: list[dict]) -> str:
                 continue
             w = min(fit, key=lambda x: x["wall"])
             s_i, t_i = _interpolated(ok, o, tool)
-            warm = _ratio(w.get("warm"), o.get("warm"))
+            # (warm, the cheapest run by its warm seconds: the first call's one-time costs
+            # can order them otherwise)
+            warm_runs = [x["warm"] for x in fit if x.get("warm")]
+            warm = _ratio(min(warm_runs), o.get("warm")) if warm_runs else None
             warm_i = _interpolated(ok, o, tool, "warm")[0]
             out.append(f"{head} {PARAM[tool].format(w['param'])} | {w['err']:.2e} | "
                        f"{w['wall'] / o['wall']:.3g} | {w['triangles'] / o['triangles']:.3g} | "
@@ -510,6 +515,8 @@ def markdown(meta: dict, rows: list[dict]) -> str:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     p.add_argument("--worker", help=argparse.SUPPRESS)
+    p.add_argument("--tables", type=Path,
+                   help="write the tables again from a results JSON (to --out) and stop")
     p.add_argument("--quick", action="store_true", help="one resolution or two per tool")
     p.add_argument("--samples", type=int, default=20000,
                    help="points sampled on each output (and a quarter as many candidates of "
@@ -523,6 +530,10 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if args.worker:
         return worker(args.worker)
+    if args.tables:
+        saved = json.loads(args.tables.read_text())
+        args.out.with_suffix(".md").write_text(markdown(saved["meta"], saved["rows"]))
+        return 0
     meta = {"date": datetime.date.today().isoformat(), "cpu_count": os.cpu_count(),
             "load": " ".join(f"{x:.1f}" for x in os.getloadavg()),
             "platform": platform.platform(), "versions": versions(),
