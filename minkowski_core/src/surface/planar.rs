@@ -98,6 +98,11 @@ impl Cut {
         true
     }
 
+    /// The extent of plane `i` and of those taken as it.
+    fn extent_of(&self, i: usize, merged: &Merged) -> Aabb {
+        (0..self.n).filter(|&j| merged.rep[j] == i).fold(Aabb::empty(), |e, j| e.union(&self.extents[j]))
+    }
+
     /// The region of the cut holding `p` (off every plane): bit `i` set in front of plane `i`.
     pub fn region(&self, p: Vec3) -> usize {
         self.planes[..self.n].iter().enumerate().fold(0, |r, (i, &(n, w))| r | (((n.dot(p) > w) as usize) << i))
@@ -170,13 +175,6 @@ fn gap_in_cell((n, w): (Vec3, f64), (m, v): (Vec3, f64), cell: &Aabb) -> Option<
     let s = c.signum();
     let corners = (0..8).map(|k| Vec3::new([cell.min.x, cell.max.x][k & 1], [cell.min.y, cell.max.y][(k >> 1) & 1], [cell.min.z, cell.max.z][(k >> 2) & 1]));
     Some(corners.map(|x| ((n.dot(x) - w) - s * (m.dot(x) - v)).abs()).fold(0.0, f64::max))
-}
-
-impl Cut {
-    /// The extent of plane `i` and of those taken as it.
-    fn extent_of(&self, i: usize, merged: &Merged) -> Aabb {
-        (0..self.n).filter(|&j| merged.rep[j] == i).fold(Aabb::empty(), |e, j| e.union(&self.extents[j]))
-    }
 }
 
 /// The box of every point: the extent of a plane whose candidates' are not known.

@@ -81,7 +81,6 @@ impl LargeFaces {
     }
 }
 
-/// The vertices the faces use (a dropped sliver may leave others behind).
 /// The boxes that lie apart from the surface: no vertex of it within `within` of the box
 /// (none within that plus half its diagonal of its centre; a box near only the middle of
 /// a large face counts as apart, and [`loose_reach`] then finds it near).
@@ -103,6 +102,7 @@ fn any_within(bins: &Bins, c: Vec3, radius: f64, bin: f64) -> bool {
     })
 }
 
+/// The vertices the faces use (a dropped sliver may leave others behind).
 fn used_vertices(surface: &Surface) -> Vec<Vec3> {
     let mut used = vec![false; surface.vertices.len()];
     for face in &surface.faces {

@@ -126,8 +126,9 @@ pub fn drop_slivers(s: &mut Surface, size: f64, volume: f64) -> Vec<Aabb> {
         e.0 += p[0].dot(p[1].cross(p[2])) / 6.0;
         e.1 = e.1.union(&Aabb::from_points(&p));
     }
+    let components = parts.len();
     let slivers: FastMap<usize, Aabb> = parts.into_iter().filter(|(_, (v, b))| v.abs() < volume && b.extent().max_element() <= size).map(|(r, (_, b))| (r, b)).collect();
-    if slivers.is_empty() || s.faces.iter().all(|f| slivers.contains_key(&uf.find(f[0] as usize))) {
+    if slivers.is_empty() || slivers.len() == components {
         return Vec::new();
     }
     s.faces.retain(|f| !slivers.contains_key(&uf.find(f[0] as usize)));
