@@ -31,7 +31,7 @@ pub struct Crossing {
 impl TriMesh {
     /// Every pair of triangles that cross along a segment longer than the rounding of the
     /// mesh: not neighbours along an edge, not coplanar (coincident faces are told apart
-    /// by [`TriMesh::front_windings`]). By a traversal of pairs of BVH nodes.
+    /// by [`TriMesh::front_windings`]), not one touching the other from one side. By a traversal of pairs of BVH nodes.
     pub fn crossings(&self) -> Vec<Crossing> {
         let verts = &self.faces;
         let scale = self.aabb.diagonal().max(1e-300);
@@ -137,8 +137,11 @@ impl TriMesh {
     }
 }
 
-/// The segment where two triangles cross, or `None` when they do not meet, only touch at a
-/// point, or lie in one plane.
+/// The segment where two triangles cross, or `None` when they do not meet, lie in one
+/// plane, or only touch: one lies on one side of the other's plane, meeting it along its
+/// boundary (an edge of a fin lying on a face, sheets that touch along a line). A touch
+/// splits neither face's sides into parts: the wedges around it are the front and the
+/// back of the face that ends there, which [`TriMesh::front_windings`] tells.
 fn tri_tri_segment(s: &Tri, t: &Tri, scale: f64) -> Option<[Vec3; 2]> {
     if s.n == Vec3::ZERO || t.n == Vec3::ZERO {
         return None;
@@ -146,9 +149,9 @@ fn tri_tri_segment(s: &Tri, t: &Tri, scale: f64) -> Option<[Vec3; 2]> {
     let eps = 1e-12 * scale;
     let ds = t.p.map(|p| s.n.dot(p - s.p[0])); // t's corners against s's plane
     let dt = s.p.map(|p| t.n.dot(p - t.p[0])); // s's corners against t's plane
-    let side = |d: [f64; 3]| (d.iter().all(|&x| x > eps) || d.iter().all(|&x| x < -eps), d.iter().all(|&x| x.abs() <= eps));
-    let ((apart_s, flat_s), (apart_t, flat_t)) = (side(ds), side(dt));
-    if apart_s || apart_t || flat_s || flat_t {
+                                               // on one side of the other's plane (apart, touching it, or in it): no crossing
+    let one_side = |d: [f64; 3]| d.iter().all(|&x| x >= -eps) || d.iter().all(|&x| x <= eps);
+    if one_side(ds) || one_side(dt) {
         return None;
     }
     let dir = s.n.cross(t.n);

@@ -40,6 +40,12 @@ const FACE_SAMPLES: [[f64; 3]; 5] = [[1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], [0.6, 0.
 /// with which a point is "on" a face.
 const FRONT_LIFTS: [f64; 2] = [1e-9, 1e-7];
 
+/// Twice a needle's area, in roundings of its largest coordinate times its longest
+/// edge, below which its normal is noise ([`TriMesh::bounds_nothing`]): each edge is off
+/// by up to a rounding of the coordinates, so their cross product by about twice that
+/// times an edge's length.
+const NEEDLE_ROUNDINGS: f64 = 16.0;
+
 /// What one ray saw.
 enum Ray {
     /// The origin lies on a face (within rounding).
@@ -102,7 +108,8 @@ impl TriMesh {
     /// The winding number just in front of every face (on the side its normal points to):
     /// at points on the face, or just above it where those lie on other faces (bodies that
     /// share a plane); `None` where it could not be told. Degenerate faces get `Some(0)`:
-    /// they bound nothing. The mesh
+    /// they bound nothing, and rays pass through them ([`TriMesh::bounds_nothing`]), so
+    /// the side a rounding-noise normal points to is no front. The mesh
     /// bounds a solid when no value is negative (see the module documentation). Parallel.
     pub fn front_windings(&self) -> Vec<Option<i64>> {
         debug_assert!(self.closed, "the winding number of an open mesh");
@@ -111,7 +118,7 @@ impl TriMesh {
 
     fn front_winding(&self, i: usize) -> Option<i64> {
         let t = &self.tris[i];
-        if t.n == Vec3::ZERO {
+        if t.n == Vec3::ZERO || self.bounds_nothing(t) {
             return Some(0);
         }
         let centre = t.p[0] * FACE_SAMPLES[0][0] + t.p[1] * FACE_SAMPLES[0][1] + t.p[2] * FACE_SAMPLES[0][2];
@@ -143,6 +150,19 @@ impl TriMesh {
         Some(last)
     }
 
+    /// Whether a face is degenerate: twice its area is below `1e-14` of the squared
+    /// diagonal, or below what rounding its corners' coordinates can make of the cross
+    /// product of its edges (a needle whose corners lie on a line up to that rounding has
+    /// a unit normal pointing anywhere). It bounds nothing: rays pass through it and it
+    /// has no front.
+    pub(crate) fn bounds_nothing(&self, t: &super::mesh::Tri) -> bool {
+        let scale = self.aabb.diagonal().max(1e-300);
+        let twice_area = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).length();
+        let magnitude = t.p.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        let longest = t.e.iter().map(|e| e.length()).fold(0.0, f64::max);
+        twice_area <= 1e-14 * scale * scale || twice_area <= NEEDLE_ROUNDINGS * f64::EPSILON * magnitude * longest
+    }
+
     /// Cast the ray `q + s d`, `s > 0`, against every face but `skip`.
     fn ray(&self, q: Vec3, d: Vec3, skip: u32) -> Ray {
         let reach = 2.0 * self.aabb.diagonal() + (q - self.aabb.center()).length() + 1.0;
@@ -169,10 +189,10 @@ impl TriMesh {
             let pv = d.cross(e2);
             let det = e1.dot(pv);
             let s = q - t.p[0];
-            let area = e1.cross(e2).length();
-            if area <= 1e-14 * scale * scale {
-                continue; // a degenerate triangle bounds nothing
+            if self.bounds_nothing(t) {
+                continue;
             }
+            let area = e1.cross(e2).length();
             if det.abs() <= 1e-12 * e1.length() * e2.length() {
                 // ray parallel to the plane: it matters only within the plane
                 if (s.dot(e1.cross(e2)) / area).abs() <= 1e-12 * scale {

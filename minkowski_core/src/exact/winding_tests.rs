@@ -210,3 +210,69 @@ fn crossings_inside_are_told_where_shells_overlap_and_not_on_one_shell() {
     let one = box_mesh([0.0; 3], [1.0, 2.0, 3.0]);
     assert_eq!(one.crossings_inside(&one.crossings()), 0);
 }
+
+/// A box 1e-5 across at (1, 1, 1) whose top face carries a needle along its diagonal
+/// from corner 4 to corner 7: a triangle (4, m, 7) with `m` at the diagonal's middle,
+/// moved off it by `dy` in y, the top triangle on its other side split at `m`.
+fn box_with_a_needle(dy: f64) -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::splat(1.0), Vec3::splat(1.0 + 1e-5), &mut v, &mut f);
+    let m = v.len() as u32;
+    v.push(Vec3::new((v[4].x + v[7].x) / 2.0, (v[4].y + v[7].y) / 2.0 + dy, v[4].z));
+    let top = f.iter().position(|t| *t == [4, 5, 7]).expect("the top's first triangle");
+    f[top] = [4, 5, m];
+    f.extend([[5, 7, m], [4, m, 7]]);
+    TriMesh::new(v, &f, "needle box").unwrap()
+}
+
+#[test]
+fn a_needle_whose_normal_is_rounding_has_no_front() {
+    // moved up in y, the needle's normal (a rounding's worth of cross product) points
+    // into the box: asked in front of it, the box would count it a face inside a solid
+    for dy in [2.2e-16, -2.2e-16] {
+        let mesh = box_with_a_needle(dy);
+        let needle = mesh.tris.len() - 1;
+        assert!(mesh.tris[needle].n != Vec3::ZERO, "its normal is a unit vector of noise (dy {dy})");
+        let fronts = mesh.front_windings();
+        assert_eq!(fronts[needle], Some(0), "the needle bounds nothing (dy {dy})");
+        assert!(fronts.iter().all(|w| *w == Some(0)), "{fronts:?}");
+    }
+    // a short edge's true sliver is no needle: kept as a face with a front
+    let sliver = box_with_a_needle(1e-9);
+    assert!(!sliver.bounds_nothing(&sliver.tris[sliver.tris.len() - 1]));
+}
+
+/// A unit box with a triangular prism standing on one of its edges on the box's top: two
+/// shells that touch along a line inside the top face.
+fn prism_on_its_edge() -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::ZERO, Vec3::ONE, &mut v, &mut f);
+    let o = v.len() as u32;
+    for y in [0.2, 0.8] {
+        v.extend([Vec3::new(0.5, y, 1.0), Vec3::new(0.7, y, 1.5), Vec3::new(0.3, y, 1.5)]);
+    }
+    let (a, b) = (o, o + 3); // the two ends' triangles
+    f.extend([[a, a + 2, a + 1], [b, b + 1, b + 2]]);
+    for k in 0..3 {
+        let (i, j) = (k, (k + 1) % 3);
+        f.extend([[a + i, a + j, b + j], [a + i, b + j, b + i]]);
+    }
+    for t in f.iter_mut().skip(12) {
+        t.swap(1, 2); // outward
+    }
+    TriMesh::new(v, &f, "prism on a box").unwrap()
+}
+
+#[test]
+fn sheets_that_touch_along_a_line_do_not_cross() {
+    let mesh = prism_on_its_edge();
+    assert!(mesh.crossings().is_empty(), "{:?}", mesh.crossings());
+    assert!(mesh.front_windings().iter().all(|w| *w == Some(0)));
+    // pushed into the box by a little, the prism's slanted faces cross the top
+    let (mut v, f) = (mesh.vertices.clone(), mesh.faces.clone());
+    for p in v.iter_mut().skip(8) {
+        p.z -= 0.01;
+    }
+    let sunk = TriMesh::new(v, &f, "prism sunk into a box").unwrap();
+    assert!(!sunk.crossings().is_empty());
+}
