@@ -157,7 +157,7 @@ def bound_by_region(surf: dict) -> dict[str, float]:
 
 
 SURFACE_STATS = ("band_cells", "h", "refinements", "planar_cells", "planar_pieces",
-                 "planar_regions", "planar_fanned", "planar_straight_dropped",
+                 "planar_regions", "planar_fanned", "planar_straight_dropped", "planar_unfolded",
                  "planes_fallback_edges", "slivers_apart",
                  "bound_by_region", "holes_closed", "sheets_unzipped", "sheets_apart")
 """The statistics every extracted surface reports (sums, C-obstacles, offsets)."""

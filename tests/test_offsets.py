@@ -1433,6 +1433,30 @@ def test_a_float32_toruss_opening_by_the_ball_is_a_clean_solid(tmp_path, caplog)
     assert abs(again.volume - torus.volume) < 0.02 * torus.volume  # it is the torus
 
 
+def test_folds_in_a_plane_are_unfolded_so_an_opened_torus_grows_again_by_the_ball(caplog):
+    """A try-out: a torus of 64 x 32 sections opened by 0.1, then grown by 0.01. On the
+    flat bands of its facets, the joined surface folded back onto itself in the plane: a
+    sliver facing up overlapping slivers facing down, a few welds across. The ball's
+    surface was refused both times ("coplanar faces facing opposite ways overlap", then
+    "1 of its triangles face into it") and auto fell to the cells: 35 s and 640k
+    triangles for the opening, 113 s and 1.8M for the growth. Each fold is now replaced
+    by what it covers once (its outline split where it crosses itself first)."""
+    torus = trimesh.creation.torus(1.0, 0.3, major_sections=64, minor_sections=32)
+    with caplog.at_level("WARNING", logger="planner.offsets"):
+        opened = planner.opening(torus, 0.1)
+        grown = planner.offset(opened.mesh, 0.01)
+    assert "no clean solid" not in caplog.text
+    assert opened.stats["method"] == "ball then ball"
+    assert grown.stats["method"] == "ball" and grown.stats["planar_unfolded"] >= 1
+    assert validate_solid(grown.mesh, name="grown").metadata[FACES_INSIDE] == 0
+    _assert_within_bound_both_ways(opened.mesh, 0.01, grown)
+    # and the exact offset's points lie within the bound of the output
+    truth = _on_the_offset(opened.mesh, 0.01, 3000, seed=3)
+    assert len(truth) > 100
+    gap = mesh_distance(grown.mesh.vertices, grown.mesh.faces, truth)
+    assert gap.max() <= grown.error_bound
+
+
 @pytest.mark.parametrize("method", ["cells", "ball", "auto"])
 def test_an_erosion_of_bars_crossing_each_other_is_refused(method):
     """An L made of two bars in one file, overlapping at a corner: no triangle has the

@@ -286,6 +286,7 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("planar_pieces", s.planar_pieces)?;
     d.set_item("planar_regions", s.regions.merged_planes)?;
     d.set_item("planar_fanned", s.regions.fanned_planes)?;
+    d.set_item("planar_unfolded", s.regions.unfolded)?;
     d.set_item("planar_straight_dropped", s.regions.straight_dropped)?;
     d.set_item("planar_deviation", s.planar_deviation)?;
     d.set_item("planes_fallback_edges", r.planes_fallback_edges)?;

@@ -18,6 +18,7 @@
 //!
 //! Entry point: [`extract`].
 
+mod folds;
 pub mod planar;
 mod reach;
 pub mod regions;

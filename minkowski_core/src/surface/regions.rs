@@ -65,6 +65,9 @@ pub struct RegionStats {
     /// Vertices found inside straight creases, left out of the regions' outlines (but
     /// where a shortened outline could not be clipped: [`triangulate`]).
     pub straight_dropped: usize,
+    /// Patches of faces where the joined surface folded back in one plane, replaced by
+    /// what they cover once ([`super::folds`]).
+    pub unfolded: usize,
 }
 
 /// Triangles of the polygons `polys` (corners welded to indices of `vertices`, each
@@ -182,7 +185,7 @@ fn fan(vertices: &mut Vec<Vec3>, ids: &[u32], faces: &mut Vec<[u32; 3]>) {
 /// The boundary loops of the regions the polygons of one plane (outward `normal`) make
 /// up: counter-clockwise around regions, clockwise around holes; `None` when they are not
 /// simple loops ([`boundary_loops`]), a loop is longer than [`MAX_LOOP`] or has no area.
-fn region_loops<'a>(vertices: &[Vec3], polys: impl Iterator<Item = &'a [u32]>, normal: Vec3) -> Option<Vec<Vec<u32>>> {
+pub(super) fn region_loops<'a>(vertices: &[Vec3], polys: impl Iterator<Item = &'a [u32]>, normal: Vec3) -> Option<Vec<Vec<u32>>> {
     let mut edges: Vec<(u32, u32)> = Vec::new();
     for p in polys {
         for i in 0..p.len() {
@@ -211,7 +214,7 @@ fn in_plane(vertices: &[Vec3], i: u32, (u, v): (Vec3, Vec3)) -> [f64; 2] {
 /// The triangles of the loops of one plane (outward `normal`) by ear clipping (within the
 /// weld tolerance `tol`, else to rounding), holes joined to the loops around them first
 /// ([`with_holes_bridged`]), or `None` when that cannot be done.
-fn clip_loops(vertices: &[Vec3], loops: &[Vec<u32>], normal: Vec3, tol: f64) -> Option<Vec<[u32; 3]>> {
+pub(super) fn clip_loops(vertices: &[Vec3], loops: &[Vec<u32>], normal: Vec3, tol: f64) -> Option<Vec<[u32; 3]>> {
     if loops.iter().any(|ids| ids.len() < 3) {
         return None; // (a sliver region whose sides were all straight creases)
     }
@@ -630,7 +633,7 @@ mod tests {
         let keys = vec![plane_key(Vec3::Z, 0.0); polys.len()];
         let before = vertices.len();
         let (faces, stats) = triangulate(&mut vertices, &polys, &keys, 1e-9, 0);
-        assert_eq!(stats, RegionStats { merged_planes: 1, fanned_planes: 0, straight_dropped: 0 });
+        assert_eq!(stats, RegionStats { merged_planes: 1, fanned_planes: 0, straight_dropped: 0, unfolded: 0 });
         assert_eq!(vertices.len(), before, "no centroid added");
         // the outline: (0,0) (1,0) (2,0) (4,0) (4,2) (2,2) (1,2) (0,2) (0,1): 7 triangles
         assert_eq!(faces.len(), 7, "{faces:?}");
@@ -662,7 +665,7 @@ mod tests {
                 keys.push(plane_key(Vec3::X, 2.0));
             }
             let (faces, stats) = triangulate(&mut vertices, &polys, &keys, 1e-9, kept);
-            assert_eq!(stats, RegionStats { merged_planes: 2, fanned_planes: 0, straight_dropped: 2 - kept }, "kept {kept}");
+            assert_eq!(stats, RegionStats { merged_planes: 2, fanned_planes: 0, straight_dropped: 2 - kept, unfolded: 0 }, "kept {kept}");
             let used = |p: Vec3| faces.iter().any(|f| f.iter().any(|&v| vertices[v as usize] == p));
             assert_eq!(used(Vec3::new(2.0, 1.0, 0.0)), kept == 1);
             assert!(!used(Vec3::new(2.0, 2.0, 0.0)));

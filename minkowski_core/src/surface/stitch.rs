@@ -26,6 +26,10 @@ pub const SHEETS_APART: f64 = 1e-3;
 /// with the cells).
 pub const SHEETS_APART_MAX: f64 = 0.05;
 
+/// How far, in cells, a fold's faces may lie from what is left when it is replaced by
+/// what it covers once ([`super::folds::unfold`]); the move counts in the planes' bound.
+const FOLD_REACH: f64 = 0.05;
+
 /// Add the convex polygons `polys` (each counter-clockwise about its outward normal) to
 /// `s`, welding corners within `tol` and splitting edges at T-junctions (see the module
 /// docs).
@@ -42,7 +46,7 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], planes: &[PlaneKey], tol: f64,
     }
     let band_vertices = s.vertices.len();
     let welded: Vec<Vec<u32>> = polys.iter().map(|poly| poly.iter().map(|&p| grid.weld(p, tol, &mut s.vertices)).collect()).collect();
-    let (faces, stats) = regions::triangulate(&mut s.vertices, &welded, planes, tol, band_vertices);
+    let (faces, mut stats) = regions::triangulate(&mut s.vertices, &welded, planes, tol, band_vertices);
     s.faces.extend(faces);
     // a triangle two of whose corners welded into one is a segment: no area, and its edges
     // would count as used twice
@@ -57,7 +61,12 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], planes: &[PlaneKey], tol: f64,
     fill_face_gaps(s, tol, lattice);
     drop_degenerate(&mut s.faces);
     cancel_opposite_twins(&mut s.faces);
-    // (the corners inside merged regions are no triangle's now)
+    // (a fold's flap reaches a few welds from what is left; a sheet thinner than the weld
+    // folded into the plane reaches a cell or more, and is left to the slivers' bound)
+    let (unfolded, moved) = super::folds::unfold(&mut s.vertices, &mut s.faces, tol, FOLD_REACH * lattice.1);
+    stats.unfolded = unfolded;
+    s.planar_deviation = s.planar_deviation.max(moved);
+    // (the corners inside merged regions and unfolded patches are no triangle's now)
     drop_unused_vertices(s);
     stats
 }
@@ -1036,7 +1045,7 @@ mod tests {
         assert!(open_edges(&s.faces).is_empty(), "{:?}", open_edges(&s.faces));
         // top and bottom are sheets through the same points, facing each other: fanned
         // about their own centres, not merged (they would share diagonals)
-        assert_eq!(stats, RegionStats { merged_planes: 0, fanned_planes: 2, straight_dropped: 0 });
+        assert_eq!(stats, RegionStats { merged_planes: 0, fanned_planes: 2, straight_dropped: 0, unfolded: 0 });
     }
 
     #[test]
