@@ -4,6 +4,7 @@ and the penetration depth of two (see :mod:`planner.offsets`, :mod:`planner.dept
 from __future__ import annotations
 
 import json
+import logging
 import math
 import sys
 from pathlib import Path
@@ -12,6 +13,8 @@ from planner.cli import _fail, _missing_mesh
 from planner.errors import EmptyResultError, InvalidParameterError, MinkplanError
 
 __all__ = ["add_parsers", "add_repair_option", "cmd_depth", "cmd_offset", "made_solid_text"]
+
+log = logging.getLogger(__name__)
 
 
 def add_parsers(sub, common) -> None:
@@ -102,9 +105,9 @@ def _warn_if_float32_breaks(mesh, out: Path, *, progress: bool | None) -> None:
                     f"{len(mesh.faces):,} triangles a solid")
         fault = float32_fault(mesh, out)
     if fault:
-        sys.stderr.write(f"minkplan: warning: {out}: its float32 coordinates make the solid "
-                         f"no clean solid ({fault}); minkplan and other tools may refuse the "
-                         f"file: write .obj or .off to keep every digit\n")
+        log.warning("%s: its float32 coordinates make the solid no clean solid (%s); "
+                    "minkplan and other tools may refuse the file: write .obj or .off to "
+                    "keep every digit", out, fault)
 
 
 def cmd_offset(args) -> int:

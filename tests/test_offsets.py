@@ -1579,18 +1579,23 @@ def test_a_solid_whose_float32_copy_is_no_solid_is_warned_of(tmp_path):
     assert float32_fault(lower, Path("lower.stl")) is None
 
 
-def test_the_commands_warn_when_a_solid_written_in_float32_is_no_solid(tmp_path, capsys):
+def test_the_commands_warn_when_a_solid_written_in_float32_is_no_solid(tmp_path, capsys,
+                                                                       caplog):
     """What ``offset`` and ``minkowski`` call after writing: the check (on the status
-    line, shown here) and its one warning line, for the pair of boxes 4e-8 apart."""
+    line, shown here) and its one warning (logged, as every other warning), for the pair
+    of boxes 4e-8 apart."""
     from planner.cli_shapes import _warn_if_float32_breaks
 
     lower = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
     upper = trimesh.creation.box(bounds=[[0, 0, 1 + 4e-8], [1, 1, 2]])
     pair = trimesh.util.concatenate([lower, upper])
     for suffix, warned in ((".stl", True), (".obj", False)):
-        _warn_if_float32_breaks(pair, tmp_path / f"pair{suffix}", progress=True)
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="planner.cli_shapes"):
+            _warn_if_float32_breaks(pair, tmp_path / f"pair{suffix}", progress=True)
         err = capsys.readouterr().err
         # (an OBJ keeps every digit: nothing to check)
         assert (f"checking that pair{suffix}'s float32 coordinates keep 24 triangles"
                 in err) is warned
-        assert ("its float32 coordinates make the solid no clean solid" in err) is warned, err
+        said = "its float32 coordinates make the solid no clean solid"
+        assert (said in caplog.text) is warned, caplog.text

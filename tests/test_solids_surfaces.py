@@ -211,6 +211,25 @@ def test_repeated_faces_and_back_to_back_pairs_dropped_are_said():
     assert part.changes == {"removed_back_to_back_faces": 2}
 
 
+def test_a_faces_reversed_copy_is_dropped_and_said():
+    """A try-out: a box with one face given again, reversed. Dropping both of the pair
+    opens the surface, so it was refused as "not watertight (3 boundary edges)"; the copy
+    is dropped (the later of the two, the face kept being turned where it is the one
+    wound against its neighbours), and said."""
+    from planner.meshes.kinds import classify
+
+    box = trimesh.creation.box()
+    copy_last = np.vstack([box.faces, box.faces[3][::-1]])
+    part = classify(trimesh.Trimesh(box.vertices, copy_last, process=False), name="box")
+    assert part.solid and len(part.mesh.faces) == 12
+    assert part.changes == {"removed_reversed_copies": 1}
+    assert part.mesh.volume == pytest.approx(1.0)
+    copy_first = np.vstack([box.faces[:3], box.faces[3][::-1], box.faces[3:]])
+    part = classify(trimesh.Trimesh(box.vertices, copy_first, process=False), name="box")
+    assert part.solid and part.mesh.volume == pytest.approx(1.0)
+    assert part.changes == {"removed_reversed_copies": 1, "fixed_winding_faces": 1}
+
+
 def test_t_junctions_are_split_and_the_part_is_a_solid():
     from planner.meshes.kinds import classify
 

@@ -58,9 +58,9 @@ def repair_mesh(mesh, *, name: str = "mesh"):
         ``(mesh, report)``: the repaired ``trimesh.Trimesh`` and a ``dict`` with counts
         (``merged_vertices``, ``removed_nonfinite_faces``, ``removed_collapsed_faces``,
         ``removed_duplicate_faces``, ``removed_degenerate_faces``,
-        ``removed_back_to_back_faces``, ``single_sided_faces``, ``fixed_winding_faces``,
-        ``filled_holes``, ``added_faces``, ``flipped_shells``, ``shells``) and the
-        final ``volume``.
+        ``removed_back_to_back_faces``, ``removed_reversed_copies``, ``single_sided_faces``,
+        ``fixed_winding_faces``, ``filled_holes``, ``added_faces``, ``flipped_shells``,
+        ``shells``) and the final ``volume``.
 
     Raises:
         InvalidMeshError: the result is still not a watertight, orientable solid

@@ -239,10 +239,11 @@ as changes made to make a solid."""
 
 _CHANGE_KEYS = ("removed_collapsed_faces", "removed_degenerate_faces",
                 "removed_duplicate_faces", "removed_back_to_back_faces",
-                "fixed_winding_faces", "flipped_shells")
+                "removed_reversed_copies", "fixed_winding_faces", "flipped_shells")
 """The cleaning's counts that are changes to the input's solid: degenerate faces dropped
 (a repeated vertex, also once vertices closer than the merge tolerance are welded; zero
-area), repeated faces and back-to-back pairs (a fin of no thickness) dropped, faces wound
+area), repeated faces and back-to-back pairs (a fin of no thickness) dropped, a face's
+reversed copy dropped (where dropping both would open the surface), faces wound
 against their neighbours turned and shells exported inside out flipped (the keys
 :func:`planner.meshes.repair_mesh` reports them by too)."""
 
@@ -296,7 +297,7 @@ def clean(vertices, faces, label):
     if len(faces) == 0:
         raise InvalidMeshError(f"{label}: zero volume: every triangle is degenerate")
     degenerate = face_areas(vertices, faces) < tol.degenerate_area_rel * scale**2
-    faces, n_deg, n_opp, stats = closed_candidate(faces, degenerate, opposite)
+    faces, n_deg, n_opp, n_copies, stats = closed_candidate(faces, degenerate, opposite)
     vertices, faces = compact(vertices, faces)
     touching = 0
     if stats == (0, 0) and edge_stats(faces)[1]:
@@ -310,9 +311,10 @@ def clean(vertices, faces, label):
         "removed_duplicate_faces": duplicates,
         "removed_degenerate_faces": n_deg,
         "removed_back_to_back_faces": n_opp,
-        "removed_faces": collapsed + duplicates + n_deg + n_opp,
+        "removed_reversed_copies": n_copies,
+        "removed_faces": collapsed + duplicates + n_deg + n_opp + n_copies,
         "degenerate_faces": int(degenerate.sum()) - n_deg,
-        "back_to_back_faces": int(opposite.sum()) - n_opp,
+        "back_to_back_faces": int(opposite.sum()) - n_opp - 2 * n_copies,
         "separated_touching_edges": int(touching),
         "edge_stats": stats,
     }

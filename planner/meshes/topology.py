@@ -21,6 +21,7 @@ __all__ = [
     "checked_arrays",
     "clean_faces",
     "closed_candidate",
+    "reversed_copies",
     "compact",
     "components",
     "edge_stats",
@@ -155,28 +156,41 @@ def face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def closed_candidate(faces, degenerate, opposite):
     """Pick the least invasive removal of degenerate / back-to-back faces that leaves a
-    closed manifold surface. Returns ``(faces, removed_degenerate, removed_opposite,
-    stats)``; ``stats`` are the edge stats of the returned faces."""
+    closed manifold surface: both faces of each back-to-back pair (a fin of no
+    thickness), or only the later of each (a face and its reversed copy). Returns
+    ``(faces, removed_degenerate, removed_opposite, removed_copies, stats)``; ``stats``
+    are the edge stats of the returned faces."""
+    copies = reversed_copies(faces, opposite)
+    n_deg, n_opp, n_copies = int(degenerate.sum()), int(opposite.sum()), int(copies.sum())
     options = [
-        (degenerate | opposite, int(degenerate.sum()), int(opposite.sum())),
-        (degenerate, int(degenerate.sum()), 0),
-        (opposite, 0, int(opposite.sum())),
-        (np.zeros(len(faces), dtype=bool), 0, 0),
+        (degenerate | opposite, n_deg, n_opp, 0),
+        (degenerate, n_deg, 0, 0),
+        (opposite, 0, n_opp, 0),
+        (degenerate | copies, n_deg, 0, n_copies),
+        (copies, 0, 0, n_copies),
+        (np.zeros(len(faces), dtype=bool), 0, 0, 0),
     ]
     best = None
-    for drop, n_deg, n_opp in options:
-        if (n_deg or n_opp) and drop.all():
+    for drop, *removed in options:
+        if any(removed) and drop.all():
             continue
         candidate = faces[~drop]
         stats = shell_edge_stats(candidate)[:2]
         if stats[0] == 0 and stats[1] == 0:
-            return candidate, n_deg, n_opp, stats
+            return (candidate, *removed, stats)
         score = stats[0] + stats[1]
         if best is None or score < best[0]:
-            best = (score, candidate, n_deg, n_opp, stats)
+            best = (score, candidate, *removed, stats)
     assert best is not None  # the last option drops nothing and always scores
-    _, candidate, n_deg, n_opp, stats = best
-    return candidate, n_deg, n_opp, stats
+    return best[1:]
+
+
+def reversed_copies(faces: np.ndarray, opposite: np.ndarray) -> np.ndarray:
+    """Of each face and its reversed copy (``opposite``, from :func:`clean_faces`), the
+    later one."""
+    copies = opposite.copy()
+    copies[group_rows(np.sort(faces, axis=1))[2]] = False
+    return copies
 
 
 def group_rows(rows: np.ndarray):
