@@ -1185,25 +1185,23 @@ def test_a_stage_retried_at_a_finer_eps_is_not_warned_of(monkeypatch, caplog):
 
 
 @pytest.mark.assets
-def test_a_balls_surface_that_is_no_clean_solid_goes_to_the_cells_under_auto(caplog):
-    """IndustReal's gear base grown by 1 mm at eps 5e-4: the ball's sum has one triangle
-    with the solid in front of it too (a fault of ours, not yet found). ``auto`` takes the
-    cells instead, saying why; ``ball`` asked for returns it, with the warning."""
+def test_the_gear_bases_ball_surface_is_a_clean_solid(caplog):
+    """IndustReal's gear base grown by 1 mm at eps 5e-4: the ball's sum had one triangle
+    "with the solid in front of it": a needle whose corners lie on a line up to the
+    rounding of their coordinates, its normal noise. Such a face bounds nothing and has no
+    front now; ``auto`` keeps the ball's surface (it took the cells: 4 s and 59k
+    triangles where the ball takes 1 s and 21k). (The fall-back itself is tested with a
+    fault made up.)"""
     from conftest import asset
 
     base = planner.load_mesh(asset("assemblies/industreal_gears/meshes/"
                                    "industreal_gear_base.obj"))
     with caplog.at_level("WARNING", logger="planner.offsets"):
         grown = planner.offset(base, 0.001, eps=0.0005)
-    assert grown.stats["method"] == "cells"
-    assert "the ball's surface is no clean solid (1 of its triangles face into it)" \
-        in caplog.text and "by the cells instead" in caplog.text
+    assert grown.stats["method"] == "ball" and "no clean solid" not in caplog.text
     checked = planner.meshes.validate_solid(grown.mesh, name="grown")
     assert not checked.metadata.get(planner.meshes.solids.FACES_INSIDE)
-    caplog.clear()
-    with caplog.at_level("WARNING", logger="planner.offsets"):
-        by_ball = planner.offset(base, 0.001, eps=0.0005, method="ball")
-    assert by_ball.stats["method"] == "ball" and "(method 'cells' gives one)" in caplog.text
+    _assert_within_bound_both_ways(base, 0.001, grown)
 
 
 def test_a_cad_gears_creases_are_split_and_the_surface_stays_closed_within_its_bound():

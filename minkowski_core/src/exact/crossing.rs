@@ -10,10 +10,18 @@
 //! surface borders a face, on a part of it that is either the whole face or borders a
 //! crossing, so the two tests see every value.
 //!
+//! A face whose edge lies in another's plane, the face on one side of it, touches the
+//! other there. Where the face across that edge is on the same side (a V resting on the
+//! other), or in the plane, the sheet turns back: it splits no face's sides into parts,
+//! and the wedges around it are the front and back of the faces that end there. Where the
+//! face across is on the other side, the sheet passes through along that edge: a
+//! crossing, as one through the faces' insides is.
+//!
 //! Entry point: [`super::TriMesh::crossings`].
 
 use super::mesh::{Tri, TriMesh};
 use crate::math::Vec3;
+use crate::util::FastMap;
 use rayon::prelude::*;
 
 /// Pairs of subtrees [`TriMesh::overlapping_pairs`] walks in parallel.
@@ -31,11 +39,14 @@ pub struct Crossing {
 impl TriMesh {
     /// Every pair of triangles that cross along a segment longer than the rounding of the
     /// mesh: not neighbours along an edge, not coplanar (coincident faces are told apart
-    /// by [`TriMesh::front_windings`]), not one touching the other from one side. By a traversal of pairs of BVH nodes.
+    /// by [`TriMesh::front_windings`]), not one touching the other from one side unless
+    /// the sheet goes on through it there ([`TriMesh::passes_through`]). By a traversal of
+    /// pairs of BVH nodes.
     pub fn crossings(&self) -> Vec<Crossing> {
         let verts = &self.faces;
         let scale = self.aabb.diagonal().max(1e-300);
-        self.overlapping_pairs()
+        let met: Vec<([u32; 2], Meeting)> = self
+            .overlapping_pairs()
             .into_par_iter()
             .filter_map(|[s, t]| {
                 let (fs, ft) = (verts[s as usize], verts[t as usize]);
@@ -43,10 +54,42 @@ impl TriMesh {
                 if shared >= 2 {
                     return None; // neighbours along an edge
                 }
-                let seg = tri_tri_segment(&self.tris[s as usize], &self.tris[t as usize], scale)?;
-                ((seg[1] - seg[0]).length() > 1e-9 * scale).then_some(Crossing { tris: [s, t], seg })
+                let meeting = meeting(&self.tris[s as usize], &self.tris[t as usize], scale)?;
+                let seg = meeting.segment();
+                ((seg[1] - seg[0]).length() > 1e-9 * scale).then_some(([s, t], meeting))
+            })
+            .collect();
+        // (the faces across the touching edges, only where there are touches)
+        let by_edge: FastMap<(u32, u32), u32> = if met.iter().any(|(_, m)| matches!(m, Meeting::Touch { .. })) {
+            verts.iter().enumerate().flat_map(|(i, f)| (0..3).map(move |k| ((f[k], f[(k + 1) % 3]), i as u32))).collect()
+        } else {
+            FastMap::default()
+        };
+        met.into_iter()
+            .filter_map(|(tris, meeting)| match meeting {
+                Meeting::Crossing(seg) => Some(Crossing { tris, seg }),
+                Meeting::Touch { seg, edges } => {
+                    let through = edges.iter().flatten().any(|&(who, edge)| self.passes_through(tris[who], edge, tris[1 - who], &by_edge, scale));
+                    through.then_some(Crossing { tris, seg })
+                }
             })
             .collect()
+    }
+
+    /// Whether the sheet of face `f`, which touches face `other`'s plane along its edge
+    /// `edge` (corners `edge` and `edge + 1`) from one side, goes on through it there: the
+    /// face across that edge lies on the plane's other side (a V of the two on one side
+    /// is a touch; one lying in the plane is a coincident face).
+    fn passes_through(&self, f: u32, edge: usize, other: u32, by_edge: &FastMap<(u32, u32), u32>, scale: f64) -> bool {
+        let face = self.faces[f as usize];
+        let (a, b) = (face[edge], face[(edge + 1) % 3]);
+        let Some(&g) = by_edge.get(&(b, a)) else { return true }; // (an open mesh: counted)
+        let o = &self.tris[other as usize];
+        let side = |v: u32| o.n.dot(self.vertices[v as usize] - o.p[0]);
+        let beyond = |fc: [u32; 3]| fc.into_iter().find(|&v| v != a && v != b).map_or(0.0, side);
+        let (here, there) = (beyond(face), beyond(self.faces[g as usize]));
+        let eps = 1e-12 * scale;
+        (here > eps && there < -eps) || (here < -eps && there > eps)
     }
 
     /// Every pair of distinct triangles (`s < t`) whose boxes overlap, by a traversal of
@@ -137,23 +180,50 @@ impl TriMesh {
     }
 }
 
-/// The segment where two triangles cross, or `None` when they do not meet, lie in one
-/// plane, or only touch: one lies on one side of the other's plane, meeting it along its
-/// boundary (an edge of a fin lying on a face, sheets that touch along a line). A touch
-/// splits neither face's sides into parts: the wedges around it are the front and the
-/// back of the face that ends there, which [`TriMesh::front_windings`] tells.
-fn tri_tri_segment(s: &Tri, t: &Tri, scale: f64) -> Option<[Vec3; 2]> {
+/// How two triangles that meet along a segment meet.
+enum Meeting {
+    /// Each passes through the other's plane.
+    Crossing([Vec3; 2]),
+    /// One or both lie on one side of the other's plane, along the segment, each with an
+    /// edge in that plane: `(which of the two, the edge's first corner)`.
+    Touch { seg: [Vec3; 2], edges: [Option<(usize, usize)>; 2] },
+}
+
+impl Meeting {
+    fn segment(&self) -> [Vec3; 2] {
+        match self {
+            Meeting::Crossing(seg) | Meeting::Touch { seg, .. } => *seg,
+        }
+    }
+}
+
+/// Where two triangles meet along a segment, or `None` when they do not, lie in one
+/// plane, or meet only where a corner of one touches the other's plane.
+fn meeting(s: &Tri, t: &Tri, scale: f64) -> Option<Meeting> {
     if s.n == Vec3::ZERO || t.n == Vec3::ZERO {
         return None;
     }
     let eps = 1e-12 * scale;
     let ds = t.p.map(|p| s.n.dot(p - s.p[0])); // t's corners against s's plane
     let dt = s.p.map(|p| t.n.dot(p - t.p[0])); // s's corners against t's plane
-                                               // on one side of the other's plane (apart, touching it, or in it): no crossing
-    let one_side = |d: [f64; 3]| d.iter().all(|&x| x >= -eps) || d.iter().all(|&x| x <= eps);
-    if one_side(ds) || one_side(dt) {
+    let side = |d: [f64; 3]| (d.iter().all(|&x| x > eps) || d.iter().all(|&x| x < -eps), d.iter().all(|&x| x.abs() <= eps));
+    let ((apart_s, flat_s), (apart_t, flat_t)) = (side(ds), side(dt));
+    if apart_s || apart_t || flat_s || flat_t {
         return None;
     }
+    // one on one side of the other's plane, an edge in it
+    let touching = |d: [f64; 3]| {
+        let one_side = d.iter().all(|&x| x >= -eps) || d.iter().all(|&x| x <= eps);
+        (0..3).find(|&k| d[k].abs() <= eps && d[(k + 1) % 3].abs() <= eps).filter(|_| one_side)
+    };
+    let edges = [touching(dt).map(|k| (0, k)), touching(ds).map(|k| (1, k))];
+    let seg = segment_of(s, t, ds, dt)?;
+    Some(if edges.iter().any(Option::is_some) { Meeting::Touch { seg, edges } } else { Meeting::Crossing(seg) })
+}
+
+/// The segment of the line of the two planes that lies in both triangles (`ds`, `dt`:
+/// each one's corners against the other's plane), or `None`.
+fn segment_of(s: &Tri, t: &Tri, ds: [f64; 3], dt: [f64; 3]) -> Option<[Vec3; 2]> {
     let dir = s.n.cross(t.n);
     if dir.length() < 1e-9 {
         return None; // parallel planes

@@ -41,7 +41,7 @@ const FACE_SAMPLES: [[f64; 3]; 5] = [[1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], [0.6, 0.
 const FRONT_LIFTS: [f64; 2] = [1e-9, 1e-7];
 
 /// Twice a needle's area, in roundings of its largest coordinate times its longest
-/// edge, below which its normal is noise ([`TriMesh::bounds_nothing`]): each edge is off
+/// edge, below which its normal is noise ([`TriMesh::is_degenerate`]): each edge is off
 /// by up to a rounding of the coordinates, so their cross product by about twice that
 /// times an edge's length.
 const NEEDLE_ROUNDINGS: f64 = 16.0;
@@ -108,7 +108,7 @@ impl TriMesh {
     /// The winding number just in front of every face (on the side its normal points to):
     /// at points on the face, or just above it where those lie on other faces (bodies that
     /// share a plane); `None` where it could not be told. Degenerate faces get `Some(0)`:
-    /// they bound nothing, and rays pass through them ([`TriMesh::bounds_nothing`]), so
+    /// they bound nothing, and rays pass through them ([`TriMesh::is_degenerate`]), so
     /// the side a rounding-noise normal points to is no front. The mesh
     /// bounds a solid when no value is negative (see the module documentation). Parallel.
     pub fn front_windings(&self) -> Vec<Option<i64>> {
@@ -118,7 +118,7 @@ impl TriMesh {
 
     fn front_winding(&self, i: usize) -> Option<i64> {
         let t = &self.tris[i];
-        if t.n == Vec3::ZERO || self.bounds_nothing(t) {
+        if t.n == Vec3::ZERO || self.is_degenerate(t) {
             return Some(0);
         }
         let centre = t.p[0] * FACE_SAMPLES[0][0] + t.p[1] * FACE_SAMPLES[0][1] + t.p[2] * FACE_SAMPLES[0][2];
@@ -155,7 +155,7 @@ impl TriMesh {
     /// product of its edges (a needle whose corners lie on a line up to that rounding has
     /// a unit normal pointing anywhere). It bounds nothing: rays pass through it and it
     /// has no front.
-    pub(crate) fn bounds_nothing(&self, t: &super::mesh::Tri) -> bool {
+    pub(crate) fn is_degenerate(&self, t: &super::mesh::Tri) -> bool {
         let scale = self.aabb.diagonal().max(1e-300);
         let twice_area = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).length();
         let magnitude = t.p.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
@@ -189,13 +189,11 @@ impl TriMesh {
             let pv = d.cross(e2);
             let det = e1.dot(pv);
             let s = q - t.p[0];
-            if self.bounds_nothing(t) {
-                continue;
-            }
-            let area = e1.cross(e2).length();
+            // (a degenerate face is passed through: asked only where it would count)
             if det.abs() <= 1e-12 * e1.length() * e2.length() {
                 // ray parallel to the plane: it matters only within the plane
-                if (s.dot(e1.cross(e2)) / area).abs() <= 1e-12 * scale {
+                let normal = e1.cross(e2);
+                if !self.is_degenerate(t) && (s.dot(normal) / normal.length()).abs() <= 1e-12 * scale {
                     degenerate = true;
                 }
                 continue;
@@ -206,7 +204,7 @@ impl TriMesh {
             let v = d.dot(qv) * inv;
             let dist = e2.dot(qv) * inv;
             let tol = 1e-9;
-            if u < -tol || v < -tol || u + v > 1.0 + tol {
+            if u < -tol || v < -tol || u + v > 1.0 + tol || self.is_degenerate(t) {
                 continue;
             }
             if dist.abs() <= 1e-12 * scale {

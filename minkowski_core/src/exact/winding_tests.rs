@@ -238,8 +238,11 @@ fn a_needle_whose_normal_is_rounding_has_no_front() {
         assert!(fronts.iter().all(|w| *w == Some(0)), "{fronts:?}");
     }
     // a short edge's true sliver is no needle: kept as a face with a front
-    let sliver = box_with_a_needle(1e-9);
-    assert!(!sliver.bounds_nothing(&sliver.tris[sliver.tris.len() - 1]));
+    for dy in [1e-9, 1e-13] {
+        // (1e-13: twenty times the roundings' worth)
+        let sliver = box_with_a_needle(dy);
+        assert!(!sliver.is_degenerate(&sliver.tris[sliver.tris.len() - 1]), "dy {dy}");
+    }
 }
 
 /// A unit box with a triangular prism standing on one of its edges on the box's top: two
@@ -275,4 +278,41 @@ fn sheets_that_touch_along_a_line_do_not_cross() {
     }
     let sunk = TriMesh::new(v, &f, "prism sunk into a box").unwrap();
     assert!(!sunk.crossings().is_empty());
+}
+
+/// A box `[0, 2]² × [0, 1]` and a prism along y whose cross-section is a square turned
+/// 45°, its side corners exactly on the box's top (`z = 1`): each of its faces touches
+/// the top along an edge, the face across on the top's other side, so its sheet passes
+/// through the top there.
+fn diamond_through_a_box_top() -> TriMesh {
+    let (mut v, mut f) = (Vec::new(), Vec::new());
+    push_box(Vec3::ZERO, Vec3::new(2.0, 2.0, 1.0), &mut v, &mut f);
+    let o = v.len() as u32;
+    let section = [(1.0, 0.5), (1.5, 1.0), (1.0, 1.5), (0.5, 1.0)]; // (x, z), counter-clockwise seen from -y
+    for y in [0.5, 1.5] {
+        v.extend(section.iter().map(|&(x, z)| Vec3::new(x, y, z)));
+    }
+    let (a, b) = (o, o + 4);
+    f.extend([[a, a + 1, a + 2], [a, a + 2, a + 3], [b, b + 2, b + 1], [b, b + 3, b + 2]]);
+    for k in 0..4 {
+        let (i, j) = (k, (k + 1) % 4);
+        f.extend([[a + i, b + i, b + j], [a + i, b + j, a + j]]);
+    }
+    let mesh = TriMesh::surface(v.clone(), &f, "diamond").unwrap();
+    let outward = mesh.tris.iter().skip(12).all(|t| (t.p[0] - Vec3::new(1.0, 1.0, 1.0)).dot(t.n) >= -1e-12);
+    if !outward {
+        for t in f.iter_mut().skip(12) {
+            t.swap(1, 2);
+        }
+    }
+    TriMesh::new(v, &f, "diamond through a box's top").unwrap()
+}
+
+#[test]
+fn a_sheet_passing_through_a_face_along_its_own_edges_crosses_it() {
+    let mesh = diamond_through_a_box_top();
+    let crossings = mesh.crossings();
+    assert!(!crossings.is_empty());
+    // the shells overlap: the solid is on both sides of both faces behind the crossings
+    assert!(mesh.crossings_inside(&crossings) > 0);
 }

@@ -11,19 +11,22 @@
 //! an edge used both ways cancelling, leave the boundary loops of what it covers once,
 //! which are ear-clipped facing the way they turn ([`super::regions`]). The loops are the
 //! patch's own edges toward the rest of the surface, so its neighbours keep their
-//! pairing, and the triangles cover the same point set. Two kinds of outline are first
-//! made simple by putting a vertex on an edge, splitting the two faces beside it (the
-//! point set stays the same, up to the weld):
+//! pairing. Two kinds of outline are dealt with first:
 //!
-//! - a needle, three corners on a line within the weld: its middle corner goes on the
-//!   long edge, and nothing is left of the needle;
+//! - a needle, three corners on a line within the weld: nothing is covered; the patch
+//!   goes, and the face across the needle's long edge takes its middle corner instead (a
+//!   T-junction, moved by no more than the weld);
 //! - an outline that crosses itself (a part of the patch facing one way, a part the
-//!   other): the crossing point goes on both edges, and the outline comes apart there
-//!   into loops that each turn one way.
+//!   other): the crossing point is put on both edges (the faces beside each split there,
+//!   nothing moved), and the outline comes apart there into loops that each turn one way,
+//!   in the next round.
 //!
-//! That runs in rounds, one vertex per edge and patch each, until no patch changes. A
-//! patch whose outline is still not simple loops, or whose signed area the clipping
-//! would change, is left as it is.
+//! A patch is replaced only where each of its faces lies within a reach (a few welds, in
+//! the caller's bound) of one piece of what is left of it: a new triangle or an edge of
+//! its outline (a sheet of the answer thinner than the weld, folded into the plane, is
+//! left to the caller, whose bound must reach it), and only where no new edge is one the
+//! rest of the surface already has. A patch whose outline is still not simple loops, or
+//! whose loops nest but do not clip, is left as it is.
 //!
 //! Entry point: [`unfold`].
 
@@ -40,34 +43,43 @@ const FOLD_COS: f64 = 0.99;
 /// the loops' length).
 const MAX_PATCH: usize = 4096;
 
-/// The most rounds of vertices put on edges.
+/// The most rounds of crossing points put on edges.
 const MAX_ROUNDS: usize = 8;
 
-/// Replace every patch of faces in the plane of a fold by the triangles of its net
-/// cover (see the module documentation); `tol` is the weld tolerance. A patch is replaced
-/// only where each vertex it alone used lies within `max_reach` of what is left of it
-/// (a sheet of the answer thinner than the weld, welded into folds, is left to the
-/// caller, whose bound must reach it). Returns how many patches were replaced and the
-/// farthest any point of the surface moved (within `max_reach`). Vertices inside a patch
-/// may be left unused; the points where an outline crossed itself are appended to
+/// The most (face, piece) pairs [`reach_of_removal`] measures; a patch needing more is
+/// left as it is.
+const MAX_REACH_PAIRS: usize = 1 << 22;
+
+/// Replace every patch of faces in the plane of a fold by the triangles of its net cover
+/// (see the module documentation); `tol` is the weld tolerance, `max_reach` how far a
+/// removed face may lie from what is left. Returns how many patches were replaced, and
+/// the farthest a removed face lay from what is left or a needle's corner from its edge.
+/// Vertices inside a patch may be left unused; crossing points are appended to
 /// `vertices`.
 pub fn unfold(vertices: &mut Vec<Vec3>, faces: &mut Vec<[u32; 3]>, tol: f64, max_reach: f64) -> (usize, f64) {
     let (mut replaced, mut moved) = (0, 0.0f64);
-    for _ in 0..=MAX_ROUNDS {
+    for _ in 0..MAX_ROUNDS {
+        if crate::deadline::cancelled() {
+            break;
+        }
         let round = unfold_round(vertices, faces, tol, max_reach);
         replaced += round.replaced;
         moved = moved.max(round.moved);
-        if round.splits == 0 {
+        if round.splits == 0 && round.deferred == 0 {
             break;
         }
     }
     (replaced, moved)
 }
 
-/// What one round of [`unfold`] did.
+/// What one round of [`unfold`] did: patches replaced, crossing points put on edges,
+/// patches left for the next round (a face of theirs split for a neighbour), and the
+/// farthest move.
+#[derive(Default)]
 struct Round {
     replaced: usize,
     splits: usize,
+    deferred: usize,
     moved: f64,
 }
 
@@ -76,26 +88,27 @@ type EdgeAt = ((u32, u32), u32);
 
 /// What a patch becomes.
 enum Cover {
-    /// The triangles of what it covers once.
-    Triangles(Vec<[u32; 3]>),
-    /// Nothing, once the middle corner of the needle it leaves is put on the needle's long
-    /// edge (as the outline runs); how far that corner is off the edge.
+    /// The triangles of what it covers once, and its outline's edges.
+    Triangles(Vec<[u32; 3]>, Vec<(u32, u32)>),
+    /// Nothing, the middle corner of the needle left put on its long edge (as the outline
+    /// runs); how far that corner is off the edge.
     Needle(EdgeAt, f64),
-    /// Loops, once a point where its outline crosses itself is put on both edges.
+    /// Loops, once the point where the outline crosses itself is put on both edges.
     Crossing([EdgeAt; 2]),
+}
+
+/// The faces of the mesh by each of their directed edges.
+fn faces_by_edge(faces: &[[u32; 3]]) -> FastMap<(u32, u32), u32> {
+    faces.iter().enumerate().flat_map(|(i, f)| (0..3).map(move |k| ((f[k], f[(k + 1) % 3]), i as u32))).collect()
 }
 
 /// One round of [`unfold`].
 fn unfold_round(vertices: &mut Vec<Vec3>, faces: &mut Vec<[u32; 3]>, tol: f64, max_reach: f64) -> Round {
-    let by_edge: FastMap<(u32, u32), u32> = faces.iter().enumerate().flat_map(|(i, f)| (0..3).map(move |k| ((f[k], f[(k + 1) % 3]), i as u32))).collect();
+    let by_edge = faces_by_edge(faces);
     let seeds = fold_seeds(vertices, faces, &by_edge, tol);
-    let mut round = Round { replaced: 0, splits: 0, moved: 0.0 };
+    let mut round = Round::default();
     if seeds.is_empty() {
         return round;
-    }
-    let mut uses = vec![0u32; vertices.len()];
-    for &v in faces.iter().flatten() {
-        uses[v as usize] += 1;
     }
     let mut taken = vec![false; faces.len()];
     // per face: gone (replaced), or split at a vertex on one of its edges
@@ -111,13 +124,16 @@ fn unfold_round(vertices: &mut Vec<Vec3>, faces: &mut Vec<[u32; 3]>, tol: f64, m
         if patch.len() > MAX_PATCH {
             continue;
         }
+        let in_patch: FastMap<u32, ()> = patch.iter().map(|&f| (f, ())).collect();
+        let busy = |f: &u32| gone[*f as usize] || split.contains_key(f);
         match net_cover(vertices, faces, &patch, plane.0, tol) {
-            Some(Cover::Triangles(tris)) => {
-                if patch.iter().any(|f| split.contains_key(f)) {
-                    continue; // (split for a neighbour this round: next round)
+            Some(Cover::Triangles(tris, outline)) => {
+                if patch.iter().any(busy) {
+                    round.deferred += 1;
+                    continue;
                 }
-                let reach = reach_of_removal(vertices, faces, &patch, &tris, &uses);
-                if reach > max_reach {
+                let reach = reach_of_removal(vertices, faces, &patch, &tris, &outline);
+                if reach > max_reach || !fits(&tris, &by_edge, &in_patch) {
                     continue;
                 }
                 for &f in &patch {
@@ -127,18 +143,35 @@ fn unfold_round(vertices: &mut Vec<Vec3>, faces: &mut Vec<[u32; 3]>, tol: f64, m
                 round.replaced += 1;
                 round.moved = round.moved.max(reach);
             }
-            Some(Cover::Needle(at, off)) => {
-                // nothing is left of the patch: only where that may go (else, the corner on
-                // the edge, the needle's edges would be used twice each way)
-                let may_go = reach_of_removal(vertices, faces, &patch, &[], &uses) <= max_reach;
-                if may_go && put_on_edges(&[at], &by_edge, &gone, &mut split) {
-                    round.splits += 1;
-                    round.moved = round.moved.max(off);
+            Some(Cover::Needle(((a, b), at), off)) => {
+                // the face across the long edge is split at the middle corner: its two
+                // halves' new edges to its far corner must be new to the surface
+                let Some(&across) = by_edge.get(&(b, a)) else { continue };
+                if patch.iter().any(busy) || busy(&across) {
+                    round.deferred += 1;
+                    continue;
                 }
+                let halves = split_at(faces[across as usize], (a, b), at);
+                let reach = reach_of_removal(vertices, faces, &patch, &[], &[(a, b)]).max(off);
+                let mut replaced = in_patch;
+                replaced.insert(across, ());
+                if reach > max_reach || !fits(&halves, &by_edge, &replaced) {
+                    continue;
+                }
+                for &f in &patch {
+                    gone[f as usize] = true;
+                }
+                gone[across as usize] = true;
+                added.extend(halves);
+                round.replaced += 1;
+                round.moved = round.moved.max(reach);
             }
             Some(Cover::Crossing(at)) => {
-                let recorded = put_on_edges(&at, &by_edge, &gone, &mut split);
-                round.splits += 2 * usize::from(recorded);
+                if put_on_edges(&at, &by_edge, &gone, &mut split) {
+                    round.splits += 2;
+                } else {
+                    round.deferred += 1;
+                }
             }
             None => {}
         }
@@ -147,7 +180,7 @@ fn unfold_round(vertices: &mut Vec<Vec3>, faces: &mut Vec<[u32; 3]>, tol: f64, m
     for (i, &f) in faces.iter().enumerate() {
         match split.get(&(i as u32)) {
             _ if gone[i] => {}
-            Some(&(edge, at)) => out.extend(split_at(f, edge, at).into_iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])),
+            Some(&(edge, at)) => out.extend(split_at(f, edge, at)),
             None => out.push(f),
         }
     }
@@ -156,9 +189,17 @@ fn unfold_round(vertices: &mut Vec<Vec3>, faces: &mut Vec<[u32; 3]>, tol: f64, m
     round
 }
 
-/// Record the splits of both faces beside each edge at its vertex (`split`), unless one
-/// of them is gone or split already this round (then it waits for the next); whether they
-/// were recorded.
+/// Whether the triangles `tris`, replacing the faces `replaced`, keep every directed edge
+/// used once: none of their edges is one a face that stays already has, and where a face
+/// that stays has its reverse, that is an edge the replaced faces had too (an outline's).
+fn fits(tris: &[[u32; 3]], by_edge: &FastMap<(u32, u32), u32>, replaced: &FastMap<u32, ()>) -> bool {
+    let stays = |e: &(u32, u32)| by_edge.get(e).is_some_and(|f| !replaced.contains_key(f));
+    let was_replaced = |e: &(u32, u32)| by_edge.get(e).is_some_and(|f| replaced.contains_key(f));
+    tris.iter().flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3]))).all(|(x, y)| !stays(&(x, y)) && (!stays(&(y, x)) || was_replaced(&(x, y))))
+}
+
+/// Record the splits of both faces beside each edge at its (new) vertex (`split`), unless
+/// one of them is gone or split already this round; whether they were recorded.
 fn put_on_edges(at: &[EdgeAt], by_edge: &FastMap<(u32, u32), u32>, gone: &[bool], split: &mut FastMap<u32, EdgeAt>) -> bool {
     let beside: Option<Vec<(u32, EdgeAt)>> = at.iter().flat_map(|&((a, b), x)| [(a, b), (b, a)].map(|e| by_edge.get(&e).map(|&f| (f, ((a, b), x))))).collect();
     let Some(beside) = beside else { return false };
@@ -169,53 +210,67 @@ fn put_on_edges(at: &[EdgeAt], by_edge: &FastMap<(u32, u32), u32>, gone: &[bool]
     free
 }
 
-/// How far the vertices only the patch uses (`uses`: faces per vertex) lie from what is
-/// left of it: the triangles `tris` replacing it, and its vertices that other faces keep.
-/// Infinite when nothing is left (a closed flat component: no fold of the weld's).
-fn reach_of_removal(vertices: &[Vec3], faces: &[[u32; 3]], patch: &[u32], tris: &[[u32; 3]], uses: &[u32]) -> f64 {
-    let mut in_patch: FastMap<u32, u32> = FastMap::default();
-    for &f in patch {
-        for &v in &faces[f as usize] {
-            *in_patch.entry(v).or_default() += 1;
-        }
-    }
-    let kept: Vec<Vec3> = in_patch.iter().filter(|&(&v, &k)| uses[v as usize] > k).map(|(&v, _)| vertices[v as usize]).collect();
-    let at = |v: u32| vertices[v as usize];
-    let removed = in_patch.iter().filter(|&(&v, &k)| uses[v as usize] == k && !tris.iter().any(|t| t.contains(&v))).map(|(&v, _)| at(v));
-    removed
-        .map(|p| {
-            let to_tris = tris.iter().map(|t| point_triangle_distance2(p, at(t[0]), at(t[1]), at(t[2])).sqrt());
-            let to_kept = kept.iter().map(|&q| (q - p).length());
-            to_tris.chain(to_kept).fold(f64::INFINITY, f64::min)
-        })
-        .fold(0.0, f64::max)
-}
-
-/// The face `f`, which holds the edge `edge` one way or the other, split at `at` on it.
+/// The face `f`, which holds the edge `(a, b)` one way or the other, split at `at` on it.
 fn split_at(f: [u32; 3], (a, b): (u32, u32), at: u32) -> [[u32; 3]; 2] {
-    let k = (0..3).find(|&k| {
+    let holds = |k: usize| {
         let e = (f[k], f[(k + 1) % 3]);
         e == (a, b) || e == (b, a)
-    });
+    };
+    let k = (0..3).find(|&k| holds(k));
+    debug_assert!(k.is_some(), "the face {f:?} has no edge {a} - {b}");
     let k = k.unwrap_or(0);
     let (p, q, r) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
     [[p, at, r], [at, q, r]]
 }
 
-/// The faces of fold edges to start patches from: of each pair of neighbours in one plane
-/// facing opposite ways, the wider (its normal is the less rounded), widest first.
+/// How far the patch's faces lie from what is left of it: the largest, over its faces, of
+/// the least over the pieces left (the triangles `tris`, the outline's edges) of the
+/// farthest corner from the piece (distance to a convex piece is convex, so the whole
+/// face lies that close to it). Infinite when nothing is left, or when that would take
+/// more than [`MAX_REACH_PAIRS`] measures.
+fn reach_of_removal(vertices: &[Vec3], faces: &[[u32; 3]], patch: &[u32], tris: &[[u32; 3]], outline: &[(u32, u32)]) -> f64 {
+    if patch.len() * (tris.len() + outline.len()) > MAX_REACH_PAIRS {
+        return f64::INFINITY;
+    }
+    let at = |v: u32| vertices[v as usize];
+    let to_tri = |p: Vec3, t: &[u32; 3]| point_triangle_distance2(p, at(t[0]), at(t[1]), at(t[2])).sqrt();
+    let to_edge = |p: Vec3, &(a, b): &(u32, u32)| point_segment_distance(p, at(a), at(b));
+    patch
+        .iter()
+        .map(|&f| {
+            let corners = faces[f as usize].map(at);
+            let far = |d: &dyn Fn(Vec3) -> f64| corners.iter().map(|&p| d(p)).fold(0.0, f64::max);
+            let by_tris = tris.iter().map(|t| far(&|p| to_tri(p, t)));
+            let by_edges = outline.iter().map(|e| far(&|p| to_edge(p, e)));
+            by_tris.chain(by_edges).fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max)
+}
+
+fn point_segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f64 {
+    let ab = b - a;
+    let t = if ab.length_squared() > 0.0 { ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+    (p - (a + ab * t)).length()
+}
+
+/// The faces of fold edges to start patches from: of each pair of neighbours facing
+/// opposite ways, both within `tol` of the wider one's plane, the wider (its normal is
+/// the less rounded), widest first.
 fn fold_seeds(vertices: &[Vec3], faces: &[[u32; 3]], by_edge: &FastMap<(u32, u32), u32>, tol: f64) -> Vec<u32> {
     let mut seeds: Vec<(f64, u32)> = Vec::new();
     for (i, f) in faces.iter().enumerate() {
-        let (n, w) = plane_of(vertices, f);
         for k in 0..3 {
             let Some(&j) = by_edge.get(&(f[(k + 1) % 3], f[k])) else { continue };
+            if j <= i as u32 {
+                continue;
+            }
             let g = &faces[j as usize];
-            let (m, _) = plane_of(vertices, g);
-            let in_plane = g.iter().all(|&v| (vertices[v as usize].dot(n) - w).abs() <= tol);
-            if (i as u32) < j && n.dot(m) < -FOLD_COS && in_plane {
-                let (a, b) = (twice_area(vertices, f), twice_area(vertices, g));
-                seeds.push(if a >= b { (a, i as u32) } else { (b, j) });
+            let (wide, area) =
+                [(i as u32, f), (j, g)].into_iter().map(|(x, fx)| (x, twice_area(vertices, fx))).fold((i as u32, -1.0), |best, c| if c.1 > best.1 { c } else { best });
+            let (n, w) = plane_of(vertices, &faces[wide as usize]);
+            let in_plane = f.iter().chain(g).all(|&v| (vertices[v as usize].dot(n) - w).abs() <= tol);
+            if in_plane && plane_of(vertices, f).0.dot(plane_of(vertices, g).0) < -FOLD_COS {
+                seeds.push((area, wide));
             }
         }
     }
@@ -252,34 +307,52 @@ fn net_cover(vertices: &mut Vec<Vec3>, faces: &[[u32; 3]], patch: &[u32], n: Vec
             return Some(Cover::Needle(at, off));
         }
     }
-    let tris = regions::clip_loops(vertices, &loops, n, tol).or_else(|| regions::clip_loops(vertices, &loops, -n, tol));
-    let tris = match tris {
-        Some(tris) => tris,
-        None => {
-            if let Some((edges, t)) = first_crossing(vertices, &loops, n)? {
-                let (a, b) = edges[0];
-                let x = vertices.len() as u32;
-                vertices.push(vertices[a as usize] + (vertices[b as usize] - vertices[a as usize]) * t);
-                return Some(Cover::Crossing([(edges[0], x), (edges[1], x)]));
+    let outline: Vec<(u32, u32)> = loops.iter().flat_map(|ids| (0..ids.len()).map(move |k| (ids[k], ids[(k + 1) % ids.len()]))).collect();
+    // one way: regions with their holes, clipped facing the way the loops' total turns
+    let facing = if loops.iter().map(|ids| loop_area(vertices, ids, n)).sum::<f64>() >= 0.0 { n } else { -n };
+    if let Some(tris) = regions::clip_loops(vertices, &loops, facing, tol) {
+        return Some(Cover::Triangles(tris, outline));
+    }
+    if let Some((edges, t)) = first_crossing(vertices, &loops, n)? {
+        let (a, b) = edges[0];
+        let x = vertices.len() as u32;
+        vertices.push(vertices[a as usize] + (vertices[b as usize] - vertices[a as usize]) * t);
+        return Some(Cover::Crossing([(edges[0], x), (edges[1], x)]));
+    }
+    // loops that each turn one way, none inside another
+    if nested(vertices, &loops, n) {
+        return None;
+    }
+    let mut tris = Vec::new();
+    for ids in &loops {
+        let facing = if loop_area(vertices, ids, n) > 0.0 { n } else { -n };
+        tris.extend(regions::clip_loops(vertices, std::slice::from_ref(ids), facing, tol)?);
+    }
+    Some(Cover::Triangles(tris, outline))
+}
+
+/// Whether a corner of one loop lies inside another (in the plane of normal `n`).
+fn nested(vertices: &[Vec3], loops: &[Vec<u32>], n: Vec3) -> bool {
+    let (u, v) = basis(n);
+    let at = |i: u32| [vertices[i as usize].dot(u), vertices[i as usize].dot(v)];
+    let inside = |ids: &[u32], q: [f64; 2]| {
+        let mut odd = false;
+        for k in 0..ids.len() {
+            let (a, b) = (at(ids[k]), at(ids[(k + 1) % ids.len()]));
+            if (a[1] > q[1]) != (b[1] > q[1]) && q[0] < a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]) {
+                odd = !odd;
             }
-            // loops that each turn one way, none inside another
-            let mut tris = Vec::new();
-            for ids in &loops {
-                let facing = if loop_area(vertices, ids, n) > 0.0 { n } else { -n };
-                tris.extend(regions::clip_loops(vertices, std::slice::from_ref(ids), facing, tol)?);
-            }
-            tris
         }
+        odd
     };
-    let area = |fs: &mut dyn Iterator<Item = [u32; 3]>| {
-        fs.fold((0.0, 0.0), |(signed, total), f| {
-            let c = cross(vertices, &f);
-            (signed + c.dot(n), total + c.length())
-        })
-    };
-    let (before, total) = area(&mut patch.iter().map(|&f| faces[f as usize]));
-    let (after, _) = area(&mut tris.iter().copied());
-    ((after - before).abs() <= 1e-9 * total.max(f64::MIN_POSITIVE)).then_some(Cover::Triangles(tris))
+    loops.iter().enumerate().any(|(i, outer)| loops.iter().enumerate().any(|(j, inner)| i != j && inner.iter().any(|&c| !outer.contains(&c) && inside(outer, at(c)))))
+}
+
+/// Two unit vectors spanning the plane of normal `n`.
+fn basis(n: Vec3) -> (Vec3, Vec3) {
+    let helper = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    let u = n.cross(helper).normalize();
+    (u, n.cross(u))
 }
 
 /// The loop `ids` as a needle: three corners, one (`at`) within `tol` of the edge between
@@ -301,9 +374,7 @@ fn needle(vertices: &[Vec3], ids: &[u32], tol: f64) -> Option<(EdgeAt, f64)> {
 /// `Some(None)` when none do, `None` when edges of two loops cross.
 #[allow(clippy::type_complexity)]
 fn first_crossing(vertices: &[Vec3], loops: &[Vec<u32>], n: Vec3) -> Option<Option<([(u32, u32); 2], f64)>> {
-    let helper = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
-    let u = n.cross(helper).normalize();
-    let v = n.cross(u);
+    let (u, v) = basis(n);
     let at = |i: u32| [vertices[i as usize].dot(u), vertices[i as usize].dot(v)];
     let edges: Vec<(usize, (u32, u32))> = loops.iter().enumerate().flat_map(|(l, ids)| (0..ids.len()).map(move |i| (l, (ids[i], ids[(i + 1) % ids.len()])))).collect();
     let orient = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]);
@@ -416,7 +487,8 @@ mod tests {
         assert!(closed(&f));
         assert_eq!(folds(&v, &f), 1);
         assert_eq!(areas_at(&v, &f, 0.0), (-0.5, 2.5));
-        assert_eq!(unfold(&mut v, &mut f, 1e-9, 1.0).0, 1);
+        // (what goes, about the diagonal's middle, lies some 0.6 from what is left)
+        assert_eq!(unfold(&mut v, &mut f, 1e-9, 10.0).0, 1);
         assert!(closed(&f));
         assert_eq!(folds(&v, &f), 0);
         // the crossing is a vertex; the lobes (0.4 up, 0.9 down) no longer overlap
@@ -453,5 +525,74 @@ mod tests {
         let (a, b, c, s) = (0, 1, 2, 5);
         assert_eq!(f.len(), 6, "{f:?}");
         assert!(f.contains(&[b, c, s]) && f.contains(&[c, a, s]), "{f:?}");
+    }
+
+    /// A tetrahedron on the corner `corner`, pointing along `dir` (outward).
+    fn tetrahedron_at(v: &mut Vec<Vec3>, f: &mut Vec<[u32; 3]>, corner: u32, dir: Vec3) {
+        let p = v[corner as usize];
+        let o = v.len() as u32;
+        let side = dir.cross(Vec3::Z).normalize() * 0.2;
+        v.extend([p + dir * 0.5 + side, p + dir * 0.5 - side, p + dir * 0.4 + Vec3::Z * 0.3]);
+        let mut tet = [[corner, o, o + 1], [corner, o + 1, o + 2], [corner, o + 2, o], [o, o + 2, o + 1]];
+        let volume: f64 = tet.iter().map(|t| v[t[0] as usize].dot(v[t[1] as usize].cross(v[t[2] as usize]))).sum();
+        if volume < 0.0 {
+            for t in tet.iter_mut() {
+                t.swap(1, 2);
+            }
+        }
+        f.extend(tet);
+    }
+
+    #[test]
+    fn a_doubled_sheet_far_from_what_is_left_stays() {
+        // a unit square on z = 0 twice, fanned differently each way, its corners held by
+        // four tetrahedra: the net cover is nothing, its middle 0.5 from anything left
+        let (a, b, c, d) = (0, 1, 2, 3);
+        let mut v = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let mut f = vec![[a, b, c], [a, c, d], [a, d, b], [b, d, c]];
+        for (k, dir) in [(a, Vec3::new(-1.0, -1.0, 0.0)), (b, Vec3::new(1.0, -1.0, 0.0)), (c, Vec3::new(1.0, 1.0, 0.0)), (d, Vec3::new(-1.0, 1.0, 0.0))] {
+            tetrahedron_at(&mut v, &mut f, k, dir.normalize());
+        }
+        assert!(closed(&f) && folds(&v, &f) > 0);
+        let before = f.clone();
+        assert_eq!(unfold(&mut v, &mut f, 1e-9, 0.05), (0, 0.0));
+        assert_eq!(f, before);
+    }
+
+    /// A unit quad on z = 0 (corners numbered as given) under two roofs sharing its
+    /// diagonal `x – z`, its bottom fanned about its centre facing down, one fan triangle
+    /// cut at a point across its edge: a fold, whose net cover is the quad.
+    fn quad_under_two_roofs(y: u32, x: u32, z: u32, w: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let mut v = vec![Vec3::ZERO; 4];
+        v[x as usize] = Vec3::new(0.0, 0.0, 0.0);
+        v[y as usize] = Vec3::new(1.0, 0.0, 0.0);
+        v[z as usize] = Vec3::new(1.0, 1.0, 0.0);
+        v[w as usize] = Vec3::new(0.0, 1.0, 0.0);
+        let (t1, t2, c, d) = (4, 5, 6, 7);
+        v.extend([Vec3::new(0.67, 0.33, 1.0), Vec3::new(0.33, 0.67, 1.0), Vec3::new(0.5, 0.5, 0.0), Vec3::new(0.3, 0.4, 0.0)]);
+        let mut f = vec![[x, y, t1], [y, z, t1], [z, x, t1], [z, w, t2], [w, x, t2], [x, z, t2]];
+        f.extend([[y, x, d], [d, x, c], [y, d, c], [x, w, c], [w, z, c], [z, y, c]]);
+        (v, f)
+    }
+
+    #[test]
+    fn a_new_diagonal_the_surface_already_has_is_not_made() {
+        // the quad clipped along x – z would use that edge a second time each way
+        for ids in [(0, 1, 2, 3), (1, 0, 3, 2), (3, 0, 1, 2), (2, 3, 0, 1)] {
+            let (mut v, mut f) = quad_under_two_roofs(ids.0, ids.1, ids.2, ids.3);
+            assert!(closed(&f), "{ids:?}");
+            unfold(&mut v, &mut f, 1e-9, 1.0);
+            assert!(closed(&f), "{ids:?}: {f:?}");
+        }
+    }
+
+    #[test]
+    fn a_fold_is_found_whichever_face_comes_first() {
+        // a sliver 3° off the plane of the wide face it folds onto
+        let v = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.5, 0.01, 0.0005), Vec3::new(0.5, 0.8, 0.0)];
+        let (sliver, wide) = ([0, 1, 2], [1, 0, 3]);
+        for (faces, seed) in [(vec![sliver, wide], 1), (vec![wide, sliver], 0)] {
+            assert_eq!(fold_seeds(&v, &faces, &faces_by_edge(&faces), 1e-3), vec![seed], "{faces:?}");
+        }
     }
 }

@@ -65,7 +65,10 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], planes: &[PlaneKey], tol: f64,
     // folded into the plane reaches a cell or more, and is left to the slivers' bound)
     let (unfolded, moved) = super::folds::unfold(&mut s.vertices, &mut s.faces, tol, FOLD_REACH * lattice.1);
     stats.unfolded = unfolded;
-    s.planar_deviation = s.planar_deviation.max(moved);
+    if unfolded > 0 {
+        // (the faces replaced were off the answer by the deviation and the weld already)
+        s.planar_deviation += tol + moved;
+    }
     // (the corners inside merged regions and unfolded patches are no triangle's now)
     drop_unused_vertices(s);
     stats
