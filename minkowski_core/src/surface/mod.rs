@@ -310,6 +310,9 @@ pub fn extract<S: CellSource>(oct: &Octree, src: &S, resolved: &ResolvedCells) -
         if closed.loops > 0 {
             s.planar_deviation = s.planar_deviation.max(closed.diameter + off);
         }
+        // (regions of a plane facing opposite ways, and fans of loops of a sliver's
+        // width, fold the surface back onto itself in their planes)
+        s.regions.unfolded = stitch::unfold(&mut s, STITCH_TOL * oct.h, oct.h);
         let (mut open, mut pinched) = open_or_pinched(&s.faces);
         if !open.is_empty() || !pinched.is_empty() {
             let at = open.iter().flat_map(|&(a, b)| [a, b]).chain(pinched.iter().copied()).collect();

@@ -66,7 +66,8 @@ pub struct RegionStats {
     /// where a shortened outline could not be clipped: [`triangulate`]).
     pub straight_dropped: usize,
     /// Patches of faces where the joined surface folded back in one plane, replaced by
-    /// what they cover once ([`super::folds`]).
+    /// what they cover once ([`super::folds`]; counted by the extraction, after the loops
+    /// left open are closed).
     pub unfolded: usize,
 }
 

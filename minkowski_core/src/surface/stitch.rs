@@ -30,6 +30,22 @@ pub const SHEETS_APART_MAX: f64 = 0.05;
 /// what it covers once ([`super::folds::unfold`]); the move counts in the planes' bound.
 const FOLD_REACH: f64 = 0.05;
 
+/// Replace the folds of the joined surface in a plane by what they cover once
+/// ([`super::folds::unfold`], within [`FOLD_REACH`] cells; the weld tolerance `tol`, the
+/// cell size `h`); the move and the weld count in the planes' bound. Returns how many
+/// patches were replaced.
+pub fn unfold(s: &mut Surface, tol: f64, h: f64) -> usize {
+    // (a fold's flap reaches a few welds from what is left; a sheet thinner than the weld
+    // folded into the plane reaches a cell or more, and is left to the slivers' bound)
+    let (unfolded, moved) = super::folds::unfold(&mut s.vertices, &mut s.faces, tol, FOLD_REACH * h);
+    if unfolded > 0 {
+        // (the faces replaced were off the answer by the deviation and the weld already)
+        s.planar_deviation += tol + moved;
+        drop_unused_vertices(s);
+    }
+    unfolded
+}
+
 /// Add the convex polygons `polys` (each counter-clockwise about its outward normal) to
 /// `s`, welding corners within `tol` and splitting edges at T-junctions (see the module
 /// docs).
@@ -46,7 +62,7 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], planes: &[PlaneKey], tol: f64,
     }
     let band_vertices = s.vertices.len();
     let welded: Vec<Vec<u32>> = polys.iter().map(|poly| poly.iter().map(|&p| grid.weld(p, tol, &mut s.vertices)).collect()).collect();
-    let (faces, mut stats) = regions::triangulate(&mut s.vertices, &welded, planes, tol, band_vertices);
+    let (faces, stats) = regions::triangulate(&mut s.vertices, &welded, planes, tol, band_vertices);
     s.faces.extend(faces);
     // a triangle two of whose corners welded into one is a segment: no area, and its edges
     // would count as used twice
@@ -61,15 +77,7 @@ pub fn join(s: &mut Surface, polys: &[Vec<Vec3>], planes: &[PlaneKey], tol: f64,
     fill_face_gaps(s, tol, lattice);
     drop_degenerate(&mut s.faces);
     cancel_opposite_twins(&mut s.faces);
-    // (a fold's flap reaches a few welds from what is left; a sheet thinner than the weld
-    // folded into the plane reaches a cell or more, and is left to the slivers' bound)
-    let (unfolded, moved) = super::folds::unfold(&mut s.vertices, &mut s.faces, tol, FOLD_REACH * lattice.1);
-    stats.unfolded = unfolded;
-    if unfolded > 0 {
-        // (the faces replaced were off the answer by the deviation and the weld already)
-        s.planar_deviation += tol + moved;
-    }
-    // (the corners inside merged regions and unfolded patches are no triangle's now)
+    // (the corners inside merged regions are no triangle's now)
     drop_unused_vertices(s);
     stats
 }
