@@ -335,17 +335,7 @@ fn net_cover(vertices: &mut Vec<Vec3>, faces: &[[u32; 3]], patch: &[u32], n: Vec
 fn nested(vertices: &[Vec3], loops: &[Vec<u32>], n: Vec3) -> bool {
     let (u, v) = basis(n);
     let at = |i: u32| [vertices[i as usize].dot(u), vertices[i as usize].dot(v)];
-    let inside = |ids: &[u32], q: [f64; 2]| {
-        let mut odd = false;
-        for k in 0..ids.len() {
-            let (a, b) = (at(ids[k]), at(ids[(k + 1) % ids.len()]));
-            if (a[1] > q[1]) != (b[1] > q[1]) && q[0] < a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]) {
-                odd = !odd;
-            }
-        }
-        odd
-    };
-    loops.iter().enumerate().any(|(i, outer)| loops.iter().enumerate().any(|(j, inner)| i != j && inner.iter().any(|&c| !outer.contains(&c) && inside(outer, at(c)))))
+    loops.iter().enumerate().any(|(i, outer)| loops.iter().enumerate().any(|(j, inner)| i != j && inner.iter().any(|&c| !outer.contains(&c) && regions::inside(outer, at(c), &at))))
 }
 
 /// Two unit vectors spanning the plane of normal `n`.

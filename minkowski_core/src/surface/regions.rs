@@ -271,7 +271,7 @@ fn with_holes_bridged(loops: &[Vec<u32>], pos: impl Fn(u32) -> [f64; 2]) -> Opti
 }
 
 /// Whether `q` lies inside the loop `ids` (crossings of the ray to `+x`).
-fn inside(ids: &[u32], q: [f64; 2], pos: &impl Fn(u32) -> [f64; 2]) -> bool {
+pub(super) fn inside(ids: &[u32], q: [f64; 2], pos: &impl Fn(u32) -> [f64; 2]) -> bool {
     let mut odd = false;
     for i in 0..ids.len() {
         let (a, b) = (pos(ids[i]), pos(ids[(i + 1) % ids.len()]));
