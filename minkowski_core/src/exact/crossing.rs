@@ -21,7 +21,7 @@
 
 use super::mesh::{Tri, TriMesh};
 use crate::math::Vec3;
-use crate::util::FastMap;
+use crate::util::{faces_by_edge, FastMap};
 use rayon::prelude::*;
 
 /// Pairs of subtrees [`TriMesh::overlapping_pairs`] walks in parallel.
@@ -60,11 +60,7 @@ impl TriMesh {
             })
             .collect();
         // (the faces across the touching edges, only where there are touches)
-        let by_edge: FastMap<(u32, u32), u32> = if met.iter().any(|(_, m)| matches!(m, Meeting::Touch { .. })) {
-            verts.iter().enumerate().flat_map(|(i, f)| (0..3).map(move |k| ((f[k], f[(k + 1) % 3]), i as u32))).collect()
-        } else {
-            FastMap::default()
-        };
+        let by_edge: FastMap<(u32, u32), u32> = if met.iter().any(|(_, m)| matches!(m, Meeting::Touch { .. })) { faces_by_edge(verts) } else { FastMap::default() };
         met.into_iter()
             .filter_map(|(tris, meeting)| match meeting {
                 Meeting::Crossing(seg) => Some(Crossing { tris, seg }),

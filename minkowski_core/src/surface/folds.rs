@@ -33,7 +33,7 @@
 use super::regions;
 use crate::math::Vec3;
 use crate::polytope::point_triangle_distance2;
-use crate::util::FastMap;
+use crate::util::{faces_by_edge, FastMap};
 
 /// The least `−cos` of the angle between two faces' normals at a fold (within 8° of
 /// opposite: a sliver's normal is rounded more than a wide face's).
@@ -95,11 +95,6 @@ enum Cover {
     Needle(EdgeAt, f64),
     /// Loops, once the point where the outline crosses itself is put on both edges.
     Crossing([EdgeAt; 2]),
-}
-
-/// The faces of the mesh by each of their directed edges.
-fn faces_by_edge(faces: &[[u32; 3]]) -> FastMap<(u32, u32), u32> {
-    faces.iter().enumerate().flat_map(|(i, f)| (0..3).map(move |k| ((f[k], f[(k + 1) % 3]), i as u32))).collect()
 }
 
 /// One round of [`unfold`].
@@ -257,20 +252,21 @@ fn point_segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f64 {
 /// opposite ways, both within `tol` of the wider one's plane, the wider (its normal is
 /// the less rounded), widest first.
 fn fold_seeds(vertices: &[Vec3], faces: &[[u32; 3]], by_edge: &FastMap<(u32, u32), u32>, tol: f64) -> Vec<u32> {
+    // (each face's plane and area once: a face is asked about from each of its edges)
+    let planes: Vec<(Vec3, f64)> = faces.iter().map(|f| plane_of(vertices, f)).collect();
+    let areas: Vec<f64> = faces.iter().map(|f| twice_area(vertices, f)).collect();
     let mut seeds: Vec<(f64, u32)> = Vec::new();
     for (i, f) in faces.iter().enumerate() {
         for k in 0..3 {
             let Some(&j) = by_edge.get(&(f[(k + 1) % 3], f[k])) else { continue };
-            if j <= i as u32 {
+            let (i, j) = (i as u32, j);
+            if j <= i || planes[i as usize].0.dot(planes[j as usize].0) >= -FOLD_COS {
                 continue;
             }
-            let g = &faces[j as usize];
-            let (wide, area) =
-                [(i as u32, f), (j, g)].into_iter().map(|(x, fx)| (x, twice_area(vertices, fx))).fold((i as u32, -1.0), |best, c| if c.1 > best.1 { c } else { best });
-            let (n, w) = plane_of(vertices, &faces[wide as usize]);
-            let in_plane = f.iter().chain(g).all(|&v| (vertices[v as usize].dot(n) - w).abs() <= tol);
-            if in_plane && plane_of(vertices, f).0.dot(plane_of(vertices, g).0) < -FOLD_COS {
-                seeds.push((area, wide));
+            let wide = if areas[j as usize] > areas[i as usize] { j } else { i };
+            let (n, w) = planes[wide as usize];
+            if f.iter().chain(&faces[j as usize]).all(|&v| (vertices[v as usize].dot(n) - w).abs() <= tol) {
+                seeds.push((areas[wide as usize], wide));
             }
         }
     }
@@ -424,8 +420,7 @@ mod tests {
     }
 
     fn folds(vertices: &[Vec3], faces: &[[u32; 3]]) -> usize {
-        let by_edge = faces.iter().enumerate().flat_map(|(i, f)| (0..3).map(move |k| ((f[k], f[(k + 1) % 3]), i as u32))).collect();
-        fold_seeds(vertices, faces, &by_edge, 1e-9).len()
+        fold_seeds(vertices, faces, &faces_by_edge(faces), 1e-9).len()
     }
 
     /// `(signed area about +z, area)` of the faces on `z = height`.
