@@ -479,10 +479,12 @@ def _cell_offset(mesh: trimesh.Trimesh, radius: float, step: float, max_cells: i
                                                 **{key: raw[key] for key in SAG_STATS}}
 
 
-SAG_STATS = ("sag_rounds", "sag_tested", "sag_splits", "sag_left", "seconds_sag")
+SAG_STATS = ("sag_rounds", "sag_tested", "sag_splits", "sag_flips", "sag_folds_refused",
+             "sag_left", "seconds_sag")
 """What the cells' refinement where the surface sags from the offset did (its creases,
-:mod:`minkowski_core::surface::sag`): rounds, points tested, edges split, the largest sag
-seen in its last round, seconds."""
+:mod:`minkowski_core::surface::sag`): rounds, points tested, edges split, edges flipped,
+triangles left as they were because a split or flip there folded the surface, the largest
+sag seen in its last round, seconds."""
 
 
 def _composed(mesh, first: float, second: float, eps, max_cells, name: str,

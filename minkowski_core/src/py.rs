@@ -293,6 +293,8 @@ fn surface_dict<'py>(py: Python<'py>, r: &UnionResult) -> PyResult<Bound<'py, Py
     d.set_item("sag_rounds", r.sag.rounds)?;
     d.set_item("sag_tested", r.sag.tested)?;
     d.set_item("sag_splits", r.sag.splits)?;
+    d.set_item("sag_flips", r.sag.flips)?;
+    d.set_item("sag_folds_refused", r.sag.folds_refused)?;
     d.set_item("sag_left", r.sag.sag_left)?;
     d.set_item("sag_covering", r.sag.covering)?;
     d.set_item("seconds_sag", r.seconds_sag)?;

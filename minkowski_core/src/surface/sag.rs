@@ -18,7 +18,12 @@
 //! boundary under it (a half on the far sheet of a crease sharper than a right angle turns
 //! from the chord by more than a right angle, yet faces as its sheet does: that one is
 //! kept). A refused edge is flipped to the diagonal between its opposite vertices instead
-//! when that sags less than half as much. Rounds repeat on the new triangles, at a cost in
+//! when that sags less than half as much. What a round makes is then checked as a whole:
+//! where a new triangle and the one across an edge of it face within 8° of opposite ways
+//! (the surface folds back: a split point past a neighbour's edge, or several splits of one
+//! triangle together, on a ridge a few degrees sharp), the splits and flips of the old
+//! triangles on both sides are given up and the round is made again (a solid check cannot
+//! tell such a fold from a wrongly triangulated polygon). Rounds repeat on the new triangles, at a cost in
 //! triangles that grows with the creases' length, not the surface's area.
 //!
 //! The bound the extraction stated still holds: every vertex it made is kept (the argument
@@ -34,6 +39,14 @@ use rayon::prelude::*;
 
 /// Rounds of splitting, at most.
 const MAX_ROUNDS: u32 = 8;
+/// An edge of a new triangle where the two faces' normals are within this (cosine) of
+/// opposite is a fold (the surface turns back within 8°): a split or flip that makes one is
+/// given up, and the chord left as the extraction made it, inside its bound. A crease that
+/// sharp is rarer than a fold made by a split point on the far side of a neighbour's edge,
+/// and a solid check cannot tell the two apart.
+const FOLD_COS: f64 = 0.99;
+/// Passes of a round that give up the splits beside folds; after them, the whole round.
+const MAX_FOLD_PASSES: usize = 4;
 /// The refinement stops once the surface has this many times the triangles it had.
 const MAX_GROWTH: usize = 3;
 /// An edge whose ends' normals turn by more than this (cosine) crosses a crease: it is
@@ -63,6 +76,8 @@ pub struct SagStats {
     pub splits: usize,
     /// Edges flipped to the diagonal along a crease.
     pub flips: usize,
+    /// Triangles whose splits and flips were given up because they folded the surface.
+    pub folds_refused: usize,
     /// The largest sag seen among the points tested in the last round (0 when none was).
     pub sag_left: f64,
     /// The largest covering radius of a triangle made here (what the bound must cover).
@@ -289,7 +304,7 @@ fn edge_set(faces: &[[u32; 3]]) -> FastSet<(u32, u32)> {
 /// diagonal between its two opposite vertices, when that sags less than half as much and
 /// the two new triangles face the way the old ones did; a triangle flips once a round, and
 /// not next to an edge `split`, and not to a diagonal longer than `sqrt 3` times `covers`.
-/// Returns the triangles changed.
+/// Returns the triangles changed, a flipped pair after pair.
 fn flip_sagging(s: &mut Surface, refused: &[(u32, u32)], split: &FastMap<(u32, u32), BoundaryPoint>, (boundary, off): (&Boundary<'_>, f64), covers: f64) -> Vec<usize> {
     let wanted: FastSet<(u32, u32)> = refused.iter().copied().collect();
     let mut around: FastMap<(u32, u32), Vec<usize>> = FastMap::default();
@@ -350,44 +365,137 @@ pub fn refine_sag(s: &mut Surface, boundary: &Boundary<'_>, (tol, covers): (f64,
     while !cands.is_empty() && stats.rounds < MAX_ROUNDS && s.faces.len() < budget && !crate::deadline::cancelled() {
         let mut split = edges_to_split(&s.vertices, &normals, &s.faces, &cands, (boundary, off), tol, &mut stats);
         let refused = keep_unfolded_splits(&s.vertices, &s.faces, &mut split, (boundary, off), covers);
-        let flipped = flip_sagging(s, &refused, &split, (boundary, off), covers);
-        if split.is_empty() && flipped.is_empty() {
-            break;
-        }
+        let Some(round) = split_round(s, &mut normals, &mut split, (&refused, (boundary, off), covers)) else { break };
         stats.rounds += 1;
         stats.splits += split.len();
-        stats.flips += flipped.len() / 2;
-        let mut changed = vec![false; s.faces.len()];
-        for fi in flipped {
+        stats.flips += round.flips;
+        stats.folds_refused += round.folds_refused;
+        cands.clear();
+        for (fi, &old) in round.origin.iter().enumerate() {
+            if round.changed[old as usize] {
+                let g = s.faces[fi];
+                stats.covering = stats.covering.max(longest_edge(&s.vertices, g).0 / 3f64.sqrt());
+                if may_sag(&s.vertices, &normals, g, (tol, covers)) {
+                    cands.push(fi);
+                }
+            }
+        }
+    }
+    stats
+}
+
+/// What one round of [`refine_sag`] made: for each new face the old face it came from,
+/// which old faces were split or flipped, how many pairs were flipped, and how many old
+/// faces had their splits and flips given up for a fold they made.
+struct Round {
+    origin: Vec<u32>,
+    changed: Vec<bool>,
+    flips: usize,
+    folds_refused: usize,
+}
+
+/// Carry out one round: flip the `refused` edges that may be ([`flip_sagging`]), split the
+/// edges of `split` at their points, and give up the splits and flips of every old face
+/// next to a fold that made ([`folds_made`]), again until none is made. `None` when nothing
+/// is left to do (`s` unchanged).
+fn split_round(
+    s: &mut Surface,
+    normals: &mut Vec<Option<Vec3>>,
+    split: &mut Splits,
+    (refused, (boundary, off), covers): (&[(u32, u32)], (&Boundary<'_>, f64), f64),
+) -> Option<Round> {
+    let (saved, vertices_before) = (s.faces.clone(), s.vertices.len());
+    let mut flips: Vec<[usize; 2]> = flip_sagging(s, refused, split, (boundary, off), covers).chunks_exact(2).map(|p| [p[0], p[1]]).collect();
+    let mut given_up = vec![false; saved.len()];
+    let mut folds_refused = 0;
+    for pass in 0..=MAX_FOLD_PASSES {
+        if split.is_empty() && flips.is_empty() {
+            return None;
+        }
+        let mut changed = vec![false; saved.len()];
+        for &fi in flips.iter().flatten() {
             changed[fi] = true;
         }
         let mut order: Vec<(u32, u32)> = split.keys().copied().collect();
         order.sort_unstable();
-        let first_new = s.vertices.len() as u32;
-        let index: FastMap<(u32, u32), u32> = order.iter().enumerate().map(|(i, &e)| (e, first_new + i as u32)).collect();
+        let index: FastMap<(u32, u32), u32> = order.iter().enumerate().map(|(i, &e)| (e, (vertices_before + i) as u32)).collect();
         for e in &order {
             let (p, n) = split[e];
             s.vertices.push(p);
             normals.push(Some(n));
         }
         let mut faces = Vec::with_capacity(s.faces.len() + 3 * split.len());
-        cands.clear();
+        let mut origin = Vec::with_capacity(faces.capacity());
         for (old, &f) in s.faces.iter().enumerate() {
             let mid = [0, 1, 2].map(|k| index.get(&edge_key(f[k], f[(k + 1) % 3])).copied());
-            let from = faces.len();
+            changed[old] |= mid.iter().any(Option::is_some);
             split_triangle(&s.vertices, f, mid, &mut faces);
-            if changed[old] || mid.iter().any(Option::is_some) {
-                for (fi, &g) in faces.iter().enumerate().skip(from) {
-                    stats.covering = stats.covering.max(longest_edge(&s.vertices, g).0 / 3f64.sqrt());
-                    if may_sag(&s.vertices, &normals, g, (tol, covers)) {
-                        cands.push(fi);
-                    }
-                }
+            origin.resize(faces.len(), old as u32);
+        }
+        let folded = folds_made(&s.vertices, &faces, &origin, &changed);
+        if folded.is_empty() {
+            s.faces = faces;
+            return Some(Round { origin, changed, flips: flips.len(), folds_refused });
+        }
+        // undo, and leave the old faces beside the folds as they were (all, past the passes)
+        s.vertices.truncate(vertices_before);
+        normals.truncate(vertices_before);
+        let give_up: Vec<usize> = if pass < MAX_FOLD_PASSES { folded } else { (0..saved.len()).collect() };
+        for old in give_up {
+            folds_refused += usize::from(!given_up[old]);
+            given_up[old] = true;
+            let f = saved[old];
+            for k in 0..3 {
+                split.remove(&edge_key(f[k], f[(k + 1) % 3]));
             }
         }
-        s.faces = faces;
+        flips.retain(|&[f1, f2]| {
+            let keep = !given_up[f1] && !given_up[f2];
+            if !keep {
+                (s.faces[f1], s.faces[f2]) = (saved[f1], saved[f2]);
+            }
+            keep
+        });
     }
-    stats
+    unreachable!("the last pass gives up every split and flip")
+}
+
+/// The old faces (by `origin`, of the new `faces`) on either side of an edge of a new
+/// triangle (one whose old face is `changed`) where the surface folds back: the two faces'
+/// normals within [`FOLD_COS`] of opposite. Sorted, without repeats.
+fn folds_made(v: &[Vec3], faces: &[[u32; 3]], origin: &[u32], changed: &[bool]) -> Vec<usize> {
+    // only faces with two corners on new triangles can be across an edge from one
+    let mut on_new = vec![false; v.len()];
+    for (fi, f) in faces.iter().enumerate() {
+        if changed[origin[fi] as usize] {
+            f.iter().for_each(|&i| on_new[i as usize] = true);
+        }
+    }
+    let near: Vec<u32> = (0..faces.len() as u32).filter(|&fi| faces[fi as usize].iter().filter(|&&i| on_new[i as usize]).count() >= 2).collect();
+    let by_edge: FastMap<(u32, u32), u32> = near
+        .iter()
+        .flat_map(|&fi| {
+            let f = faces[fi as usize];
+            (0..3).map(move |k| ((f[k], f[(k + 1) % 3]), fi))
+        })
+        .collect();
+    let unit = |f: [u32; 3]| normal(v[f[0] as usize], v[f[1] as usize], v[f[2] as usize]).normalize_or_zero();
+    let mut folded: Vec<usize> = Vec::new();
+    for (fi, &f) in faces.iter().enumerate() {
+        if !changed[origin[fi] as usize] {
+            continue;
+        }
+        let n = unit(f);
+        for k in 0..3 {
+            let Some(&g) = by_edge.get(&(f[(k + 1) % 3], f[k])) else { continue };
+            if n.dot(unit(faces[g as usize])) < -FOLD_COS {
+                folded.extend([origin[fi] as usize, origin[g as usize] as usize]);
+            }
+        }
+    }
+    folded.sort_unstable();
+    folded.dedup();
+    folded
 }
 
 #[cfg(test)]
@@ -532,6 +640,50 @@ mod tests {
         let stats = refine_sag(&mut s, &|p, _| Some((Vec3::new(p.x, p.y, 0.0), Vec3::Z)), (1e-6, 10.0), 0.0);
         assert_eq!((stats.splits, stats.tested), (0, 0));
         assert_eq!(s.faces, faces);
+    }
+
+    /// The unit square in the plane `z = 0`, facing up, cut along its diagonal 0–2.
+    fn square() -> Surface {
+        Surface { vertices: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y], faces: vec![[0, 1, 2], [0, 2, 3]], ..Default::default() }
+    }
+
+    /// One round on `s` splitting its edge 1–2 at `m` (on the plane; nothing to flip).
+    fn split_right_edge_at(s: &mut Surface, m: Vec3) -> (Option<Round>, Splits) {
+        let mut normals = vec![Some(Vec3::Z); s.vertices.len()];
+        let mut split: Splits = [((1, 2), (m, Vec3::Z))].into_iter().collect();
+        let flat = |p: Vec3, _: f64| Some((Vec3::new(p.x, p.y, 0.0), Vec3::Z));
+        let round = split_round(s, &mut normals, &mut split, (&[], (&flat, 0.0), 10.0));
+        (round, split)
+    }
+
+    #[test]
+    fn a_split_point_beside_its_edge_splits_the_triangle() {
+        let mut s = square();
+        let (round, split) = split_right_edge_at(&mut s, Vec3::new(1.1, 0.5, 0.0));
+        let round = round.expect("a split made");
+        assert_eq!((split.len(), round.folds_refused, s.faces.len()), (1, 0, 3));
+        assert_eq!(round.changed, vec![true, false]);
+    }
+
+    #[test]
+    fn a_split_point_past_a_neighbours_edge_is_given_up_not_folded() {
+        // the half m 2 0 would face down, over the other triangle across 2–0
+        let mut s = square();
+        let (faces, vertices) = (s.faces.clone(), s.vertices.clone());
+        let (round, split) = split_right_edge_at(&mut s, Vec3::new(-0.5, 0.5, 0.0));
+        assert!(round.is_none(), "nothing left to do once the split is given up");
+        assert!(split.is_empty());
+        assert_eq!((s.faces, s.vertices), (faces, vertices));
+    }
+
+    #[test]
+    fn a_fold_found_by_folds_made_names_the_old_faces_on_both_sides() {
+        let mut s = square();
+        s.vertices.push(Vec3::new(-0.5, 0.5, 0.0));
+        // the old face 0 as its two halves (the second folded), the old face 1 unchanged
+        let faces = [[1, 4, 0], [4, 2, 0], [0, 2, 3]];
+        assert_eq!(folds_made(&s.vertices, &faces, &[0, 0, 1], &[true, false]), vec![0, 1]);
+        assert!(folds_made(&s.vertices, &faces, &[0, 0, 1], &[false, false]).is_empty(), "only new triangles are asked");
     }
 
     #[test]
