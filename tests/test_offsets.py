@@ -1457,25 +1457,34 @@ def test_a_float32_toruss_opening_by_the_ball_is_a_clean_solid(tmp_path, caplog)
     assert abs(again.volume - torus.volume) < 0.02 * torus.volume  # it is the torus
 
 
-def test_folds_in_a_plane_are_unfolded_so_an_opened_torus_grows_again_by_the_ball(caplog):
-    """A try-out: a torus of 64 x 32 sections opened by 0.1, then grown by 0.01. On the
-    flat bands of its facets, the joined surface folded back onto itself in the plane: a
-    sliver facing up overlapping slivers facing down, a few welds across. The ball's
-    surface was refused both times ("coplanar faces facing opposite ways overlap", then
-    "1 of its triangles face into it") and auto fell to the cells: 35 s and 640k
-    triangles for the opening, 113 s and 1.8M for the growth. Each fold is now replaced
-    by what it covers once (its outline split where it crosses itself first)."""
-    torus = trimesh.creation.torus(1.0, 0.3, major_sections=64, minor_sections=32)
+@pytest.mark.parametrize(("sections", "radii", "opening", "growth"), [
+    ((64, 32), (1.0, 0.3), 0.1, 0.01),
+    ((16, 8), (2.0, 0.5), 0.25, 0.05),
+])
+def test_folds_in_a_plane_are_unfolded_so_an_opened_torus_grows_again_by_the_ball(
+        caplog, sections, radii, opening, growth):
+    """Try-outs: tori opened, then grown a little. On the flat bands of their facets, the
+    joined surface folded back onto itself in the plane: a sliver facing up overlapping
+    slivers facing down, a few welds across. The ball's surface was refused ("coplanar
+    faces facing opposite ways overlap", then "1 of its triangles face into it") and auto
+    fell to the cells: for the fine torus 35 s and 640k triangles for the opening, 113 s
+    and 1.8M for the growth. Each fold is now replaced by what it covers once (its outline
+    split where it crosses itself first). The coarse torus's growth left a sliver's loop
+    whose five corners lie on one line, fanned (3 triangles facing into the solid; the
+    cells took 33 s and 370k triangles): the face across its long edge takes the corners
+    instead."""
+    torus = trimesh.creation.torus(*radii, major_sections=sections[0],
+                                   minor_sections=sections[1])
     with caplog.at_level("WARNING", logger="planner.offsets"):
-        opened = planner.opening(torus, 0.1)
-        grown = planner.offset(opened.mesh, 0.01)
+        opened = planner.opening(torus, opening)
+        grown = planner.offset(opened.mesh, growth)
     assert "no clean solid" not in caplog.text
     assert opened.stats["method"] == "ball then ball"
     assert grown.stats["method"] == "ball" and grown.stats["planar_unfolded"] >= 1
     assert validate_solid(grown.mesh, name="grown").metadata[FACES_INSIDE] == 0
-    _assert_within_bound_both_ways(opened.mesh, 0.01, grown)
+    _assert_within_bound_both_ways(opened.mesh, growth, grown)
     # and the exact offset's points lie within the bound of the output
-    truth = _on_the_offset(opened.mesh, 0.01, 3000, seed=3)
+    truth = _on_the_offset(opened.mesh, growth, 3000, seed=3)
     assert len(truth) > 100
     gap = mesh_distance(grown.mesh.vertices, grown.mesh.faces, truth)
     assert gap.max() <= grown.error_bound

@@ -13,8 +13,9 @@
 //! patch's own edges toward the rest of the surface, so its neighbours keep their
 //! pairing. Two kinds of outline are dealt with first:
 //!
-//! - a needle, three corners on a line within the weld: nothing is covered; the patch
-//!   goes, and the face across the needle's long edge takes its middle corner instead (a
+//! - a needle, an edge and a chain of corners running back along it within the weld:
+//!   nothing is covered; the patch goes, and the face across the needle's long edge takes
+//!   its chain's corners instead (a fan of its far corner over them: T-junctions
 //!   T-junction, moved by no more than the weld);
 //! - an outline that crosses itself (a part of the patch facing one way, a part the
 //!   other): the crossing point is put on both edges (the faces beside each split there,
@@ -90,9 +91,9 @@ type EdgeAt = ((u32, u32), u32);
 enum Cover {
     /// The triangles of what it covers once, and its outline's edges.
     Triangles(Vec<[u32; 3]>, Vec<(u32, u32)>),
-    /// Nothing, the middle corner of the needle left put on its long edge (as the outline
+    /// Nothing, the chain of corners of the needle left put on its long edge (as the outline
     /// runs); how far that corner is off the edge.
-    Needle(EdgeAt, f64),
+    Needle((u32, u32), Vec<u32>, f64),
     /// Loops, once the point where the outline crosses itself is put on both edges.
     Crossing([EdgeAt; 2]),
 }
@@ -138,7 +139,7 @@ fn unfold_round(vertices: &mut Vec<Vec3>, faces: &mut Vec<[u32; 3]>, tol: f64, m
                 round.replaced += 1;
                 round.moved = round.moved.max(reach);
             }
-            Some(Cover::Needle(((a, b), at), off)) => {
+            Some(Cover::Needle((a, b), chain, off)) => {
                 // the face across the long edge is split at the middle corner: its two
                 // halves' new edges to its far corner must be new to the surface
                 let Some(&across) = by_edge.get(&(b, a)) else { continue };
@@ -146,7 +147,7 @@ fn unfold_round(vertices: &mut Vec<Vec3>, faces: &mut Vec<[u32; 3]>, tol: f64, m
                     round.deferred += 1;
                     continue;
                 }
-                let halves = split_at(faces[across as usize], (a, b), at);
+                let halves = fan_along(faces[across as usize], (a, b), &chain);
                 let reach = reach_of_removal(vertices, faces, &patch, &[], &[(a, b)]).max(off);
                 let mut replaced = in_patch;
                 replaced.insert(across, ());
@@ -203,6 +204,16 @@ fn put_on_edges(at: &[EdgeAt], by_edge: &FastMap<(u32, u32), u32>, gone: &[bool]
         split.extend(beside);
     }
     free
+}
+
+/// The face `f`, which holds the edge `b → a`, fanned from its far corner over the
+/// `chain` of corners put on that edge (from `b` towards `a`).
+fn fan_along(f: [u32; 3], (a, b): (u32, u32), chain: &[u32]) -> Vec<[u32; 3]> {
+    let k = (0..3).find(|&k| (f[k], f[(k + 1) % 3]) == (b, a));
+    debug_assert!(k.is_some(), "the face {f:?} has no edge {b} -> {a}");
+    let r = f[(k.unwrap_or(0) + 2) % 3];
+    let path: Vec<u32> = std::iter::once(b).chain(chain.iter().copied()).chain(std::iter::once(a)).collect();
+    path.windows(2).map(|w| [w[0], w[1], r]).collect()
 }
 
 /// The face `f`, which holds the edge `(a, b)` one way or the other, split at `at` on it.
@@ -299,8 +310,8 @@ fn grow_patch(vertices: &[Vec3], faces: &[[u32; 3]], by_edge: &FastMap<(u32, u32
 fn net_cover(vertices: &mut Vec<Vec3>, faces: &[[u32; 3]], patch: &[u32], n: Vec3, tol: f64) -> Option<Cover> {
     let loops = regions::region_loops(vertices, patch.iter().map(|&f| faces[f as usize].as_slice()), n)?;
     if let [ids] = loops.as_slice() {
-        if let Some((at, off)) = needle(vertices, ids, tol) {
-            return Some(Cover::Needle(at, off));
+        if let Some((edge, chain, off)) = needle(vertices, ids, tol) {
+            return Some(Cover::Needle(edge, chain, off));
         }
     }
     let outline: Vec<(u32, u32)> = loops.iter().flat_map(|ids| (0..ids.len()).map(move |k| (ids[k], ids[(k + 1) % ids.len()]))).collect();
@@ -341,17 +352,29 @@ fn basis(n: Vec3) -> (Vec3, Vec3) {
     (u, n.cross(u))
 }
 
-/// The loop `ids` as a needle: three corners, one (`at`) within `tol` of the edge between
-/// the other two and between their ends; that edge (as the loop runs) and `at`, and how
-/// far `at` is off it.
-fn needle(vertices: &[Vec3], ids: &[u32], tol: f64) -> Option<(EdgeAt, f64)> {
-    let [p0, p1, p2] = <[u32; 3]>::try_from(ids).ok()?;
+/// The loop `ids` as a needle: an edge `a → b` of it, the rest of it (from `b` back to
+/// `a`) running back along that edge strictly between its ends, each corner within `tol`
+/// of it. The edge, those corners from `b` on, and how far the farthest is off the edge.
+fn needle(vertices: &[Vec3], ids: &[u32], tol: f64) -> Option<((u32, u32), Vec<u32>, f64)> {
+    let n = ids.len();
+    if n < 3 {
+        return None;
+    }
     let at = |i: u32| vertices[i as usize];
-    [(p0, p1, p2), (p1, p2, p0), (p2, p0, p1)].into_iter().find_map(|(a, b, c)| {
-        let (ab, ac) = (at(b) - at(a), at(c) - at(a));
-        let along = ac.dot(ab) / ab.length_squared();
-        let off = (ac - ab * along).length();
-        (along > 0.0 && along < 1.0 && off <= tol).then_some((((a, b), c), off))
+    (0..n).find_map(|k| {
+        let (a, b) = (ids[k], ids[(k + 1) % n]);
+        let ab = at(b) - at(a);
+        let chain: Vec<u32> = (2..n).map(|j| ids[(k + j) % n]).collect();
+        let (mut last, mut off) = (1.0, 0.0f64);
+        for &c in &chain {
+            let ac = at(c) - at(a);
+            let along = ac.dot(ab) / ab.length_squared();
+            if !(along > 0.0 && along < last) {
+                return None;
+            }
+            (last, off) = (along, off.max((ac - ab * along).length()));
+        }
+        (off <= tol).then_some(((a, b), chain, off))
     })
 }
 
@@ -510,6 +533,33 @@ mod tests {
         let (a, b, c, s) = (0, 1, 2, 5);
         assert_eq!(f.len(), 6, "{f:?}");
         assert!(f.contains(&[b, c, s]) && f.contains(&[c, a, s]), "{f:?}");
+    }
+
+    #[test]
+    fn a_needle_of_a_chain_of_corners_puts_them_all_on_the_edge_across() {
+        // as the needle under a roof, with three corners (C3, C2, C1, within 1e-12 of the
+        // edge A – B) running back from B to A: the fan of a sliver's loop over corners
+        // that all lie on one line
+        let (a, b, c1, c2, c3, e, t, s) = (0, 1, 2, 3, 4, 5, 6, 7);
+        let mut v = vec![
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(0.25, 1e-12, 0.0),
+            Vec3::new(0.5, -1e-12, 0.0),
+            Vec3::new(0.75, 1e-12, 0.0),
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::new(0.5, 0.3, 1.0),
+            Vec3::new(0.5, -0.3, 1.0),
+        ];
+        let mut f = vec![[b, e, a], [e, b, c3], [c3, c2, e], [c2, c1, e], [c1, a, e], [b, a, s], [c3, b, t], [c2, c3, t], [c1, c2, t], [a, c1, t], [s, a, t], [b, s, t]];
+        assert!(closed(&f) && folds(&v, &f) >= 1);
+        assert_eq!(unfold(&mut v, &mut f, 1e-9, 1.0).0, 1);
+        assert!(closed(&f));
+        assert_eq!(areas_at(&v, &f, 0.0), (0.0, 0.0));
+        assert_eq!(f.len(), 10, "{f:?}");
+        for piece in [[b, c3, s], [c3, c2, s], [c2, c1, s], [c1, a, s]] {
+            assert!(f.contains(&piece), "{piece:?} in {f:?}");
+        }
     }
 
     /// A tetrahedron on the corner `corner`, pointing along `dir` (outward).
