@@ -23,8 +23,9 @@
 //! (the surface folds back: a split point past a neighbour's edge, or several splits of one
 //! triangle together, on a ridge a few degrees sharp), the splits and flips of the old
 //! triangles on both sides are given up and the round is made again (a solid check cannot
-//! tell such a fold from a wrongly triangulated polygon). Rounds repeat on the new triangles, at a cost in
-//! triangles that grows with the creases' length, not the surface's area.
+//! tell such a fold from a wrongly triangulated polygon). Rounds repeat on the new
+//! triangles, at a cost in triangles that grows with the creases' length, not the
+//! surface's area.
 //!
 //! The bound the extraction stated still holds: every vertex it made is kept (the argument
 //! that every boundary point lies near one holds as before), and a point of a new triangle
