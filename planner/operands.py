@@ -13,6 +13,7 @@ import trimesh
 from .errors import InvalidMeshError
 from .meshes import load_mesh
 from .meshes.kinds import classify
+from .meshes.topology import checked_arrays
 from .problem import Part
 
 __all__ = ["REPAIR_OFFER", "as_mesh", "label", "solid_part"]
@@ -45,16 +46,18 @@ def solid_part(obj, role: str, *, repair: bool | None = None) -> Part:
     """The operand as a solid part: a part as it is (a problem's, whose kind and checks a
     source keeps), anything else checked as a solid (see the module documentation); with
     ``repair``, its holes filled where they can be (:func:`planner.meshes.repair_mesh`).
-    ``repair=False``: the caller has that option, and an open mesh's refusal offers it;
+    ``repair=False``: the caller has that option, and a refusal offers it;
     ``None``: it has none."""
     if isinstance(obj, Part):
         return obj
     mesh = as_mesh(obj, role)
     name = label(mesh, role)
+    if repair is False:
+        checked_arrays(mesh, f"mesh {name!r}")  # what the offer below would not mend
     try:
         solid = classify(mesh, name=name, kind="solid", repair=bool(repair))
     except InvalidMeshError as error:
-        if repair is not False or "repair_mesh" not in str(error):
+        if repair is not False:  # (offered as the offsets offer it: for any refusal)
             raise
         raise InvalidMeshError(f"{error}; or: {REPAIR_OFFER}") from None
     return Part(name, solid.mesh, f"operand {role}", kind_reason=solid.reason, checked=True,

@@ -186,8 +186,8 @@ def _unwritable_in(folder: Path, missing: Path | None) -> str | None:
     try:  # the permission bits can say yes where the file system says no (/proc)
         with tempfile.TemporaryFile(dir=folder):
             pass
-    except OSError as exc:
-        return f"{what} ({exc.strerror or exc})"
+    except OSError as exc:  # (the OS's reason can be odd: /proc says no such file)
+        return f"{what} (creating a file there failed: {exc.strerror or exc})"
     return None
 
 

@@ -78,6 +78,22 @@ def test_depth_bad_input_is_one_line_exit_2(pair, tmp_path, capsys):
         assert "Traceback" not in err[0]
 
 
+def test_depth_offers_repair_where_the_offset_does_and_it_mends(pair, tmp_path, capsys):
+    """A try-out: an operand with a NaN corner. ``offset`` offered ``--repair`` for it
+    and ``depth`` did not, though ``depth --repair`` mends it (the faces at that corner
+    dropped, the hole filled)."""
+    box = shapes.box()
+    nan = tmp_path / "nan.obj"
+    corners = ["v nan nan nan"] + [f"v {x:.17g} {y:.17g} {z:.17g}" for x, y, z in box.vertices[1:]]
+    nan.write_text("\n".join(corners + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in box.faces])
+                   + "\n")
+    assert _exit_code(["depth", str(nan), str(pair[1])]) == 2
+    err = capsys.readouterr().err
+    assert "NaN" in err and "--repair" in err
+    assert _exit_code(["depth", str(nan), str(pair[1]), "--repair", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["upper"] > 0
+
+
 def test_assemble_overlap_reports_depth(tmp_path, capsys):
     asm = tmp_path / "overlap.yaml"
     asm.write_text("parts:\n  - {name: a, box: [1, 1, 1]}\n"

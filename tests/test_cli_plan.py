@@ -341,8 +341,10 @@ def test_an_output_folder_that_cannot_be_created_is_the_one_named(tmp_path, caps
                         str(tmp_path / "nope" / "run")], capsys)
     assert code == 2 and len(err.strip().splitlines()) == 1
     assert (f"--out {tmp_path}/nope/run: folder {tmp_path}/nope does not exist and cannot be "
-            f"created in {tmp_path} (No such file or directory)") in err
+            f"created in {tmp_path} (creating a file there failed: No such file or directory)"
+            ) in err
     code, _, err = run(["plan", str(SCENARIOS / "bug_trap.yaml"), "--out", str(tmp_path)],
                        capsys)
-    assert code == 2 and f"folder {tmp_path} is not writable (No such file" in err
+    assert code == 2 and (f"folder {tmp_path} is not writable (creating a file there failed: "
+                          f"No such file") in err
     assert not (tmp_path / "nope").exists()
