@@ -15,8 +15,8 @@
 //!
 //! - a needle, an edge and a chain of corners running back along it within the weld:
 //!   nothing is covered; the patch goes, and the face across the needle's long edge takes
-//!   its chain's corners instead (a fan of its far corner over them: T-junctions
-//!   T-junction, moved by no more than the weld);
+//!   the chain's corners instead, fanned from its far corner over them (T-junctions: the
+//!   surface moves by no more than the weld);
 //! - an outline that crosses itself (a part of the patch facing one way, a part the
 //!   other): the crossing point is put on both edges (the faces beside each split there,
 //!   nothing moved), and the outline comes apart there into loops that each turn one way,
@@ -91,8 +91,8 @@ type EdgeAt = ((u32, u32), u32);
 enum Cover {
     /// The triangles of what it covers once, and its outline's edges.
     Triangles(Vec<[u32; 3]>, Vec<(u32, u32)>),
-    /// Nothing, the chain of corners of the needle left put on its long edge (as the outline
-    /// runs); how far that corner is off the edge.
+    /// Nothing: the needle's long edge (as the outline runs), the chain of its corners to
+    /// put on that edge, and how far the farthest is off it.
     Needle((u32, u32), Vec<u32>, f64),
     /// Loops, once the point where the outline crosses itself is put on both edges.
     Crossing([EdgeAt; 2]),
@@ -140,8 +140,8 @@ fn unfold_round(vertices: &mut Vec<Vec3>, faces: &mut Vec<[u32; 3]>, tol: f64, m
                 round.moved = round.moved.max(reach);
             }
             Some(Cover::Needle((a, b), chain, off)) => {
-                // the face across the long edge is split at the middle corner: its two
-                // halves' new edges to its far corner must be new to the surface
+                // the face across the long edge is fanned over the chain's corners: the
+                // fan's new edges to its far corner must be new to the surface
                 let Some(&across) = by_edge.get(&(b, a)) else { continue };
                 if patch.iter().any(busy) || busy(&across) {
                     round.deferred += 1;
