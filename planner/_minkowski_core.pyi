@@ -138,6 +138,7 @@ def offset_surface(
     max_cells: int = 8000000,
     max_refinements: int = 2,
     simplify: bool = True,
+    refine_creases: bool = True,
 ) -> dict[str, Any]: ...
 def rounded_polytope(
     points: npt.NDArray[np.float64],

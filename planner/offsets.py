@@ -418,6 +418,17 @@ def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
     return _cell_offset(solid, radius, step, max_cells, name), "cells"
 
 
+def _not_a_solid(mesh: trimesh.Trimesh, name: str) -> str | None:
+    """Why the winding check refuses the offset's surface ``mesh``, or ``None``."""
+    from .meshes.solids import validate_solid  # noqa: PLC0415
+
+    try:
+        validate_solid(mesh, name=f"{name} (offset)")
+    except InvalidMeshError as error:
+        return without_advice(str(error))
+    return None
+
+
 def _solid_fault(mesh: trimesh.Trimesh, name: str) -> str | None:
     """What keeps the ball's output from being a clean solid, or ``None``: the winding
     check refusing it, or triangles with the solid in front of them too (two sheets that
@@ -458,25 +469,46 @@ def _fine_facets(solid: trimesh.Trimesh, eps: float) -> bool:
 def _cell_offset(mesh: trimesh.Trimesh, radius: float, step: float, max_cells: int | None,
                  name: str, *, solid: bool = True) -> tuple[trimesh.Trimesh, float, dict[str, Any]]:
     """``(mesh, error_bound, stats)`` of the native cell source's offset (of a surface's
-    triangles when not ``solid``)."""
-    from . import budget  # noqa: PLC0415
-    from ._minkowski_core import offset_surface  # noqa: PLC0415
+    triangles when not ``solid``). A solid's surface whose refinement at its creases left
+    it no clean solid (a split that folds it through itself) is made again without that
+    refinement (``stats["creases_unrefined"]`` says why; the extraction's own surface is
+    within the same bound)."""
     from .meshes.checked import core_mesh  # noqa: PLC0415
 
-    cells, from_memory = budget.surface_cells(max_cells)
     checked = core_mesh(mesh, solid=solid, name=name)
+    raw = _native_offset(checked, radius, step, max_cells, name, refine_creases=True)
+    surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
+    fault = None
+    if solid and raw["sag_splits"] + raw["sag_flips"] > 0:
+        fault = _not_a_solid(surface, name)
+        if fault is not None:
+            log.info("%s offset by %g: the refinement at the creases made the cells' surface "
+                     "no clean solid (%s); made again without it", name, radius, fault)
+            raw = _native_offset(checked, radius, step, max_cells, name, refine_creases=False)
+            surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
+    return surface, float(raw["error_bound"]), {"triangles": len(surface.faces),
+                                                **surface_stats(raw),
+                                                **{key: raw[key] for key in SAG_STATS},
+                                                "creases_unrefined": fault}
+
+
+def _native_offset(checked, radius: float, step: float, max_cells: int | None, name: str, *,
+                   refine_creases: bool) -> dict[str, Any]:
+    """The native cell source's offset of the core's ``checked`` mesh (its surface and
+    statistics), within the memory's or ``max_cells``'s budget."""
+    from . import budget  # noqa: PLC0415
+    from ._minkowski_core import offset_surface  # noqa: PLC0415
+
+    cells, from_memory = budget.surface_cells(max_cells)
     try:
-        raw = offset_surface(checked, radius, step, max_cells=cells)
+        return offset_surface(checked, radius, step, max_cells=cells,
+                              refine_creases=refine_creases)
     except ResourceLimitError as exc:
         # how much larger eps may be: below the radius, else the bound says nothing
         knob = (f"eps (now {step:.3g}; below the radius {abs(radius):g}, or the result need "
                 f"not lie around the offset)")
         raise budget.explain(exc, f"{name} offset by {radius:g}", knob=knob,
                              cells_given=budget.cells_setting(from_memory)) from exc
-    surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
-    return surface, float(raw["error_bound"]), {"triangles": len(surface.faces),
-                                                **surface_stats(raw),
-                                                **{key: raw[key] for key in SAG_STATS}}
 
 
 SAG_STATS = ("sag_rounds", "sag_tested", "sag_splits", "sag_flips", "sag_folds_refused",

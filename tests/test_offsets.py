@@ -1204,14 +1204,16 @@ def test_the_gear_bases_ball_surface_is_a_clean_solid(caplog):
     _assert_within_bound_both_ways(base, 0.001, grown)
 
 
-def test_a_cad_gears_creases_are_split_and_the_surface_stays_closed_within_its_bound():
+def test_a_cad_gears_offset_by_the_cells_is_a_clean_solid_within_its_bound():
     """IndustReal's small gear (20k triangles) grown by 1 mm at eps 1 mm: the offsets of
     neighbouring teeth meet in sharp concave creases (their normals turn by 70 to 117
     degrees), where marching tetrahedra's chords cut the valleys off by half the bound.
-    Triangles that sag there are split where the creases run (or flipped along them): a
-    thousand edges or so. The surface stays closed and every point of it within the bound
-    (how far the true creases now lie from it, both ways, is measured by
-    ``tests/benchmarks/bench_offsets.py``)."""
+    Triangles that sag there are split where the creases run (or flipped along them); but
+    here the splits folded the surface through itself (a try-out found the result no
+    clean solid: 21 faces with the inside in front, winding number -1), which nothing
+    checked. The cells' surface of a solid is now checked, and one the refinement broke
+    is made again without it (said in ``stats["creases_unrefined"]``): a clean solid,
+    every point of it within the bound."""
     from conftest import asset
     from oracle import surface_distance
 
@@ -1223,11 +1225,12 @@ def test_a_cad_gears_creases_are_split_and_the_surface_stays_closed_within_its_b
     r = 0.001
     result = planner.offset(gear, r, eps=0.001, method="cells")
     out = result.mesh
-    assert out.is_watertight and out.is_winding_consistent
-    assert result.stats["sag_splits"] > 100
+    assert "closed but not a solid" in result.stats["creases_unrefined"]
+    assert result.stats["sag_splits"] == 0
+    validate_solid(out, name="grown gear")
     probes = np.vstack([out.vertices, trimesh.sample.sample_surface(out, 20000, seed=0)[0]])
     error = np.abs(surface_distance(gear, probes) - r)
-    assert error.max() <= min(result.error_bound, 3e-4)
+    assert error.max() <= result.error_bound
 
 
 def test_a_cad_gears_opening_takes_its_eroded_surface_whose_sharp_tips_fold_nothing():

@@ -90,6 +90,9 @@ pub struct OffsetSource<'a> {
     grow: bool,
     /// The box the offset lies in.
     pub aabb: Aabb,
+    /// Whether the surface is refined where it sags from the offset (at its creases:
+    /// [`crate::surface::sag`]); on by default.
+    pub refine_creases: bool,
 }
 
 impl<'a> OffsetSource<'a> {
@@ -106,7 +109,7 @@ impl<'a> OffsetSource<'a> {
         let grow = r > 0.0;
         let aabb = if grow { mesh.aabb.inflated(r * (1.0 + 1e-9)) } else { mesh.aabb };
         let faces = mesh.tris.iter().map(|t| Face::new(t.p)).collect();
-        OffsetSource { mesh, faces, flat: FlatFaces::new(mesh), radius: r.abs(), grow, aabb }
+        OffsetSource { mesh, faces, flat: FlatFaces::new(mesh), radius: r.abs(), grow, aabb, refine_creases: true }
     }
 
     /// The distance from `p` to the triangle of record `t` (flags ignored).
@@ -329,7 +332,7 @@ impl CellSource for OffsetSource<'_> {
     }
 
     fn has_boundary_points(&self) -> bool {
-        true
+        self.refine_creases
     }
 
     /// The slab faces of the records, when every record has [`SLAB`] and they lie on at

@@ -213,10 +213,12 @@ fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: 
 /// `{x : dist(x, P) <= r}` for `r > 0`, the erosion `{x in P : dist(x, boundary) >= |r|}`
 /// for `r < 0`, as a closed surface at resolution `eps` with its two-sided error bound (a
 /// dict as `union_surface`'s). A surface (checked as one) grows as its triangles do:
-/// `{x : dist(x, triangles) <= r}`, `r > 0`.
+/// `{x : dist(x, triangles) <= r}`, `r > 0`. `refine_creases`: refine the surface where it
+/// sags from the offset (its creases).
 #[pyfunction]
-#[pyo3(signature = (mesh, radius, eps, max_cells=8_000_000, max_refinements=2, simplify=true))]
-fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (mesh, radius, eps, max_cells=8_000_000, max_refinements=2, simplify=true, refine_creases=true))]
+#[allow(clippy::too_many_arguments)]
+fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool, refine_creases: bool) -> PyResult<Bound<'py, PyDict>> {
     if !(radius.is_finite() && radius != 0.0) {
         return Err(InvalidParameterError::new_err(format!("radius = {radius}: must be a non-zero finite number")));
     }
@@ -226,7 +228,8 @@ fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f6
     let solid = mesh.inner.clone();
     let params = UnionParams { eps, max_cells, max_refinements, simplify, planes: true };
     let r = interruptible(py, move || {
-        let src = crate::offset::OffsetSource::new(solid.as_ref(), radius);
+        let mut src = crate::offset::OffsetSource::new(solid.as_ref(), radius);
+        src.refine_creases = refine_creases;
         approximate_solid(&src, &src.aabb, &params)
     })??;
     surface_dict(py, &r)
