@@ -218,7 +218,16 @@ fn union_surface<'py>(py: Python<'py>, prims: &Primitives, eps: f64, max_cells: 
 #[pyfunction]
 #[pyo3(signature = (mesh, radius, eps, max_cells=8_000_000, max_refinements=2, simplify=true, refine_creases=true))]
 #[allow(clippy::too_many_arguments)]
-fn offset_surface<'py>(py: Python<'py>, mesh: &CheckedMesh, radius: f64, eps: f64, max_cells: usize, max_refinements: u32, simplify: bool, refine_creases: bool) -> PyResult<Bound<'py, PyDict>> {
+fn offset_surface<'py>(
+    py: Python<'py>,
+    mesh: &CheckedMesh,
+    radius: f64,
+    eps: f64,
+    max_cells: usize,
+    max_refinements: u32,
+    simplify: bool,
+    refine_creases: bool,
+) -> PyResult<Bound<'py, PyDict>> {
     if !(radius.is_finite() && radius != 0.0) {
         return Err(InvalidParameterError::new_err(format!("radius = {radius}: must be a non-zero finite number")));
     }
