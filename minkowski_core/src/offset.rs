@@ -783,7 +783,15 @@ mod tests {
             }
             let v: Vec<Vec3> = p.to_vec();
             let mesh = TriMesh::surface(v, &[[0, 1, 2]], "tri").expect("a triangle");
-            let src = OffsetSource { faces: vec![Face::new(p)], flat: FlatFaces::new(&mesh), mesh: &mesh, radius: 0.1 + 0.5 * rand().abs(), grow: true, aabb: mesh.aabb };
+            let src = OffsetSource {
+                faces: vec![Face::new(p)],
+                flat: FlatFaces::new(&mesh),
+                mesh: &mesh,
+                radius: 0.1 + 0.5 * rand().abs(),
+                grow: true,
+                aabb: mesh.aabb,
+                refine_creases: true,
+            };
             let a = point(1.5, &mut rand);
             let b = match k % 7 {
                 0 => a + (p[1] - p[0]) * rand(),                          // parallel to an edge
