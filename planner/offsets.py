@@ -418,27 +418,24 @@ def _by_method(solid: trimesh.Trimesh, radius: float, step: float, method: str,
     return _cell_offset(solid, radius, step, max_cells, name), "cells"
 
 
-def _not_a_solid(mesh: trimesh.Trimesh, name: str) -> str | None:
-    """Why the winding check refuses the offset's surface ``mesh``, or ``None``."""
+def _checked_solid(mesh: trimesh.Trimesh, name: str) -> tuple[trimesh.Trimesh | None, str | None]:
+    """The offset's surface ``mesh`` validated as a solid, or ``None`` and why the winding
+    check refuses it."""
     from .meshes.solids import validate_solid  # noqa: PLC0415
 
     try:
-        validate_solid(mesh, name=f"{name} (offset)")
+        return validate_solid(mesh, name=f"{name} (offset)"), None
     except InvalidMeshError as error:
-        return without_advice(str(error))
-    return None
+        return None, without_advice(str(error))
 
 
 def _solid_fault(mesh: trimesh.Trimesh, name: str) -> str | None:
     """What keeps the ball's output from being a clean solid, or ``None``: the winding
     check refusing it, or triangles with the solid in front of them too (two sheets that
     meet; an erosion of it would refuse them)."""
-    from .meshes.solids import validate_solid  # noqa: PLC0415
-
-    try:
-        checked = validate_solid(mesh, name=f"{name} (offset)")
-    except InvalidMeshError as error:
-        return without_advice(str(error))
+    checked, refused = _checked_solid(mesh, name)
+    if checked is None:
+        return refused
     inner = int(checked.metadata.get(FACES_INSIDE) or 0)
     return f"{inner} of its triangles face into it" if inner else None
 
@@ -480,7 +477,7 @@ def _cell_offset(mesh: trimesh.Trimesh, radius: float, step: float, max_cells: i
     surface = trimesh.Trimesh(raw["vertices"], raw["faces"], process=False)
     fault = None
     if solid and raw["sag_splits"] + raw["sag_flips"] > 0:
-        fault = _not_a_solid(surface, name)
+        fault = _checked_solid(surface, name)[1]
         if fault is not None:
             log.info("%s offset by %g: the refinement at the creases made the cells' surface "
                      "no clean solid (%s); made again without it", name, radius, fault)

@@ -218,15 +218,9 @@ fn fan_along(f: [u32; 3], (a, b): (u32, u32), chain: &[u32]) -> Vec<[u32; 3]> {
 
 /// The face `f`, which holds the edge `(a, b)` one way or the other, split at `at` on it.
 fn split_at(f: [u32; 3], (a, b): (u32, u32), at: u32) -> [[u32; 3]; 2] {
-    let holds = |k: usize| {
-        let e = (f[k], f[(k + 1) % 3]);
-        e == (a, b) || e == (b, a)
-    };
-    let k = (0..3).find(|&k| holds(k));
-    debug_assert!(k.is_some(), "the face {f:?} has no edge {a} - {b}");
-    let k = k.unwrap_or(0);
-    let (p, q, r) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
-    [[p, at, r], [at, q, r]]
+    let holds_ab = (0..3).any(|k| (f[k], f[(k + 1) % 3]) == (a, b));
+    let halves = if holds_ab { fan_along(f, (b, a), &[at]) } else { fan_along(f, (a, b), &[at]) };
+    [halves[0], halves[1]]
 }
 
 /// How far the patch's faces lie from what is left of it: the largest, over its faces, of
