@@ -466,10 +466,11 @@ def _fine_facets(solid: trimesh.Trimesh, eps: float) -> bool:
 def _cell_offset(mesh: trimesh.Trimesh, radius: float, step: float, max_cells: int | None,
                  name: str, *, solid: bool = True) -> tuple[trimesh.Trimesh, float, dict[str, Any]]:
     """``(mesh, error_bound, stats)`` of the native cell source's offset (of a surface's
-    triangles when not ``solid``). A solid's surface whose refinement at its creases left
-    it no clean solid (a split that folds it through itself) is made again without that
-    refinement (``stats["creases_unrefined"]`` says why; the extraction's own surface is
-    within the same bound)."""
+    triangles when not ``solid``). The refinement at the creases gives up the splits that
+    fold the surface or pass it through itself; behind that, a solid's surface it changed
+    is checked, and one still no clean solid is made again without the refinement
+    (``stats["creases_unrefined"]`` says why; the extraction's own surface is within the
+    same bound)."""
     from .meshes.checked import core_mesh  # noqa: PLC0415
 
     checked = core_mesh(mesh, solid=solid, name=name)
@@ -512,8 +513,8 @@ SAG_STATS = ("sag_rounds", "sag_tested", "sag_splits", "sag_flips", "sag_folds_r
              "sag_left", "seconds_sag")
 """What the cells' refinement where the surface sags from the offset did (its creases,
 :mod:`minkowski_core::surface::sag`): rounds, points tested, edges split, edges flipped,
-triangles left as they were because a split or flip there folded the surface, the largest
-sag seen in its last round, seconds."""
+triangles left as they were because a split or flip there folded the surface or passed it
+through itself, the largest sag seen in its last round, seconds."""
 
 
 def _composed(mesh, first: float, second: float, eps, max_cells, name: str,

@@ -176,6 +176,16 @@ impl TriMesh {
     }
 }
 
+/// Whether the triangles `s` and `t` (corners) meet along a segment longer than the
+/// rounding of a mesh of size `scale`: they cross, or one touches the other along an
+/// edge. Triangles in one plane, or meeting only at a corner, do not.
+pub fn triangles_meet(s: [Vec3; 3], t: [Vec3; 3], scale: f64) -> bool {
+    meeting(&Tri::new(s), &Tri::new(t), scale).is_some_and(|m| {
+        let seg = m.segment();
+        (seg[1] - seg[0]).length() > 1e-9 * scale
+    })
+}
+
 /// How two triangles that meet along a segment meet.
 enum Meeting {
     /// Each passes through the other's plane.

@@ -17,15 +17,20 @@
 //! triangle over is refused: a half that faces away both from the triangle and from the
 //! boundary under it (a half on the far sheet of a crease sharper than a right angle turns
 //! from the chord by more than a right angle, yet faces as its sheet does: that one is
-//! kept). A refused edge is flipped to the diagonal between its opposite vertices instead
-//! when that sags less than half as much. What a round makes is then checked as a whole:
-//! where a new triangle and the one across an edge of it face within 8° of opposite ways
-//! (the surface folds back: a split point past a neighbour's edge, or several splits of one
-//! triangle together, on a ridge a few degrees sharp), the splits and flips of the old
-//! triangles on both sides are given up and the round is made again (a solid check cannot
-//! tell such a fold from a wrongly triangulated polygon). Rounds repeat on the new
-//! triangles, at a cost in triangles that grows with the creases' length, not the
-//! surface's area.
+//! kept); a crease point refused so is replaced by the midpoint's boundary point when that
+//! folds nothing. A refused edge is flipped to the diagonal between its opposite vertices
+//! instead when that sags less than half as much. What a round makes is then checked as a
+//! whole, for two faults a solid check would find later without saying which split made
+//! them: where a new triangle and the one across an edge of it face within 8° of opposite
+//! ways (the surface folds back: a split point past a neighbour's edge, or several splits
+//! of one triangle together, on a ridge a few degrees sharp; a solid check cannot tell such
+//! a fold from a wrongly triangulated polygon), and where a new triangle crosses another,
+//! or touches it along an edge (the triangles around a corner turned over one another
+//! across a crease sharper than a right angle: on IndustReal's small gear grown by 1 mm at
+//! eps 2e-3, winding number −1 in front of 20 faces). The old triangles there have their crease points replaced by midpoints, or,
+//! failing that, their splits and flips given up, and the round is made again. Rounds
+//! repeat on the new triangles, at a cost in triangles that grows with the creases' length,
+//! not the surface's area.
 //!
 //! The bound the extraction stated still holds: every vertex it made is kept (the argument
 //! that every boundary point lies near one holds as before), and a point of a new triangle
@@ -34,7 +39,9 @@
 //! ([`SagStats::covering`] gives the largest, which the caller takes into the bound).
 
 use super::Surface;
-use crate::math::Vec3;
+use crate::bvh::Bvh;
+use crate::exact::crossing::triangles_meet;
+use crate::math::{Aabb, Vec3};
 use crate::util::{FastMap, FastSet};
 use rayon::prelude::*;
 
@@ -46,7 +53,8 @@ const MAX_ROUNDS: u32 = 8;
 /// sharp is rarer than a fold made by a split point on the far side of a neighbour's edge,
 /// and a solid check cannot tell the two apart.
 const FOLD_COS: f64 = 0.99;
-/// Passes of a round that give up the splits beside folds; after them, the whole round.
+/// Passes of a round that give up the splits beside folds or crossings (passes that only
+/// put midpoints for crease points not counted); after them, the whole round.
 const MAX_FOLD_PASSES: usize = 4;
 /// The refinement stops once the surface has this many times the triangles it had.
 const MAX_GROWTH: usize = 3;
@@ -77,7 +85,8 @@ pub struct SagStats {
     pub splits: usize,
     /// Edges flipped to the diagonal along a crease.
     pub flips: usize,
-    /// Triangles whose splits and flips were given up because they folded the surface.
+    /// Triangles whose splits and flips were given up because they folded the surface or
+    /// passed it through itself.
     pub folds_refused: usize,
     /// The largest sag seen among the points tested in the last round (0 when none was).
     pub sag_left: f64,
@@ -221,8 +230,18 @@ fn below_edge(v: &[Vec3], (i, j): (u32, u32), p: Vec3) -> f64 {
 /// One round's tests on the triangles `cands` of `faces`: the point to split each edge at
 /// whose midpoint, or crease point ([`on_crease`]), sags by more than `tol` (the crease
 /// point when there is one, else the midpoint's boundary point), also the longest edge of
-/// a triangle whose centroid does. Records the largest sag seen.
-fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cands: &[usize], (boundary, off): (&Boundary<'_>, f64), tol: f64, stats: &mut SagStats) -> Splits {
+/// a triangle whose centroid does. Records the largest sag seen. Also the midpoint's
+/// boundary point of each edge split at its crease point, to split it at instead where
+/// the crease point folds the surface or passes it through itself.
+fn edges_to_split(
+    v: &[Vec3],
+    normals: &[Option<Vec3>],
+    faces: &[[u32; 3]],
+    cands: &[usize],
+    (boundary, off): (&Boundary<'_>, f64),
+    tol: f64,
+    stats: &mut SagStats,
+) -> (Splits, Splits) {
     let mut edges: Vec<(u32, u32)> = cands.iter().flat_map(|&fi| (0..3).map(move |k| edge_key(faces[fi][k], faces[fi][(k + 1) % 3]))).collect();
     edges.sort_unstable();
     edges.dedup();
@@ -254,6 +273,11 @@ fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cand
             _ => None,
         })
         .collect();
+    let at_mid_instead: Splits = edges
+        .iter()
+        .zip(at_mid.iter().zip(&at_crease))
+        .filter_map(|(&e, (mid, crease))| Some((e, mid.as_ref()?.1)).filter(|_| crease.is_some() && split.contains_key(&e)))
+        .collect();
     let mid_of: FastMap<(u32, u32), Option<(f64, BoundaryPoint)>> = edges.iter().copied().zip(at_mid).collect();
     for (&fi, centre) in cands.iter().zip(&at_centre) {
         let sags = matches!(centre, Some(s) if s.0 > tol);
@@ -265,14 +289,43 @@ fn edges_to_split(v: &[Vec3], normals: &[Option<Vec3>], faces: &[[u32; 3]], cand
             }
         }
     }
-    split
+    (split, at_mid_instead)
 }
 
 /// Drop from `split` every edge next to a triangle whose covering radius is above `covers`,
 /// or would be in a half of it, or which its boundary point would fold
-/// ([`split_keeps_facing`]). Returns the edges dropped.
-fn keep_unfolded_splits(v: &[Vec3], faces: &[[u32; 3]], split: &mut FastMap<(u32, u32), BoundaryPoint>, (boundary, off): (&Boundary<'_>, f64), covers: f64) -> Vec<(u32, u32)> {
-    let mut refused = Vec::new();
+/// ([`split_keeps_facing`]); an edge whose crease point only folds is split at its
+/// midpoint's boundary point instead (`at_mid_instead`) when that folds nothing. Returns
+/// the edges dropped.
+fn keep_unfolded_splits(
+    v: &[Vec3],
+    faces: &[[u32; 3]],
+    (split, at_mid_instead): (&mut Splits, &mut Splits),
+    (boundary, off): (&Boundary<'_>, f64),
+    covers: f64,
+) -> Vec<(u32, u32)> {
+    // the midpoints to fall back on, here and in the round, only where they would be kept
+    let unfit = refused_splits(v, faces, at_mid_instead, (boundary, off), covers);
+    at_mid_instead.retain(|e, _| !unfit.contains_key(e));
+    let mut edges = Vec::new();
+    for (e, only_folds) in refused_splits(v, faces, split, (boundary, off), covers) {
+        if only_folds {
+            if let Some(p) = at_mid_instead.remove(&e) {
+                split.insert(e, p);
+                continue;
+            }
+        }
+        split.remove(&e);
+        edges.push(e);
+    }
+    edges.sort_unstable();
+    edges
+}
+
+/// The edges of `split` that [`keep_unfolded_splits`] drops, each with whether it is
+/// dropped only for a fold (not for a triangle too wide).
+fn refused_splits(v: &[Vec3], faces: &[[u32; 3]], split: &Splits, (boundary, off): (&Boundary<'_>, f64), covers: f64) -> FastMap<(u32, u32), bool> {
+    let mut refused: FastMap<(u32, u32), bool> = FastMap::default();
     for &f in faces {
         let wide = longest_edge(v, f).0 / 3f64.sqrt() > covers;
         for k in 0..3 {
@@ -283,15 +336,11 @@ fn keep_unfolded_splits(v: &[Vec3], faces: &[[u32; 3]], split: &mut FastMap<(u32
             let p = corners.map(|i| v[i as usize]);
             let halves_wide = [[p[0], m.0, p[2]], [m.0, p[1], p[2]]].iter().any(|h| (0..3).any(|k| (h[k] - h[(k + 1) % 3]).length() / 3f64.sqrt() > covers));
             if folds || halves_wide || wide {
-                refused.push(e);
+                let only_folds = refused.entry(e).or_insert(true);
+                *only_folds &= !(halves_wide || wide);
             }
         }
     }
-    for e in &refused {
-        split.remove(e);
-    }
-    refused.sort_unstable();
-    refused.dedup();
     refused
 }
 
@@ -364,9 +413,9 @@ pub fn refine_sag(s: &mut Surface, boundary: &Boundary<'_>, (tol, covers): (f64,
     let budget = s.faces.len().saturating_mul(MAX_GROWTH);
     let mut cands: Vec<usize> = (0..s.faces.len()).filter(|&fi| may_sag(&s.vertices, &normals, s.faces[fi], (tol, covers))).collect();
     while !cands.is_empty() && stats.rounds < MAX_ROUNDS && s.faces.len() < budget && !crate::deadline::cancelled() {
-        let mut split = edges_to_split(&s.vertices, &normals, &s.faces, &cands, (boundary, off), tol, &mut stats);
-        let refused = keep_unfolded_splits(&s.vertices, &s.faces, &mut split, (boundary, off), covers);
-        let Some(round) = split_round(s, &mut normals, &mut split, (&refused, (boundary, off), covers)) else { break };
+        let (mut split, mut at_mid_instead) = edges_to_split(&s.vertices, &normals, &s.faces, &cands, (boundary, off), tol, &mut stats);
+        let refused = keep_unfolded_splits(&s.vertices, &s.faces, (&mut split, &mut at_mid_instead), (boundary, off), covers);
+        let Some(round) = split_round(s, &mut normals, (&mut split, &mut at_mid_instead), (&refused, (boundary, off), covers)) else { break };
         stats.rounds += 1;
         stats.splits += split.len();
         stats.flips += round.flips;
@@ -387,7 +436,7 @@ pub fn refine_sag(s: &mut Surface, boundary: &Boundary<'_>, (tol, covers): (f64,
 
 /// What one round of [`refine_sag`] made: for each new face the old face it came from,
 /// which old faces were split or flipped, how many pairs were flipped, and how many old
-/// faces had their splits and flips given up for a fold they made.
+/// faces had their splits and flips given up for a fold or crossing they made.
 struct Round {
     origin: Vec<u32>,
     changed: Vec<bool>,
@@ -396,20 +445,24 @@ struct Round {
 }
 
 /// Carry out one round: flip the `refused` edges that may be ([`flip_sagging`]), split the
-/// edges of `split` at their points, and give up the splits and flips of every old face
-/// next to a fold that made ([`folds_made`]), again until none is made. `None` when nothing
-/// is left to do (`s` unchanged).
+/// edges of `split` at their points, and where that folds the surface or passes it through
+/// itself ([`folds_made`], [`crossings_made`]), again: an old face there with edges split
+/// at crease points has them split at their midpoints' boundary points instead
+/// (`at_mid_instead`), another has its splits and flips given up. `None` when nothing is
+/// left to do (`s` unchanged).
 fn split_round(
     s: &mut Surface,
     normals: &mut Vec<Option<Vec3>>,
-    split: &mut Splits,
+    (split, at_mid_instead): (&mut Splits, &mut Splits),
     (refused, (boundary, off), covers): (&[(u32, u32)], (&Boundary<'_>, f64), f64),
 ) -> Option<Round> {
     let (saved, vertices_before) = (s.faces.clone(), s.vertices.len());
     let mut flips: Vec<[usize; 2]> = flip_sagging(s, refused, split, (boundary, off), covers).chunks_exact(2).map(|p| [p[0], p[1]]).collect();
     let mut given_up = vec![false; saved.len()];
-    let mut folds_refused = 0;
-    for pass in 0..=MAX_FOLD_PASSES {
+    let (mut folds_refused, mut give_up_passes) = (0, 0);
+    // each pass puts a midpoint for a crease point or gives up a face: past the passes
+    // that give up, every split and flip is given up, and the pass after returns `None`
+    loop {
         if split.is_empty() && flips.is_empty() {
             return None;
         }
@@ -433,7 +486,10 @@ fn split_round(
             split_triangle(&s.vertices, f, mid, &mut faces);
             origin.resize(faces.len(), old as u32);
         }
-        let folded = folds_made(&s.vertices, &faces, &origin, &changed);
+        let mut folded = folds_made(&s.vertices, &faces, &origin, &changed);
+        folded.extend(crossings_made(&s.vertices, &faces, &origin, &changed));
+        folded.sort_unstable();
+        folded.dedup();
         if folded.is_empty() {
             s.faces = faces;
             return Some(Round { origin, changed, flips: flips.len(), folds_refused });
@@ -441,13 +497,23 @@ fn split_round(
         // undo, and leave the old faces beside the folds as they were (all, past the passes)
         s.vertices.truncate(vertices_before);
         normals.truncate(vertices_before);
-        let give_up: Vec<usize> = if pass < MAX_FOLD_PASSES { folded } else { (0..saved.len()).collect() };
+        let last = give_up_passes >= MAX_FOLD_PASSES;
+        let give_up: Vec<usize> = if last { (0..saved.len()).collect() } else { folded };
+        let mut gave_up = false;
         for old in give_up {
+            let edges = [0, 1, 2].map(|k| edge_key(saved[old][k], saved[old][(k + 1) % 3]));
+            let instead: Vec<(u32, u32)> = edges.into_iter().filter(|e| split.contains_key(e) && at_mid_instead.contains_key(e)).collect();
+            if !last && !instead.is_empty() {
+                for e in instead {
+                    split.insert(e, at_mid_instead.remove(&e).expect("an edge with a midpoint"));
+                }
+                continue;
+            }
             folds_refused += usize::from(!given_up[old]);
             given_up[old] = true;
-            let f = saved[old];
-            for k in 0..3 {
-                split.remove(&edge_key(f[k], f[(k + 1) % 3]));
+            gave_up = true;
+            for e in edges {
+                split.remove(&e);
             }
         }
         flips.retain(|&[f1, f2]| {
@@ -457,8 +523,46 @@ fn split_round(
             }
             keep
         });
+        give_up_passes += usize::from(gave_up);
     }
-    unreachable!("the last pass gives up every split and flip")
+}
+
+/// The changed old faces (by `origin`, of the new `faces`) whose new triangles meet
+/// another triangle of `faces` that is no neighbour along an edge (cross it, or touch it
+/// along an edge: stricter than the solid check, which lets a sheet rest on another): the
+/// surface passes through itself there (a split point moved across a sheet close by, or a corner's
+/// triangles turned over one another; an edge's fold is [`folds_made`]'s). Sorted,
+/// without repeats.
+fn crossings_made(v: &[Vec3], faces: &[[u32; 3]], origin: &[u32], changed: &[bool]) -> Vec<usize> {
+    let corners = |f: [u32; 3]| f.map(|i| v[i as usize]);
+    let made: Vec<u32> = (0..faces.len() as u32).filter(|&fi| changed[origin[fi as usize] as usize]).collect();
+    if made.is_empty() {
+        return Vec::new();
+    }
+    let boxes: Vec<Aabb> = made.iter().map(|&fi| Aabb::from_points(&corners(faces[fi as usize]))).collect();
+    let tree = Bvh::build(&boxes);
+    let scale = Aabb::from_points(v).diagonal().max(1e-300);
+    let mut crossed: Vec<usize> = (0..faces.len())
+        .into_par_iter()
+        .flat_map_iter(|gi| {
+            let g = faces[gi];
+            let mut hit = Vec::new();
+            tree.for_each_overlapping(&Aabb::from_points(&corners(g)), |k| {
+                let fi = made[k] as usize;
+                let shared = g.iter().filter(|i| faces[fi].contains(i)).count();
+                if fi != gi && shared < 2 && (fi < gi || !changed[origin[gi] as usize]) && triangles_meet(corners(faces[fi]), corners(g), scale) {
+                    hit.push(origin[fi] as usize);
+                    if changed[origin[gi] as usize] {
+                        hit.push(origin[gi] as usize);
+                    }
+                }
+            });
+            hit
+        })
+        .collect();
+    crossed.sort_unstable();
+    crossed.dedup();
+    crossed
 }
 
 /// The old faces (by `origin`, of the new `faces`) on either side of an edge of a new
@@ -653,7 +757,7 @@ mod tests {
         let mut normals = vec![Some(Vec3::Z); s.vertices.len()];
         let mut split: Splits = [((1, 2), (m, Vec3::Z))].into_iter().collect();
         let flat = |p: Vec3, _: f64| Some((Vec3::new(p.x, p.y, 0.0), Vec3::Z));
-        let round = split_round(s, &mut normals, &mut split, (&[], (&flat, 0.0), 10.0));
+        let round = split_round(s, &mut normals, (&mut split, &mut Splits::default()), (&[], (&flat, 0.0), 10.0));
         (round, split)
     }
 
@@ -685,6 +789,17 @@ mod tests {
         let faces = [[1, 4, 0], [4, 2, 0], [0, 2, 3]];
         assert_eq!(folds_made(&s.vertices, &faces, &[0, 0, 1], &[true, false]), vec![0, 1]);
         assert!(folds_made(&s.vertices, &faces, &[0, 0, 1], &[false, false]).is_empty(), "only new triangles are asked");
+    }
+
+    #[test]
+    fn a_new_triangle_crossing_another_names_its_old_face_and_neighbours_do_not_count() {
+        // a new triangle on the plane z = 0 (old face 0), one piercing it (old face 1,
+        // unchanged), and one sharing its edge 0-1 (old face 2, changed: neighbours)
+        let v = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.2, 0.2, -1.0), Vec3::new(0.3, 0.2, 1.0), Vec3::new(0.2, 0.3, 1.0), Vec3::new(0.5, -0.5, 0.5)];
+        let faces = [[0, 1, 2], [3, 4, 5], [1, 0, 6]];
+        assert_eq!(crossings_made(&v, &faces, &[0, 1, 2], &[true, false, true]), vec![0]);
+        assert_eq!(crossings_made(&v, &faces, &[0, 1, 2], &[true, true, false]), vec![0, 1], "both sides when both are new");
+        assert!(crossings_made(&v, &faces, &[0, 1, 2], &[false, false, true]).is_empty(), "only new triangles are asked");
     }
 
     #[test]
