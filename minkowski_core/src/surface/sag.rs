@@ -27,10 +27,10 @@
 //! a fold from a wrongly triangulated polygon), and where a new triangle crosses another,
 //! or touches it along an edge (the triangles around a corner turned over one another
 //! across a crease sharper than a right angle: on IndustReal's small gear grown by 1 mm at
-//! eps 2e-3, winding number −1 in front of 20 faces). The old triangles there have their crease points replaced by midpoints, or,
-//! failing that, their splits and flips given up, and the round is made again. Rounds
-//! repeat on the new triangles, at a cost in triangles that grows with the creases' length,
-//! not the surface's area.
+//! eps 2e-3, winding number −1 in front of 20 faces). The old triangles there have their
+//! crease points replaced by midpoints, or, failing that, their splits and flips given up,
+//! and the round is made again. Rounds repeat on the new triangles, at a cost in triangles
+//! that grows with the creases' length, not the surface's area.
 //!
 //! The bound the extraction stated still holds: every vertex it made is kept (the argument
 //! that every boundary point lies near one holds as before), and a point of a new triangle
@@ -530,9 +530,9 @@ fn split_round(
 /// The changed old faces (by `origin`, of the new `faces`) whose new triangles meet
 /// another triangle of `faces` that is no neighbour along an edge (cross it, or touch it
 /// along an edge: stricter than the solid check, which lets a sheet rest on another): the
-/// surface passes through itself there (a split point moved across a sheet close by, or a corner's
-/// triangles turned over one another; an edge's fold is [`folds_made`]'s). Sorted,
-/// without repeats.
+/// surface passes through itself there (a split point moved across a sheet close by, or a
+/// corner's triangles turned over one another; an edge's fold is [`folds_made`]'s).
+/// Sorted, without repeats.
 fn crossings_made(v: &[Vec3], faces: &[[u32; 3]], origin: &[u32], changed: &[bool]) -> Vec<usize> {
     let corners = |f: [u32; 3]| f.map(|i| v[i as usize]);
     let made: Vec<u32> = (0..faces.len() as u32).filter(|&fi| changed[origin[fi as usize] as usize]).collect();
