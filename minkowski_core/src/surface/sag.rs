@@ -276,7 +276,8 @@ fn edges_to_split(
     let at_mid_instead: Splits = edges
         .iter()
         .zip(at_mid.iter().zip(&at_crease))
-        .filter_map(|(&e, (mid, crease))| Some((e, mid.as_ref()?.1)).filter(|_| crease.is_some() && split.contains_key(&e)))
+        .filter(|(e, (_, crease))| crease.is_some() && split.contains_key(e))
+        .filter_map(|(&e, (mid, _))| mid.as_ref().map(|m| (e, m.1)))
         .collect();
     let mid_of: FastMap<(u32, u32), Option<(f64, BoundaryPoint)>> = edges.iter().copied().zip(at_mid).collect();
     for (&fi, centre) in cands.iter().zip(&at_centre) {
@@ -550,7 +551,7 @@ fn crossings_made(v: &[Vec3], faces: &[[u32; 3]], origin: &[u32], changed: &[boo
             tree.for_each_overlapping(&Aabb::from_points(&corners(g)), |k| {
                 let fi = made[k] as usize;
                 let shared = g.iter().filter(|i| faces[fi].contains(i)).count();
-                if fi != gi && shared < 2 && (fi < gi || !changed[origin[gi] as usize]) && triangles_meet(corners(faces[fi]), corners(g), scale) {
+                if shared < 2 && (fi < gi || !changed[origin[gi] as usize]) && triangles_meet(corners(faces[fi]), corners(g), scale) {
                     hit.push(origin[fi] as usize);
                     if changed[origin[gi] as usize] {
                         hit.push(origin[gi] as usize);
